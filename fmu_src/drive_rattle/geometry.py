@@ -1,0 +1,212 @@
+"""Helical involute geometry of the gear pair and the tooth pairs in the zone of action.
+
+Conventions (docs/model.md, section 2):
+
+* Each gear's angle is positive in its own forward direction.  ``phi_p = 0`` with
+  ``phi_w = 0`` puts the pinion tooth centreline on the line of centres, centred in the
+  wheel's tooth space (teeth at the centre of the backlash).
+* ``s`` is the roll coordinate along a transverse line of action, measured from the
+  pinion's base-circle tangent point; at a contact ``s`` is the pinion's roll length
+  (involute radius of curvature, transverse) ``rho_p`` and ``L - s`` the wheel's, where
+  ``L = a sin(alpha_t)`` is the length between the two base tangent points (eq. 5, read as
+  MODEL_NOTES section 2).
+* ``flank = +1`` is the drive flank (pinion leads), ``flank = -1`` the coast flank.
+  On the drive line of action the contacts travel towards larger ``s`` when the pinion turns
+  forward, on the coast line towards smaller ``s``.
+* A helical tooth pair touches along a straight contact line inclined at the base helix
+  angle; across the face width it spans ``w = b tan(beta_b)`` of roll coordinate.  A pair is
+  in the zone of action while that span overlaps the path of contact
+  ``[s_start, s_end]``; the overlap gives the pair's representative roll position (its
+  centre) and its engaged fraction.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .parameters import DEG, MAX_PAIR_SLOTS, MeshParameters
+
+DRIVE = 1
+COAST = -1
+
+#: Roll distance [m] under which a breakpoint counts as reached (far below any physical
+#: length, above the rounding of roll coordinates of a long run: ~1e-14 m at 100 m of roll).
+BREAKPOINT_TOLERANCE = 1e-12
+
+
+class HelicalPairGeometry:
+    """Geometry of an unshifted helical involute pair.
+
+    All lengths in m, angles in rad.  Raises ValueError for pairs that undercut, interfere,
+    have a transverse contact ratio below 1 or need more than ``MAX_PAIR_SLOTS`` pair slots.
+    """
+
+    def __init__(self, p: MeshParameters):
+        self.z_pinion = p.z_pinion
+        self.z_wheel = p.z_wheel
+        self.ratio = p.z_pinion / p.z_wheel  # wheel speed / pinion speed in rigid mesh
+        # Transverse pressure angle and base helix angle (MODEL_NOTES section 4).
+        self.alpha_t = math.atan(math.tan(p.alpha_n) / math.cos(p.beta))
+        self.beta_b = math.asin(math.sin(p.beta) * math.cos(p.alpha_n))
+        self.m_t = p.m_n / math.cos(p.beta)
+        # Pitch, base and tip radii; addendum h_a m_n, no profile shift.
+        self.r_pinion = 0.5 * p.z_pinion * self.m_t
+        self.r_wheel = 0.5 * p.z_wheel * self.m_t
+        self.centre_distance = self.r_pinion + self.r_wheel
+        self.rb_pinion = self.r_pinion * math.cos(self.alpha_t)
+        self.rb_wheel = self.r_wheel * math.cos(self.alpha_t)
+        self.ra_pinion = self.r_pinion + p.addendum * p.m_n
+        self.ra_wheel = self.r_wheel + p.addendum * p.m_n
+        # Line of action between the base tangent points, and the path of contact on it.
+        self.line_length = self.centre_distance * math.sin(self.alpha_t)
+        self.s_start = self.line_length - math.sqrt(self.ra_wheel**2 - self.rb_wheel**2)
+        self.s_end = math.sqrt(self.ra_pinion**2 - self.rb_pinion**2)
+        self.s_pitch = self.rb_pinion * math.tan(self.alpha_t)
+        self.base_pitch = 2.0 * math.pi * self.rb_pinion / p.z_pinion  # transverse, p_bt
+        self.eps_alpha = (self.s_end - self.s_start) / self.base_pitch
+        self.eps_beta = p.b * math.sin(p.beta) / (math.pi * p.m_n)
+        self.eps_gamma = self.eps_alpha + self.eps_beta
+        # Transverse extent of one contact line across the face (= eps_beta * p_bt).
+        self.line_span = p.b * math.tan(self.beta_b)
+        # Rigid-body kinematics onto the tooth normal: delta = cos(beta_b)*(rb_p phi_p - rb_w phi_w)
+        self.normal_factor = math.cos(self.beta_b)
+        self.half_backlash = 0.5 * p.backlash
+        # Roll coordinate of the reference pair at phi_p = 0 (tooth centreline on the line of
+        # centres: the flank is a quarter base pitch ahead of the pitch point), both flanks.
+        self.flank_phase = self.s_pitch + 0.25 * self.base_pitch
+        self._check(p)
+        self._breakpoints = self._roll_breakpoints()
+
+    # ------------------------------------------------------------------ validation
+    def _check(self, p: MeshParameters) -> None:
+        sin2 = math.sin(self.alpha_t) ** 2
+        # Undercut limit of a rack cutter whose dedendum matches the addendum h_a m_n.
+        z_min = 2.0 * p.addendum * math.cos(p.beta) / sin2
+        for name, z in (("gear.z_pinion", p.z_pinion), ("gear.z_wheel", p.z_wheel)):
+            if z < z_min:
+                raise ValueError(
+                    f"parameter '{name}' = {z} undercuts with gear.alpha_n = "
+                    f"{p.alpha_n / DEG:.4g} deg and gear.beta = {p.beta / DEG:.4g} deg; "
+                    f"allowed: {name} >= {math.ceil(z_min - 1e-9)} (2 cos(beta)/sin^2(alpha_t) "
+                    f"* gear.h_a = {z_min:.4g})")
+        if self.s_start <= 0.0 or self.s_end >= self.line_length:
+            raise ValueError(
+                "tip interference: the path of contact leaves the line of action "
+                f"(s_start = {self.s_start:.4g} m, s_end = {self.s_end:.4g} m, line length "
+                f"{self.line_length:.4g} m) for gear.z_pinion = {p.z_pinion}, gear.z_wheel = "
+                f"{p.z_wheel}; allowed: 0 < s_start < s_end < line length")
+        if self.eps_alpha < 1.0:
+            raise ValueError(
+                f"transverse contact ratio eps_alpha = {self.eps_alpha:.4f} below 1 for "
+                f"gear.z_pinion = {p.z_pinion}, gear.z_wheel = {p.z_wheel}, gear.h_a = "
+                f"{p.addendum:.4g}, gear.alpha_n = {p.alpha_n / DEG:.4g} deg, gear.beta = "
+                f"{p.beta / DEG:.4g} deg; allowed: eps_alpha >= 1")
+        if self.max_pairs > MAX_PAIR_SLOTS:
+            b_max = (MAX_PAIR_SLOTS - self.eps_alpha) * math.pi * p.m_n / max(
+                math.sin(p.beta), 1e-300)
+            raise ValueError(
+                f"parameter 'gear.b' = {p.b!r} gives a total contact ratio eps_gamma = "
+                f"{self.eps_gamma:.4g}, needing {self.max_pairs} pair slots; at most "
+                f"{MAX_PAIR_SLOTS} are available; allowed: gear.b < {b_max:.4g} m")
+
+    @property
+    def max_pairs(self) -> int:
+        """Largest number of pairs that can be in the zone of action at once."""
+        return math.floor(self.eps_gamma) + 1
+
+    # ------------------------------------------------------------------ pairs
+    def flank_roll(self, flank: int, phi_p: float) -> float:
+        """Roll coordinate ``u`` of pair 0's contact-line centre for pinion angle ``phi_p``.
+
+        Pair ``n`` sits at ``s_n = u - n * base_pitch``.
+        """
+        return self.flank_phase + flank * self.rb_pinion * phi_p
+
+    def pairs(self, flank: int, phi_p: float) -> list[tuple[int, float, float]]:
+        """Tooth pairs in the zone of action on ``flank`` at pinion angle ``phi_p``.
+
+        Returns ``(slot, s, fraction)`` per pair: the slot (pair number modulo
+        ``MAX_PAIR_SLOTS``, so a slot follows one pair through its passage), the roll
+        coordinate of the centre of its engaged contact line [m] and the engaged fraction of
+        its contact line (1 for spur gears).
+        """
+        return self.pairs_at_roll(self.flank_roll(flank, phi_p))
+
+    def pairs_at_roll(self, u: float) -> list[tuple[int, float, float]]:
+        """As :meth:`pairs`, from the roll coordinate ``u`` of :meth:`flank_roll`."""
+        pb = self.base_pitch
+        half = 0.5 * self.line_span
+        s0, s1 = self.s_start, self.s_end
+        n_lo = math.floor((u - s1 - half) / pb) + 1
+        n_hi = math.ceil((u - s0 + half) / pb) - 1
+        out = []
+        for n in range(n_lo, n_hi + 1):
+            s = u - n * pb
+            if half > 0.0:
+                lo = s - half if s - half > s0 else s0
+                hi = s + half if s + half < s1 else s1
+                if hi > lo:
+                    out.append((n % MAX_PAIR_SLOTS, 0.5 * (lo + hi), (hi - lo) / (2.0 * half)))
+            elif s0 < s < s1:
+                out.append((n % MAX_PAIR_SLOTS, s, 1.0))
+        return out
+
+    def _roll_breakpoints(self) -> tuple[float, ...]:
+        """Roll coordinates (mod base pitch) where a pair enters, leaves, or its engaged
+        contact line stops growing or starts shrinking; between them every pair quantity
+        is a smooth function of the pinion angle."""
+        half = 0.5 * self.line_span
+        raw = {self.s_start - half, self.s_start + half, self.s_end - half, self.s_end + half}
+        return tuple(sorted(v % self.base_pitch for v in raw))
+
+    def next_breakpoint(self, u_a: float, u_b: float) -> float | None:
+        """First roll coordinate of a breakpoint between ``u_a`` and ``u_b`` (in the direction
+        of travel), or None.  Breakpoints within ``BREAKPOINT_TOLERANCE`` of ``u_a`` are
+        behind us: the previous substep ended on them."""
+        if u_a == u_b:
+            return None
+        pb = self.base_pitch
+        tol = BREAKPOINT_TOLERANCE
+        best = None
+        if u_b > u_a:
+            for bp in self._breakpoints:
+                v = bp + (math.floor((u_a + tol - bp) / pb) + 1) * pb
+                if v < u_b and (best is None or v < best):
+                    best = v
+        else:
+            for bp in self._breakpoints:
+                v = bp + (math.ceil((u_a - tol - bp) / pb) - 1) * pb
+                if v > u_b and (best is None or v > best):
+                    best = v
+        return best
+
+    # ------------------------------------------------------------------ radii
+    def normal_radii(self, s: float) -> tuple[float, float, float]:
+        """Principal radii in the normal plane at roll coordinate ``s`` (eq. 3-5 as read in
+        MODEL_NOTES section 2): the involute radius of curvature is the roll length, and a
+        helicoid's normal-section radius is the transverse one over cos(beta_b).
+
+        Returns ``(r_pinion, r_wheel, r_x)`` in m with ``r_x = r_p r_w / (r_p + r_w)``.
+        """
+        c = self.normal_factor
+        rp = s / c
+        rw = (self.line_length - s) / c
+        return rp, rw, rp * rw / (rp + rw)
+
+    def summary(self) -> dict[str, float]:
+        """Derived quantities of the pair, SI units, for reports and documentation."""
+        return {
+            "alpha_t [rad]": self.alpha_t,
+            "beta_b [rad]": self.beta_b,
+            "centre distance [m]": self.centre_distance,
+            "pitch radius pinion [m]": self.r_pinion,
+            "pitch radius wheel [m]": self.r_wheel,
+            "base radius pinion [m]": self.rb_pinion,
+            "base radius wheel [m]": self.rb_wheel,
+            "tip radius pinion [m]": self.ra_pinion,
+            "tip radius wheel [m]": self.ra_wheel,
+            "transverse base pitch [m]": self.base_pitch,
+            "eps_alpha [1]": self.eps_alpha,
+            "eps_beta [1]": self.eps_beta,
+            "eps_gamma [1]": self.eps_gamma,
+        }

@@ -1,0 +1,75 @@
+"""Film, regime of lubrication and flank friction (paper eq. 11-17, read as docs/model.md says).
+
+Plain functions of SI floats; the mesh model calls them per tooth pair.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: Film parameter below which the contact is in boundary lubrication (psi = 1).
+LAMBDA_BOUNDARY = 1.0
+#: Film parameter above which the contact is in full-film lubrication (psi = 0).
+LAMBDA_FULL_FILM = 3.0
+
+FORM_SPLIT = 0
+FORM_APPARENT_AREA = 1
+FORM_AS_PRINTED = 2
+
+
+def film_thickness(rigid_gap: float, delta_max: float) -> float:
+    """Film thickness h [m] of eq. (11): the rigid gap (negative while the flanks
+    interpenetrate) plus the energy-balance delta_max of eq. (7), never negative."""
+    h = rigid_gap + delta_max
+    return h if h > 0.0 else 0.0
+
+
+def asperity_area(W: float, E_star: float, gamma: float, sigma: float) -> float:
+    """Real contact area A_e [m^2] of elastic asperity tips, eq. (13):
+    A_e = 3.2 W / E* sqrt(gamma / sigma)."""
+    return 3.2 * W / E_star * math.sqrt(gamma / sigma)
+
+
+def dry_fraction(lam: float, A_e: float, A: float) -> float:
+    """Proportion psi of dry (asperity) contact, eq. (12)-(15):
+    1 for lambda <= 1 (boundary), 0 for lambda >= 3 (full film), A_e/A in between,
+    clamped to [0, 1]."""
+    if lam <= LAMBDA_BOUNDARY:
+        return 1.0
+    if lam >= LAMBDA_FULL_FILM or A <= 0.0:
+        return 0.0
+    psi = A_e / A
+    return psi if psi < 1.0 else 1.0
+
+
+def friction_force(
+    form: int, psi: float, A_e: float, A: float, tau_s: float, eta: float, U: float, h: float
+) -> float:
+    """Magnitude of the flank friction force [N], eq. (12) in the chosen reading.
+
+    form 0 (split, default): psi A_e tau_s + (1 - psi) A eta U / h -- boundary shear on the real
+    asperity area, viscous shear on the apparent area;
+    form 1 (apparent area): A (psi tau_s + (1 - psi) eta U / h);
+    form 2 (as printed): A_e (psi tau_s + (1 - psi) eta U / h).
+    The viscous term is only evaluated where psi < 1, which implies h > lambda_boundary sigma > 0.
+    """
+    viscous = eta * abs(U) / h if psi < 1.0 else 0.0
+    if form == FORM_SPLIT:
+        return psi * A_e * tau_s + (1.0 - psi) * A * viscous
+    if form == FORM_APPARENT_AREA:
+        return A * (psi * tau_s + (1.0 - psi) * viscous)
+    if form == FORM_AS_PRINTED:
+        return A_e * (psi * tau_s + (1.0 - psi) * viscous)
+    raise ValueError(f"friction form {form!r} unknown; allowed: 0, 1, 2")
+
+
+def entrainment_speed(w_p: float, rho_p: float, w_w: float, rho_w: float) -> float:
+    """Entraining (mean rolling) speed u [m/s] of the two flanks at the contact, transverse
+    plane: u = (w_p rho_p + w_w rho_w) / 2 (replaces eq. 16-17, see docs/model.md)."""
+    return 0.5 * (w_p * rho_p + w_w * rho_w)
+
+
+def sliding_speed(w_p: float, rho_p: float, w_w: float, rho_w: float) -> float:
+    """Sliding speed v_s = w_p rho_p - w_w rho_w [m/s] of the pinion flank relative to the
+    wheel flank, along the profile tangent; it changes sign at the pitch point."""
+    return w_p * rho_p - w_w * rho_w

@@ -1,0 +1,283 @@
+"""Parameter declarations: the single source of truth for every model parameter.
+
+Each parameter is declared once, as a field of a frozen dataclass whose metadata holds a
+:class:`ParameterSpec` (public name, unit, description, default, limits).  The FMU
+registration, the modelDescription, the documentation tables and the validation below are
+all generated from these declarations, so they cannot drift apart.
+
+Values are plain SI floats (angles in rad, lengths in m).  Display units (deg, mm, um, rpm)
+are metadata for the FMI layer only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Iterator, Mapping
+
+#: Upper bound on the number of tooth pairs that can be in the zone of action at once.
+#: The FMU exposes this many `pair[k].W` slots; a geometry needing more is rejected.
+MAX_PAIR_SLOTS = 8
+
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """Declaration of one parameter.
+
+    ``minimum``/``maximum`` are inclusive unless ``min_exclusive``/``max_exclusive``.
+    ``choices`` maps the allowed integer codes of an enumeration parameter to their meaning.
+    """
+
+    name: str
+    default: Any
+    unit: str
+    description: str
+    minimum: float | None = None
+    maximum: float | None = None
+    min_exclusive: bool = False
+    max_exclusive: bool = False
+    display_unit: str | None = None
+    choices: Mapping[int, str] | None = None
+
+    @property
+    def kind(self) -> str:
+        """FMI type name: ``Boolean``, ``Integer`` or ``Real``."""
+        if isinstance(self.default, bool):
+            return "Boolean"
+        if isinstance(self.default, int):
+            return "Integer"
+        return "Real"
+
+    def allowed(self) -> str:
+        """Human-readable statement of the allowed values, used in error messages."""
+        if self.kind == "Boolean":
+            return "true or false"
+        if self.choices is not None:
+            return "one of " + ", ".join(f"{k} ({v})" for k, v in self.choices.items())
+        lo = "-inf" if self.minimum is None else _fmt(self.minimum)
+        hi = "+inf" if self.maximum is None else _fmt(self.maximum)
+        left = "(" if self.min_exclusive or self.minimum is None else "["
+        right = ")" if self.max_exclusive or self.maximum is None else "]"
+        unit = "" if self.unit in ("", "1") else f" {self.unit}"
+        return f"{left}{lo}, {hi}{right}{unit}"
+
+    def check(self, value: Any) -> Any:
+        """Return ``value`` converted to the parameter's type, or raise ValueError naming it."""
+        kind = self.kind
+        if kind == "Boolean":
+            if isinstance(value, bool) or value in (0, 1):
+                return bool(value)
+            raise self._error(value)
+        if kind == "Integer":
+            if isinstance(value, bool) or not _is_integral(value):
+                raise self._error(value, "must be an integer")
+            value = int(value)
+            if self.choices is not None and value not in self.choices:
+                raise self._error(value)
+        else:
+            if isinstance(value, bool):
+                raise self._error(value, "must be a real number")
+            try:
+                value = float(value)
+            except (TypeError, ValueError):
+                raise self._error(value, "must be a real number") from None
+            if not math.isfinite(value):
+                raise self._error(value, "must be finite")
+        if self.minimum is not None and (
+            value < self.minimum or (self.min_exclusive and value == self.minimum)
+        ):
+            raise self._error(value)
+        if self.maximum is not None and (
+            value > self.maximum or (self.max_exclusive and value == self.maximum)
+        ):
+            raise self._error(value)
+        return value
+
+    def _error(self, value: Any, reason: str = "is out of range") -> ValueError:
+        return ValueError(
+            f"parameter '{self.name}' = {value!r} {reason}; allowed: {self.allowed()}"
+        )
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def _is_integral(value: Any) -> bool:
+    if isinstance(value, int):
+        return True
+    return isinstance(value, float) and math.isfinite(value) and value == int(value)
+
+
+def declare(name: str, default: Any, unit: str, description: str, **limits: Any) -> Any:
+    """Dataclass field carrying a :class:`ParameterSpec` in its metadata."""
+    spec = ParameterSpec(name, default, unit, description, **limits)
+    return field(default=default, metadata={"spec": spec})
+
+
+def specs(cls_or_obj: Any) -> Iterator[tuple[str, ParameterSpec]]:
+    """Yield ``(attribute, spec)`` for every declared parameter of a parameter dataclass."""
+    for f in fields(cls_or_obj):
+        spec = f.metadata.get("spec")
+        if spec is not None:
+            yield f.name, spec
+
+
+class _ParameterSet:
+    """Mixin: range validation on construction and construction from public names."""
+
+    def __post_init__(self) -> None:
+        for attr, spec in specs(self):
+            object.__setattr__(self, attr, spec.check(getattr(self, attr)))
+        self._check_combination()
+
+    def _check_combination(self) -> None:
+        """Cross-parameter checks; overridden where parameters constrain each other."""
+
+    @classmethod
+    def from_public(cls, values: Mapping[str, Any]):
+        """Build from a mapping of public (FMI) names to values; unknown names are an error."""
+        by_name = {spec.name: attr for attr, spec in specs(cls)}
+        unknown = sorted(set(values) - set(by_name))
+        if unknown:
+            raise ValueError(
+                f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(by_name))}"
+            )
+        return cls(**{by_name[k]: v for k, v in values.items()})
+
+    def to_public(self) -> dict[str, Any]:
+        """Mapping of public (FMI) names to values."""
+        return {spec.name: getattr(self, attr) for attr, spec in specs(self)}
+
+    def with_public(self, **changes: Any):
+        """Copy with some parameters changed, given by attribute name."""
+        return replace(self, **changes)
+
+
+DEG = math.pi / 180.0
+
+#: friction.form codes (see docs/model.md, eq. 12)
+FRICTION_FORMS = {
+    0: "split: psi*A_e*tau_s + (1-psi)*A*eta*U/h",
+    1: "apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)",
+    2: "as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h)",
+}
+#: friction.shear_speed codes
+SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
+
+
+@dataclass(frozen=True)
+class MeshParameters(_ParameterSet):
+    """Parameters of the gear-mesh impact and friction model (defaults: MODEL_NOTES section 3)."""
+
+    # --- gear pair geometry -------------------------------------------------------------
+    z_pinion: int = declare(
+        "gear.z_pinion", 20, "1", "number of teeth of the pinion (input-shaft gear)",
+        minimum=5, maximum=400)
+    z_wheel: int = declare(
+        "gear.z_wheel", 39, "1", "number of teeth of the wheel (output gear)",
+        minimum=5, maximum=400)
+    m_n: float = declare(
+        "gear.m_n", 2.25e-3, "m", "normal module", minimum=0.0, min_exclusive=True,
+        maximum=0.1, display_unit="mm")
+    alpha_n: float = declare(
+        "gear.alpha_n", 20.0 * DEG, "rad", "normal pressure angle",
+        minimum=10.0 * DEG, maximum=35.0 * DEG, display_unit="deg")
+    beta: float = declare(
+        "gear.beta", 27.75 * DEG, "rad", "helix angle at the pitch cylinder (0 = spur)",
+        minimum=0.0, maximum=45.0 * DEG, display_unit="deg")
+    addendum: float = declare(
+        "gear.h_a", 1.0, "1",
+        "addendum coefficient: tip radius r_a = r + h_a m_n (1 = standard full depth, < 1 stub)",
+        minimum=0.5, maximum=1.5)
+    b: float = declare(
+        "gear.b", 25e-3, "m", "face width in contact", minimum=0.0, min_exclusive=True,
+        maximum=1.0, display_unit="mm")
+    backlash: float = declare(
+        "gear.backlash", 0.10e-3, "m",
+        "total normal backlash (sum of both flank clearances along the tooth normal)",
+        minimum=0.0, maximum=5e-3, display_unit="mm")
+    # --- materials (pinion 1, wheel 2) ---------------------------------------------------
+    E_pinion: float = declare(
+        "material.E_pinion", 210e9, "Pa", "Young's modulus of the pinion",
+        minimum=0.0, min_exclusive=True, maximum=1e13)
+    nu_pinion: float = declare(
+        "material.nu_pinion", 0.30, "1", "Poisson's ratio of the pinion",
+        minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
+    E_wheel: float = declare(
+        "material.E_wheel", 210e9, "Pa", "Young's modulus of the wheel",
+        minimum=0.0, min_exclusive=True, maximum=1e13)
+    nu_wheel: float = declare(
+        "material.nu_wheel", 0.30, "1", "Poisson's ratio of the wheel",
+        minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
+    density: float = declare(
+        "material.rho", 7850.0, "kg/m3",
+        "density of the tooth material (mass of the equivalent ellipsoid, eq. 7)",
+        minimum=0.0, min_exclusive=True, maximum=1e5)
+    # --- wheel dynamics --------------------------------------------------------------------
+    J_wheel: float = declare(
+        "wheel.J", 1.3e-3, "kg.m2", "mass moment of inertia of the wheel (eq. 10, I_w)",
+        minimum=0.0, min_exclusive=True, maximum=1e3)
+    # --- Hertzian contact ------------------------------------------------------------------
+    r_y: float = declare(
+        "contact.r_y", 7.8125, "m",
+        "equivalent flank radius along the contact line (eq. 6 read as lead crowning: "
+        "r_y = b^2/(8 C_b); default = 10 um crowning over 25 mm)",
+        minimum=0.0, min_exclusive=True, maximum=1e3)
+    length_weighting: bool = declare(
+        "contact.length_weighting", True, "",
+        "scale each pair's Hertz stiffness by the fraction of its contact line inside the "
+        "zone of action (pairs enter and leave the mesh smoothly); false = the paper's "
+        "reading, full stiffness for any pair in the path of contact")
+    damping: float = declare(
+        "contact.damping", 0.0, "s/m",
+        "Hunt-Crossley damping factor d in W = K*delta^1.5*(1 + d*delta_dot); not in the "
+        "paper, 0 = undamped", minimum=0.0, maximum=1e3)
+    # --- lubricant, surfaces, friction (eq. 11-17) ----------------------------------------
+    friction_enabled: bool = declare(
+        "friction.enabled", True, "", "include flank friction (eq. 12-17)")
+    friction_form: int = declare(
+        "friction.form", 0, "1", "reading of eq. 12 (see docs/model.md): "
+        + "; ".join(f"{k} = {v}" for k, v in FRICTION_FORMS.items()),
+        minimum=0, maximum=2, choices=FRICTION_FORMS)
+    shear_speed: int = declare(
+        "friction.shear_speed", 0, "1", "speed in the viscous term eta*U/h: "
+        + "; ".join(f"{k} = {v}" for k, v in SHEAR_SPEEDS.items()),
+        minimum=0, maximum=1, choices=SHEAR_SPEEDS)
+    tau_s: float = declare(
+        "friction.tau_s", 2.28e8, "Pa",
+        "boundary shear strength of the asperity junctions (default gives a boundary "
+        "friction coefficient A_e*tau_s/W = 0.1 with the default surfaces)",
+        minimum=0.0, maximum=1e10)
+    eta: float = declare(
+        "lubricant.eta", 0.05, "Pa.s", "dynamic viscosity of the lubricant",
+        minimum=0.0, min_exclusive=True, maximum=1e3)
+    sigma: float = declare(
+        "surface.sigma", 0.4e-6, "m", "composite RMS roughness of the flanks",
+        minimum=0.0, min_exclusive=True, maximum=1e-3, display_unit="um")
+    gamma: float = declare(
+        "surface.gamma", 1e-4, "m", "average asperity tip radius (eq. 13)",
+        minimum=0.0, min_exclusive=True, maximum=1.0, display_unit="um")
+    # --- initial state -------------------------------------------------------------------
+    phi_start: float = declare(
+        "wheel.phi_start", 0.0, "rad",
+        "initial wheel angle (used when init.in_contact is false)", display_unit="deg")
+    w_start: float = declare(
+        "wheel.w_start", 0.0, "rad/s",
+        "initial wheel speed (used when init.in_contact is false)", display_unit="rpm")
+    init_in_contact: bool = declare(
+        "init.in_contact", True, "",
+        "start in the static flank equilibrium for the initial load torque and pinion "
+        "speed (no start-up transient); false = start from wheel.phi_start, wheel.w_start")
+    # --- numerics ------------------------------------------------------------------------
+    h_max: float = declare(
+        "solver.h_max", 1e-5, "s",
+        "largest integration substep while teeth are in contact (free flight is exact)",
+        minimum=0.0, min_exclusive=True, maximum=1e-2)
+
+    def _check_combination(self) -> None:
+        # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the
+        # geometry that defines them; building it here makes every invalid set fail early.
+        from .geometry import HelicalPairGeometry
+
+        HelicalPairGeometry(self)
