@@ -96,8 +96,20 @@ class MeshModel:
     def stiffness_sum(self, flank: int, phi_p: float) -> float:
         """Sum of the pairs' stiffness non-linearities K_i [N/m^1.5] at pinion angle phi_p,
         so that the flank's total normal force is stiffness_sum * delta^(3/2)."""
-        return sum(self._pair_stiffness(s, frac)[1] for _, s, frac in
+        return sum(self._pair_stiffness(s, frac)[2] for _, s, frac in
                    self.geometry.pairs(flank, phi_p))
+
+    def energy_balance_delta_max(self, flank: int, phi_p: float, v_impact: float) -> float:
+        """Largest eq. (7)-(8) delta_max [m] over the pairs in the zone of action of
+        ``flank`` for an impact at normal speed ``v_impact`` [m/s]."""
+        p = self.params
+        out = 0.0
+        for _, s, frac in self.geometry.pairs(flank, phi_p):
+            r_x, K_full, _ = self._pair_stiffness(s, frac)
+            d = hertz.energy_balance_delta_max(v_impact, K_full, r_x, p.r_y, self.E_star,
+                                               p.density)
+            out = max(out, d)
+        return out
 
     def _pair_stiffness(self, s: float, fraction: float) -> tuple[float, float, float]:
         """``(r_x, K_full, K)`` of a pair at roll coordinate s with engaged fraction."""
@@ -132,7 +144,7 @@ class MeshModel:
             v_s = lubrication.sliding_speed(w_p, rho_p, w_w, rho_w)
             u = lubrication.entrainment_speed(w_p, rho_p, w_w, rho_w)
             h = lam = psi = d_max = 0.0
-            if p.friction_enabled and W > 0.0:
+            if (p.friction_enabled or detail) and W > 0.0:
                 A_e = lubrication.asperity_area(W, E_star, p.gamma, p.sigma)
                 A = hertz.apparent_area(W, r_x, p.r_y, E_star)
                 d_max = hertz.energy_balance_delta_max(
@@ -140,13 +152,15 @@ class MeshModel:
                 h = lubrication.film_thickness(-delta, d_max)
                 lam = h / p.sigma
                 psi = lubrication.dry_fraction(lam, A_e, A)
-                U = u if p.shear_speed == 0 else v_s
-                F = lubrication.friction_force(p.friction_form, psi, A_e, A, p.tau_s, p.eta, U, h)
-                if v_s != 0.0:
-                    sgn = 1.0 if v_s > 0.0 else -1.0
-                    tau_w += sgn * F * rho_w
-                    tau_p -= sgn * F * rho_p
-                    F_net += sgn * F
+                if p.friction_enabled:
+                    U = u if p.shear_speed == 0 else v_s
+                    F = lubrication.friction_force(
+                        p.friction_form, psi, A_e, A, p.tau_s, p.eta, U, h)
+                    if v_s != 0.0:
+                        sgn = 1.0 if v_s > 0.0 else -1.0
+                        tau_w += sgn * F * rho_w
+                        tau_p -= sgn * F * rho_p
+                        F_net += sgn * F
             if detail:
                 out.pairs.append(PairLoad(slot, s, frac, r_x, K, W, F, v_s, u, h, lam, psi, d_max))
         out.tau_wheel, out.tau_pinion, out.W, out.F = tau_w, tau_p, W_sum, F_net

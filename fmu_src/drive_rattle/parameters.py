@@ -12,8 +12,9 @@ are metadata for the FMI layer only.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Any, Iterator, Mapping
+from typing import Any
 
 #: Upper bound on the number of tooth pairs that can be in the zone of action at once.
 #: The FMU exposes this many `pair[k].W` slots; a geometry needing more is rejected.
@@ -41,7 +42,9 @@ class ParameterSpec:
 
     @property
     def kind(self) -> str:
-        """FMI type name: ``Boolean``, ``Integer`` or ``Real``."""
+        """FMI type name: ``Boolean``, ``Integer``, ``Real`` or ``String``."""
+        if isinstance(self.default, str):
+            return "String"
         if isinstance(self.default, bool):
             return "Boolean"
         if isinstance(self.default, int):
@@ -52,6 +55,8 @@ class ParameterSpec:
         """Human-readable statement of the allowed values, used in error messages."""
         if self.kind == "Boolean":
             return "true or false"
+        if self.kind == "String":
+            return "a string"
         if self.choices is not None:
             return "one of " + ", ".join(f"{k} ({v})" for k, v in self.choices.items())
         lo = "-inf" if self.minimum is None else _fmt(self.minimum)
@@ -64,6 +69,10 @@ class ParameterSpec:
     def check(self, value: Any) -> Any:
         """Return ``value`` converted to the parameter's type, or raise ValueError naming it."""
         kind = self.kind
+        if kind == "String":
+            if not isinstance(value, str):
+                raise self._error(value, "must be a string")
+            return value
         if kind == "Boolean":
             if isinstance(value, bool) or value in (0, 1):
                 return bool(value)
@@ -123,7 +132,7 @@ def specs(cls_or_obj: Any) -> Iterator[tuple[str, ParameterSpec]]:
             yield f.name, spec
 
 
-class _ParameterSet:
+class ParameterSet:
     """Mixin: range validation on construction and construction from public names."""
 
     def __post_init__(self) -> None:
@@ -167,7 +176,7 @@ SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |
 
 
 @dataclass(frozen=True)
-class MeshParameters(_ParameterSet):
+class MeshParameters(ParameterSet):
     """Parameters of the gear-mesh impact and friction model (defaults: MODEL_NOTES section 3)."""
 
     # --- gear pair geometry -------------------------------------------------------------

@@ -8,7 +8,7 @@ here; tests hold it against ``scipy.optimize.brentq``.
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 #: Iteration cap of :func:`brent`; Brent's method needs at most ~log2(range/xtol)^2 steps.
 MAX_ITERATIONS = 200
@@ -100,7 +100,7 @@ def first_crossing(c0: float, c1: float, c2: float, t_max: float, rising: bool) 
     for t in roots:
         if 0.0 < t <= t_max:
             slope = c1 + 2.0 * c2 * t
-            if (slope > 0.0) if rising else (slope < 0.0):
-                if best is None or t < best:
-                    best = t
+            right_way = (slope > 0.0) if rising else (slope < 0.0)
+            if right_way and (best is None or t < best):
+                best = t
     return best

@@ -51,7 +51,7 @@ class WheelState:
                 self.v_impact_last, self.impacts_drive, self.impacts_coast)
 
     @classmethod
-    def from_tuple(cls, values) -> "WheelState":
+    def from_tuple(cls, values) -> WheelState:
         phi, w, flank, vd, vc, vl, nd, nc = values
         return cls(float(phi), float(w), int(flank), float(vd), float(vc), float(vl),
                    int(nd), int(nc))
@@ -223,12 +223,11 @@ class _StepRun:
             st.flank = flank
         t = 0.0
         while t < self.H:
-            if st.flank == 0:
-                t = self._free_flight(t)
-            else:
-                t = self._contact_substep(t)
+            t = self._free_flight(t) if st.flank == 0 else self._contact_substep(t)
         r = self.result
-        r.tau_wheel_mean = (self.J * (st.w - self.stepper.state.w) + self.tau_load * self.H) / self.H
+        # Mean mesh torque from the momentum balance I_w dw = (tau_mesh - tau_load) dt.
+        dw = st.w - self.stepper.state.w
+        r.tau_wheel_mean = (self.J * dw + self.tau_load * self.H) / self.H
         r.tau_pinion_mean = self.int_tau_pinion / self.H
         if st.flank != 0:
             r.delta_peak = max(r.delta_peak, mesh.penetration(st.flank, self.phi_p(self.H), st.phi))

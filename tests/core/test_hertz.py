@@ -27,8 +27,8 @@ def test_sphere_impact_example_of_model_notes():
 
 def test_contact_duration_factor_is_the_integral():
     val, _ = integrate.quad(lambda x: 1.0 / math.sqrt(1.0 - x**2.5), 0.0, 1.0)
-    assert hertz.CONTACT_DURATION_FACTOR == pytest.approx(2.0 * val, rel=1e-9)
-    assert hertz.CONTACT_DURATION_FACTOR == pytest.approx(2.9432, abs=1e-4)
+    assert pytest.approx(2.0 * val, rel=1e-9) == hertz.CONTACT_DURATION_FACTOR
+    assert pytest.approx(2.9432, abs=1e-4) == hertz.CONTACT_DURATION_FACTOR
 
 
 def test_energy_balance_delta_max_solves_eq7_with_eq8_mass():

@@ -1,0 +1,125 @@
+"""Inputs and outputs of the two units: one declaration per signal (public name, unit,
+description), and the functions that compute the output values from the physics state.
+
+The FMU slaves register exactly these signals, the modelDescription and the documentation
+tables are generated from them, and the co-simulation harness records them by name.  The
+names are public API: they change only on purpose.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from . import lubrication
+from .parameters import MAX_PAIR_SLOTS
+from .stepper import WheelStepper
+
+
+@dataclass(frozen=True)
+class SignalSpec:
+    """Declaration of one input or output."""
+
+    name: str
+    unit: str  # SI unit ("1" dimensionless)
+    description: str
+    kind: str = "Real"  # FMI type: Real or Integer
+    display_unit: str | None = None
+    start: float = 0.0  # start value of inputs
+
+
+MESH_INPUTS = (
+    SignalSpec("pinion.phi", "rad", "pinion (input-shaft gear) angle, forward positive",
+               display_unit="deg"),
+    SignalSpec("pinion.w", "rad/s", "pinion speed", display_unit="rpm"),
+    SignalSpec("pinion.a", "rad/s2", "pinion angular acceleration (Taylor term inside a step)"),
+    SignalSpec("wheel.tau_load", "N.m",
+               "resisting torque on the wheel (M_res of eq. 10), positive against forward "
+               "rotation"),
+)
+
+MESH_OUTPUTS = (
+    SignalSpec("wheel.tau_mesh", "N.m",
+               "mesh torque on the wheel averaged over the last step, positive driving it "
+               "forward"),
+    SignalSpec("pinion.tau_mesh", "N.m",
+               "mesh torque on the pinion averaged over the last step (negative while the "
+               "pinion drives)"),
+    SignalSpec("wheel.phi", "rad", "wheel angle, forward positive", display_unit="deg"),
+    SignalSpec("wheel.w", "rad/s", "wheel speed", display_unit="rpm"),
+    SignalSpec("mesh.W", "N", "total normal force of the pairs in contact now"),
+    SignalSpec("mesh.W_peak", "N", "peak total normal force within the last step"),
+    SignalSpec("mesh.F", "N",
+               "net flank friction force now, positive when it drives the wheel forward"),
+    SignalSpec("mesh.delta", "m", "normal penetration of the flank in contact now, 0 when apart",
+               display_unit="um"),
+    SignalSpec("mesh.delta_peak", "m", "peak normal penetration within the last step",
+               display_unit="um"),
+    SignalSpec("mesh.v_impact", "m/s", "normal approach speed at the last contact onset",
+               display_unit="mm/s"),
+    SignalSpec("mesh.h", "m",
+               "film thickness (eq. 11) at the most loaded pair; when apart, the clearance "
+               "of the nearer flank plus its eq. 7 delta_max", display_unit="um"),
+    SignalSpec("mesh.lambda", "1", "film parameter h/sigma (at mesh.h)"),
+    SignalSpec("mesh.psi", "1", "proportion of dry contact psi (at mesh.h)"),
+    SignalSpec("mesh.n_contact", "1", "number of tooth pairs in contact now", kind="Integer"),
+    SignalSpec("mesh.impacts_drive", "1", "cumulative contact onsets on the drive flank",
+               kind="Integer"),
+    SignalSpec("mesh.impacts_coast", "1", "cumulative contact onsets on the coast flank",
+               kind="Integer"),
+    *(SignalSpec(f"pair[{k}].W", "N",
+                 f"normal force of pair slot {k} (tooth pairs numbered in mesh order, slot = "
+                 f"number mod {MAX_PAIR_SLOTS}; either flank)")
+      for k in range(MAX_PAIR_SLOTS)),
+)
+
+DRIVELINE_INPUTS = (
+    SignalSpec("wheel.phi", "rad", "wheel angle (from the mesh unit)", display_unit="deg"),
+    SignalSpec("wheel.w", "rad/s", "wheel speed (from the mesh unit)", display_unit="rpm"),
+)
+
+DRIVELINE_OUTPUTS = (
+    SignalSpec("pinion.phi", "rad", "input-shaft (pinion) angle", display_unit="deg"),
+    SignalSpec("pinion.w", "rad/s", "input-shaft (pinion) speed", display_unit="rpm"),
+    SignalSpec("pinion.a", "rad/s2", "input-shaft (pinion) angular acceleration"),
+    SignalSpec("wheel.tau_load", "N.m",
+               "output-shaft torque resisting the wheel, positive against forward rotation"),
+    SignalSpec("vehicle.w", "rad/s", "speed of the reflected vehicle inertia",
+               display_unit="rpm"),
+)
+
+
+def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
+    """Values of ``MESH_OUTPUTS`` for the stepper's current state (SI units)."""
+    st, last = stepper.state, stepper.last
+    loads = stepper.loads_now()
+    loaded = [p for p in loads.pairs if p.W > 0.0]
+    if loaded:
+        top = max(loaded, key=lambda p: p.W)
+        h, lam, psi = top.h, top.film_parameter, top.dry_fraction
+    else:
+        v_imp = st.v_impact_drive if loads.flank > 0 else st.v_impact_coast
+        d_max = stepper.mesh.energy_balance_delta_max(loads.flank, stepper.pinion[0], v_imp)
+        h = lubrication.film_thickness(-loads.delta, d_max)
+        lam = h / stepper.params.sigma
+        psi = lubrication.dry_fraction(lam, 0.0, 0.0)
+    out = {
+        "wheel.tau_mesh": last.tau_wheel_mean,
+        "pinion.tau_mesh": last.tau_pinion_mean,
+        "wheel.phi": st.phi,
+        "wheel.w": st.w,
+        "mesh.W": loads.W,
+        "mesh.W_peak": last.W_peak,
+        "mesh.F": loads.F,
+        "mesh.delta": loads.delta if loaded else 0.0,
+        "mesh.delta_peak": last.delta_peak,
+        "mesh.v_impact": st.v_impact_last,
+        "mesh.h": h,
+        "mesh.lambda": lam,
+        "mesh.psi": psi,
+        "mesh.n_contact": len(loaded),
+        "mesh.impacts_drive": st.impacts_drive,
+        "mesh.impacts_coast": st.impacts_coast,
+    }
+    for k, f in enumerate(stepper.mesh.pair_forces(loads)):
+        out[f"pair[{k}].W"] = f
+    return out

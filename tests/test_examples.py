@@ -1,0 +1,28 @@
+"""Every example runs (short horizons)."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def load(name):
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_paper_scenario_example(tmp_path):
+    mod = load("paper_scenario")
+    result = mod.run(stop_time=0.2, out_dir=tmp_path)
+    names = {f.name for f in result["files"]}
+    assert names == {"comparison.md", "fig3_wheel_speed.png", "fig4_pair_force.png",
+                     "fig5_force_spectrum.png"}
+    for f in result["files"]:
+        assert f.stat().st_size > 1000
+    rows = dict((q, run) for q, run, _ in result["rows"])
+    assert rows["mean wheel speed [rad/s]"] == pytest.approx(86.92 * 20 / 39, rel=0.01)
+    assert "| mean wheel speed [rad/s] |" in (tmp_path / "comparison.md").read_text()
