@@ -80,7 +80,7 @@ def _figures(t, s, spec, drive_params, mesh_params, out: Path, show_plot: bool) 
     fig, ax = plt.subplots(figsize=(8, 4))
     ax.semilogy(spec.frequency, spec.psd, lw=0.8)
     f_engine = drive_params.w_mean / (2 * np.pi)
-    for order, amp, _ in drive_params.order_terms():
+    for order, _amp, _ in drive_params.order_terms():
         ax.axvline(order * f_engine, color="tab:orange", ls=":", lw=0.8)
         ax.text(order * f_engine, ax.get_ylim()[1], f" {order:g}E", color="tab:orange",
                 va="top", fontsize=7)

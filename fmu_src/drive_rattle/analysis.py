@@ -33,7 +33,7 @@ def welch_spectrum(time, values, segment_seconds: float = 0.25) -> Spectrum:
     t = np.asarray(time, dtype=float)
     x = np.asarray(values, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    nper = min(len(x), max(16, int(round(segment_seconds * fs))))
+    nper = min(len(x), max(16, round(segment_seconds * fs)))
     f, p = signal.welch(x - x.mean(), fs=fs, nperseg=nper, detrend="constant")
     return Spectrum(f, p)
 
