@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .parameters import ParameterSet, declare
+from .stepper import check_step_size
 
 RPM = 2.0 * math.pi / 60.0
 #: Number of engine-order slots of the input-shaft kinematics.
@@ -82,7 +83,11 @@ class DrivelineParameters(ParameterSet):
         "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
         minimum=0.0, maximum=1e5)
     h_max: float = declare(
-        "solver.h_max_driveline", 1e-4, "s", "largest integration substep of the output shaft",
+        "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
+        minimum=0.0, min_exclusive=True, maximum=1.0)
+    h_comm_max: float = declare(
+        "solver.h_comm_max", 1e-2, "s",
+        "largest communication step accepted (the wheel is extrapolated linearly over a step)",
         minimum=0.0, min_exclusive=True, maximum=1.0)
 
     def order_terms(self) -> list[tuple[float, float, float]]:
@@ -234,7 +239,47 @@ class OutputShaft:
             phi += dt * (w + dt / 6.0 * (a1 + a2 + a3))
             w += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
         if not (math.isfinite(phi) and math.isfinite(w)):
-            raise ValueError("output shaft diverged: reduce solver.h_max_driveline")
+            raise ValueError("output shaft diverged: reduce solver.h_max")
         self.state = ShaftState(phi, w)
         self.tau_load = self.torque(phi_w + w_w * h, w_w, self.state)
         return self.tau_load
+
+
+def input_kinematics(p: DrivelineParameters, t_start: float = 0.0,
+                     resources: Path | None = None):
+    """The input-shaft kinematics the parameters select: a speed table or engine orders.
+
+    A relative speed-table path is looked up in ``resources`` (the FMU's resources folder)
+    first, then in the working directory."""
+    if p.speed_table:
+        path = Path(p.speed_table)
+        if not path.is_absolute() and resources is not None and (Path(resources) / path).exists():
+            path = Path(resources) / path
+        return SpeedTableKinematics(path, p.phi_start)
+    return EngineOrderKinematics(p, t_start)
+
+
+class Driveline:
+    """The driveline unit: input-shaft kinematics and output shaft, at communication points.
+
+    ``phi_w``, ``w_w`` are the wheel's angle and speed at the start time; the shaft starts in
+    steady state behind them."""
+
+    def __init__(self, p: DrivelineParameters, t_start: float, phi_w: float, w_w: float,
+                 resources: Path | None = None):
+        self.params = p
+        self.kinematics = input_kinematics(p, t_start, resources)
+        self.shaft = OutputShaft(p, phi_w, w_w)
+        self.time = t_start
+
+    def step(self, t: float, h: float, phi_w: float, w_w: float) -> None:
+        """Advance from the communication point t by h with the wheel's angle and speed at t."""
+        check_step_size(h, self.params.h_comm_max)
+        self.shaft.step(h, phi_w, w_w)
+        self.time = t + h
+
+    def outputs(self) -> dict[str, float]:
+        """Values of the driveline outputs now (SI units, public names)."""
+        phi, w, a = self.kinematics(self.time)
+        return {"pinion.phi": phi, "pinion.w": w, "pinion.a": a,
+                "wheel.tau_load": self.shaft.tau_load, "vehicle.w": self.shaft.state.w}

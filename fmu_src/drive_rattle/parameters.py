@@ -283,6 +283,11 @@ class MeshParameters(ParameterSet):
         "solver.h_max", 1e-5, "s",
         "largest integration substep while teeth are in contact (free flight is exact)",
         minimum=0.0, min_exclusive=True, maximum=1e-2)
+    h_comm_max: float = declare(
+        "solver.h_comm_max", 1e-2, "s",
+        "largest communication step accepted (the pinion's Taylor polynomial and the held "
+        "load torque stop being meaningful beyond a fraction of an engine-order period)",
+        minimum=0.0, min_exclusive=True, maximum=1.0)
 
     def _check_combination(self) -> None:
         # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the

@@ -155,8 +155,7 @@ class WheelStepper:
         ``w_p`` [rad/s], ``a_p`` [rad/s^2] at the step start and the held load torque
         ``tau_load`` [N.m].  Commits the new state only when the whole step succeeded."""
         _check_finite(phi_p=phi_p, w_p=w_p, a_p=a_p, tau_load=tau_load)
-        if not (h > 0.0 and math.isfinite(h)):
-            raise ValueError(f"step size h = {h!r} s is invalid; allowed: finite and > 0")
+        check_step_size(h, self.params.h_comm_max)
         run = _StepRun(self, h, phi_p, w_p, a_p, tau_load)
         state, result = run.execute()
         self.state = state
@@ -393,6 +392,16 @@ class _StepRun:
             r.delta_peak = d
             K = m.stiffness_sum(flank, self.phi_p(t + s * h))
             r.W_peak = max(r.W_peak, K * d**1.5)
+
+
+def check_step_size(h: float, h_max: float) -> None:
+    """Raise ValueError unless 0 < h <= h_max (the parameter solver.h_comm_max)."""
+    if not (h > 0.0 and math.isfinite(h)):
+        raise ValueError(f"step size h = {h!r} s is invalid; allowed: finite and > 0")
+    if h > h_max:
+        raise ValueError(
+            f"step size h = {h!r} s exceeds solver.h_comm_max = {h_max!r} s; allowed: "
+            f"(0, {h_max!r}] s")
 
 
 def _check_finite(**values: float) -> None:

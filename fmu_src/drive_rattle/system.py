@@ -8,14 +8,8 @@ it bit for bit, which tests the FMI layer without any tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
-from .driveline import (
-    DrivelineParameters,
-    EngineOrderKinematics,
-    OutputShaft,
-    SpeedTableKinematics,
-)
+from .driveline import Driveline, DrivelineParameters
 from .interface import DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS, mesh_outputs
 from .parameters import MeshParameters
 from .stepper import WheelStepper
@@ -38,16 +32,6 @@ class Record:
     onset_flanks: list[int] = field(default_factory=list)
 
 
-def input_kinematics(p: DrivelineParameters, t_start: float = 0.0, resources: Path | None = None):
-    """The input-shaft kinematics the parameters select: a speed table or engine orders."""
-    if p.speed_table:
-        path = Path(p.speed_table)
-        if not path.is_absolute() and resources is not None and (resources / path).exists():
-            path = resources / path
-        return SpeedTableKinematics(path, p.phi_start)
-    return EngineOrderKinematics(p, t_start)
-
-
 def simulate(mesh_params: MeshParameters | None = None,
              driveline_params: DrivelineParameters | None = None,
              stop_time: float = 0.1, step: float = 1e-4, start_time: float = 0.0,
@@ -57,39 +41,35 @@ def simulate(mesh_params: MeshParameters | None = None,
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
-    kin = input_kinematics(dp, start_time)
-    phi_p, w_p, a_p = kin(start_time)
     # Initialisation in the order the co-simulation master uses: the driveline's initial
-    # load (its wheel inputs still at their start values), then the mesh's equilibrium under
-    # it, then the driveline's shaft set in steady state behind the wheel.
-    mesh = WheelStepper(mp, phi_p, w_p, OutputShaft(dp, 0.0, 0.0).tau_load)
-    shaft = OutputShaft(dp, mesh.state.phi, mesh.state.w)
+    # outputs (its wheel inputs still at their start values 0), the mesh's equilibrium under
+    # its load torque, then the driveline built behind the mesh's initial wheel state.
+    first = Driveline(dp, start_time, 0.0, 0.0).outputs()
+    mesh = WheelStepper(mp, first["pinion.phi"], first["pinion.w"], first["wheel.tau_load"])
+    drive = Driveline(dp, start_time, mesh.state.phi, mesh.state.w)
     rec = Record(signals={n: [] for n in names})
     n_steps = round((stop_time - start_time) / step)
     for k in range(n_steps + 1):
         t = start_time + k * step
-        _record(rec, t, names, (phi_p, w_p, a_p), shaft, mesh)
+        d = drive.outputs()
+        _record(rec, t, names, d, mesh)
         if k == n_steps:
             break
         wheel_phi, wheel_w = mesh.state.phi, mesh.state.w
-        result = mesh.step(step, phi_p, w_p, a_p, shaft.tau_load)
+        result = mesh.step(step, d["pinion.phi"], d["pinion.w"], d["pinion.a"],
+                           d["wheel.tau_load"])
         for ev in result.events:
             if ev.kind == "onset":
                 rec.onset_times.append(t + ev.time)
                 rec.onset_speeds.append(ev.speed)
                 rec.onset_flanks.append(ev.flank)
-        shaft.step(step, wheel_phi, wheel_w)
-        phi_p, w_p, a_p = kin(start_time + (k + 1) * step)
+        drive.step(t, step, wheel_phi, wheel_w)
     return rec
 
 
-def _record(rec: Record, t: float, names, pinion, shaft: OutputShaft,
+def _record(rec: Record, t: float, names, driveline_outputs: dict,
             mesh: WheelStepper) -> None:
     rec.time.append(t)
-    values = mesh_outputs(mesh)
-    values.update({"pinion.phi": pinion[0], "pinion.w": pinion[1], "pinion.a": pinion[2],
-                   "wheel.tau_load": shaft.tau_load, "vehicle.w": shaft.state.w})
+    values = {**mesh_outputs(mesh), **driveline_outputs}
     for n in names:
         rec.signals[n].append(values[n])
-
-

@@ -1,0 +1,140 @@
+"""Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation) and validate
+them.
+
+    python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
+
+Each FMU bundles the slave module, the runtime part of the physics core (standard library
+only), the FMI glue, generated documentation and the native status shim.  The normalised
+modelDescription of each build is compared with the committed one in
+modelDescription_templates/: an interface change fails the build until the template is
+updated (--update-templates) and the diff committed.  Every FMU is checked with fmpy's
+validate_fmu and, when installed, fmu-manipulation-toolbox's `fmutool -check`; any problem
+fails the build.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree
+
+ROOT = Path(__file__).resolve().parent
+SRC = ROOT / "fmu_src"
+TEMPLATES = ROOT / "modelDescription_templates"
+MODELS = ("GearMeshRattle", "Driveline")
+
+#: Modules of the core that run inside the FMUs (the rest needs numpy/scipy or is tooling).
+CORE_RUNTIME = ("__init__", "parameters", "geometry", "hertz", "lubrication", "mesh", "roots",
+                "stepper", "driveline", "interface")
+FMI_RUNTIME = ("__init__", "slave", "model_description", "units")
+
+sys.path.insert(0, str(SRC))
+
+
+class BuildError(RuntimeError):
+    pass
+
+
+def _stage_packages(staging: Path) -> list[Path]:
+    out = []
+    for package, modules in (("drive_rattle", CORE_RUNTIME), ("drive_rattle_fmi", FMI_RUNTIME)):
+        dest = staging / package
+        dest.mkdir(parents=True)
+        for m in modules:
+            shutil.copy2(SRC / package / f"{m}.py", dest / f"{m}.py")
+        out.append(dest)
+    return out
+
+
+def _slave_class(name: str):
+    module = __import__(name)
+    return getattr(module, name)
+
+
+def build_one(name: str, out_dir: Path, update_templates: bool = False,
+              use_fmutool: bool = True) -> Path:
+    """Build, shim, check against the template and validate one FMU; returns its path."""
+    from pythonfmu.builder import FmuBuilder
+
+    from drive_rattle_fmi.documentation import HOW_TO_RUN, html_page
+    from drive_rattle_fmi.model_description import normalised_xml
+    from drive_rattle_fmi.native import install_shim
+    from drive_rattle_fmi.slave import MESSAGE_VARIABLE, STATUS_ADDRESS_VARIABLE
+
+    cls = _slave_class(name)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fmu = out_dir / f"{name}.fmu"
+    with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
+        tmp = Path(tmp)
+        packages = _stage_packages(tmp / "stage")
+        doc = tmp / "documentation"
+        doc.mkdir()
+        (doc / "index.html").write_text(
+            html_page(cls, HOW_TO_RUN.format(name=name)), encoding="utf-8")
+        FmuBuilder.build_FMU(SRC / f"{name}.py", dest=fmu, project_files=packages,
+                             documentation_folder=doc, canGetAndSetFMUstate=True,
+                             canSerializeFMUstate=True)
+    slave = cls(instance_name="build")
+    vrs = {v.name: v.value_reference for v in slave.vars.values()}
+    install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE])
+
+    with zipfile.ZipFile(fmu) as z:
+        xml = ElementTree.fromstring(z.read("modelDescription.xml"))
+    text = normalised_xml(xml)
+    template = TEMPLATES / f"{name}.xml"
+    if update_templates:
+        TEMPLATES.mkdir(exist_ok=True)
+        template.write_text(text, encoding="utf-8")
+    elif not template.exists() or template.read_text(encoding="utf-8") != text:
+        raise BuildError(
+            f"{name}: the interface differs from {template.relative_to(ROOT)}; review the "
+            "change, run `python build_fmu.py --update-templates` and commit the template diff")
+    validate(fmu, use_fmutool)
+    return fmu
+
+
+def validate(fmu: Path, use_fmutool: bool = True) -> None:
+    """fmpy's validate_fmu and (if installed) `fmutool -check`; raises BuildError on problems."""
+    from fmpy.validation import validate_fmu
+
+    problems = validate_fmu(str(fmu))
+    if problems:
+        raise BuildError(f"{fmu.name}: fmpy validate_fmu found problems:\n" + "\n".join(problems))
+    tool = shutil.which("fmutool") or (Path(sys.executable).parent / "fmutool")
+    if use_fmutool and Path(tool).exists():
+        run = subprocess.run([str(tool), "-input", str(fmu), "-check"], capture_output=True,
+                             text=True)
+        report = run.stdout + run.stderr
+        if run.returncode != 0 or "ERROR" in report:
+            raise BuildError(f"{fmu.name}: fmutool -check failed:\n{report}")
+
+
+def build(out_dir: Path = ROOT / "dist", update_templates: bool = False,
+          use_fmutool: bool = True) -> list[Path]:
+    """Build and validate both FMUs."""
+    return [build_one(name, out_dir, update_templates, use_fmutool) for name in MODELS]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=ROOT / "dist", help="output folder")
+    ap.add_argument("--update-templates", action="store_true",
+                    help="write the normalised modelDescriptions to modelDescription_templates/")
+    ap.add_argument("--no-fmutool", action="store_true", help="skip `fmutool -check`")
+    args = ap.parse_args(argv)
+    try:
+        for fmu in build(args.out, args.update_templates, not args.no_fmutool):
+            print(f"built and validated {fmu}")
+    except BuildError as err:
+        print(f"build_fmu.py: {err}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,80 @@
+"""Interface documentation of the FMUs, generated from the same specs as the registration and
+the modelDescription: documentation/index.html inside each FMU and the Markdown tables of
+docs/fmi.md."""
+
+from __future__ import annotations
+
+import html
+
+from drive_rattle.parameters import specs
+
+
+def interface_rows(slave_cls) -> list[tuple[str, str, str, str, str, str]]:
+    """``(name, causality, type, unit, start/limits, description)`` for every public variable."""
+    rows = []
+    for _attr, spec in specs(slave_cls.PARAMETERS):
+        limits = spec.allowed() if spec.kind in ("Real", "Integer") else ""
+        start = repr(spec.default) if spec.kind != "Boolean" else str(spec.default).lower()
+        allowed = f"{start}; {limits}".rstrip("; ")
+        rows.append((spec.name, "parameter", spec.kind, spec.unit, allowed, spec.description))
+    for spec in slave_cls.INPUTS:
+        rows.append((spec.name, "input", spec.kind, spec.unit, repr(spec.start),
+                     spec.description))
+    for spec in slave_cls.OUTPUTS:
+        rows.append((spec.name, "output", spec.kind, spec.unit, "", spec.description))
+    return rows
+
+
+def markdown_interface(slave_cls) -> str:
+    """Markdown table of the interface."""
+    head = "| name | causality | type | unit | start; allowed | description |\n"
+    head += "|---|---|---|---|---|---|\n"
+    body = "".join(
+        "| `" + r[0] + "` | " + " | ".join(c.replace("|", "\\|") for c in r[1:]) + " |\n"
+        for r in interface_rows(slave_cls))
+    return head + body
+
+
+def html_page(slave_cls, how_to_run: str) -> str:
+    """documentation/index.html of the FMU."""
+    rows = "\n".join(
+        "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
+        for r in interface_rows(slave_cls))
+    exp = slave_cls.DEFAULT_EXPERIMENT
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{slave_cls.__name__}</title>
+<style>body{{font-family:sans-serif;max-width:70em}}td,th{{border:1px solid #ccc;padding:2px 6px;
+vertical-align:top}}table{{border-collapse:collapse}}code{{background:#f4f4f4}}</style></head>
+<body>
+<h1>{slave_cls.__name__}</h1>
+<p>{html.escape(slave_cls.description)}</p>
+<p>FMI 2.0 co-simulation, built with pythonfmu and a native status shim (linux64). Default
+experiment: start {exp['startTime']} s, stop {exp['stopTime']} s, communication step
+{exp['stepSize']} s. All values are SI; display units are declared in the modelDescription.</p>
+<h2>How to run</h2>
+{how_to_run}
+<h2>Interface</h2>
+<table><tr><th>name</th><th>causality</th><th>type</th><th>unit</th><th>start; allowed</th>
+<th>description</th></tr>
+{rows}
+</table>
+<h2>Behaviour on bad input</h2>
+<p>Invalid parameters make <code>fmi2ExitInitializationMode</code> return fmi2Error; a
+non-finite input, a non-positive or too large step, or a communication point that does not
+continue the last step make <code>fmi2DoStep</code> return fmi2Error. The message, naming the
+variable, its value and what is allowed, is sent to the logger even with debug logging off, and
+a rejected call leaves the instance's state as it was.</p>
+</body></html>
+"""
+
+
+HOW_TO_RUN = """<p>The FMU needs a Python 3 interpreter (3.10 or newer) on the machine where it
+runs; its model code uses only the standard library, and pythonfmu's runtime is bundled.
+Inside a Python host (fmpy, libcosimpy) the host's interpreter is used:</p>
+<pre>from fmpy import simulate_fmu
+result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
+<p>A native host (a C/C++ simulation tool) on Linux must load libpython into the process first
+(<code>LD_PRELOAD=/path/to/libpython3.x.so</code>, the library of the Python installation whose
+<code>python3</code> is first on <code>PATH</code>). Do not unpack the FMU under a path that
+needs escaping beyond what the shim decodes (any %XX is decoded).</p>
+"""
