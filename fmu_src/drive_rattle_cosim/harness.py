@@ -1,0 +1,338 @@
+"""Co-simulation of GearMeshRattle and Driveline on fmpy's low-level FMU2Slave API.
+
+Fixed communication step, Jacobi coupling (both units step from the outputs of the last
+communication point), the same as libcosim's fixed-step algorithm and as the in-process twin
+``drive_rattle.system.simulate``.  Communication points are integer nanoseconds,
+``t_k = (t0_ns + k step_ns) / 1e9``, and each step is ``t_{k+1} - t_k``, as libcosim computes
+them, so the three agree bit for bit.
+
+Python::
+
+    from drive_rattle_cosim.harness import CoSimulation
+    with CoSimulation("dist/GearMeshRattle.fmu", "dist/Driveline.fmu",
+                      parameters={"GearMeshRattle.gear.backlash": 0.12e-3}) as sim:
+        result = sim.run(stop_time=0.5, outputs=["GearMeshRattle.wheel.w"])
+    result.to_csv("out/run.csv")
+
+Command line: ``python -m drive_rattle_cosim.harness --help``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import csv
+import shutil
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
+MESH, DRIVELINE = "GearMeshRattle", "Driveline"
+
+#: (source unit, output, destination unit, input): the one definition of the coupling, used by
+#: the harness and the SSP writer.
+CONNECTIONS = (
+    (DRIVELINE, "pinion.phi", MESH, "pinion.phi"),
+    (DRIVELINE, "pinion.w", MESH, "pinion.w"),
+    (DRIVELINE, "pinion.a", MESH, "pinion.a"),
+    (DRIVELINE, "wheel.tau_load", MESH, "wheel.tau_load"),
+    (MESH, "wheel.phi", DRIVELINE, "wheel.phi"),
+    (MESH, "wheel.w", DRIVELINE, "wheel.w"),
+)
+
+#: Rounds of output-to-input exchange in initialization mode (libcosim does one per unit).
+INIT_ROUNDS = 2
+#: Steps from which on a progress bar is shown when asked for.
+PROGRESS_MIN_STEPS = 20_000
+
+_STATUS = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
+
+
+class CoSimulationError(RuntimeError):
+    """A unit refused a call; the message holds the unit's logged reason."""
+
+
+@dataclass
+class Variable:
+    name: str
+    vr: int
+    kind: str  # Real, Integer, Boolean, String
+    causality: str
+    unit: str
+
+
+class Unit:
+    """One FMU instance with name-based, typed access."""
+
+    def __init__(self, fmu: Path, instance_name: str):
+        self.name = instance_name
+        self.fmu = Path(fmu)
+        if not self.fmu.is_file():
+            raise FileNotFoundError(f"FMU {self.fmu} does not exist (build it with build_fmu.py)")
+        md = read_model_description(str(self.fmu))
+        self.model_name = md.coSimulation.modelIdentifier
+        self.variables = {
+            v.name: Variable(v.name, v.valueReference, v.type, v.causality, v.unit or "")
+            for v in md.modelVariables
+        }
+        self.messages: list[tuple[str, str]] = []  # (status, message) from the logger
+        self._dir = extract(str(self.fmu))
+        self._callbacks = fmi2CallbackFunctions()
+        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        try:  # format the variadic printf arguments natively before they reach Python
+            from ctypes import byref
+
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(self._callbacks))
+        except Exception:  # pragma: no cover - the proxy ships with fmpy on every platform
+            pass
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
+                               modelIdentifier=self.model_name, instanceName=instance_name)
+        self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
+        self._freed = False
+
+    def _log(self, env, instance, status, category, message):
+        self.messages.append((_STATUS[status] if 0 <= status < 6 else str(status),
+                              message.decode("utf-8", "replace")))
+
+    def call(self, what: str, fn, *args):
+        """Call an fmpy method; an FMI error becomes CoSimulationError with the logged reason."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return fn(*args)
+        except FMICallException as err:
+            reason = self.messages[-1][1] if self.messages else "no message logged"
+            raise CoSimulationError(
+                f"{self.name}: {what} returned {_STATUS[err.status]}: {reason}") from None
+
+    def var(self, name: str) -> Variable:
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise KeyError(f"{self.name} has no variable '{name}'") from None
+
+    def set(self, values: dict) -> None:
+        """Set variables by name, grouped by type."""
+        groups: dict[str, tuple[list, list]] = {}
+        for name, value in values.items():
+            v = self.var(name)
+            vrs, vals = groups.setdefault(v.kind, ([], []))
+            vrs.append(v.vr)
+            vals.append(value.encode("utf-8") if v.kind == "String" else value)
+        for kind, (vrs, vals) in groups.items():
+            self.call(f"set{kind}", getattr(self.slave, f"set{kind}"), vrs, vals)
+
+    def close(self) -> None:
+        if not self._freed:
+            self._freed = True
+            # terminate after a failed call may be refused; free the instance anyway
+            with contextlib.suppress(Exception):
+                self.slave.terminate()
+            self.slave.freeInstance()
+            shutil.rmtree(self._dir, ignore_errors=True)
+
+
+@dataclass
+class Result:
+    """Recorded communication points: ``time`` [s] and one column per recorded variable."""
+
+    time: list[float] = field(default_factory=list)
+    columns: dict[str, list] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+
+    def __getitem__(self, name: str) -> list:
+        return self.columns[name]
+
+    def to_csv(self, path) -> Path:
+        """Write ``time [s]`` and every column with its unit in the header."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        names = list(self.columns)
+        with path.open("w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f)
+            w.writerow(["time [s]"] + [f"{n} [{self.units[n]}]" for n in names])
+            for k, t in enumerate(self.time):
+                w.writerow([repr(t)] + [repr(self.columns[n][k]) for n in names])
+        return path
+
+
+def communication_points(start: float, step: float, stop: float) -> list[float]:
+    """``t_k = (t0_ns + k step_ns) / 1e9`` up to ``stop``, as libcosim places them.
+
+    Raises ValueError for a step that is not a whole number of nanoseconds."""
+    step_ns = round(step * 1e9)
+    if step_ns <= 0 or abs(step_ns - step * 1e9) > 1e-6 * step * 1e9:
+        raise ValueError(f"communication step {step!r} s must be a positive whole number of ns")
+    t0_ns = round(start * 1e9)
+    n = round((stop - start) * 1e9 / step_ns)
+    return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]
+
+
+class CoSimulation:
+    """The mesh and the driveline FMUs, coupled by ``CONNECTIONS``.
+
+    ``parameters`` maps ``"<Unit>.<variable>"`` to values; they are set before initialization.
+    """
+
+    def __init__(self, mesh_fmu, driveline_fmu, parameters: dict | None = None,
+                 start_time: float = 0.0, step: float = 1e-4):
+        self.start_time, self.step = start_time, step
+        self.units: dict[str, Unit] = {}
+        try:
+            self.units[MESH] = Unit(mesh_fmu, MESH)
+            self.units[DRIVELINE] = Unit(driveline_fmu, DRIVELINE)
+            self._initialize(parameters or {})
+        except BaseException:
+            self.close()
+            raise
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self) -> None:
+        for u in self.units.values():
+            u.close()
+
+    def _split(self, qualified: str) -> tuple[Unit, str]:
+        unit, _, name = qualified.partition(".")
+        if unit not in self.units or not name:
+            raise KeyError(f"'{qualified}' must be '<unit>.<variable>' with unit one of "
+                           f"{', '.join(self.units)}")
+        return self.units[unit], name
+
+    def _initialize(self, parameters: dict) -> None:
+        per_unit: dict[str, dict] = {u: {} for u in self.units}
+        for qualified, value in parameters.items():
+            unit, name = self._split(qualified)
+            if unit.var(name).causality != "parameter":
+                raise KeyError(f"'{qualified}' is not a parameter")
+            per_unit[unit.name][name] = value
+        for u in self.units.values():
+            u.set(per_unit[u.name])
+            u.call("setupExperiment", u.slave.setupExperiment, None, self.start_time)
+            u.call("enterInitializationMode", u.slave.enterInitializationMode)
+        for _ in range(INIT_ROUNDS):
+            self._transfer()
+        for u in self.units.values():
+            u.call("exitInitializationMode", u.slave.exitInitializationMode)
+        self._plan = self._transfer_plan()
+        self.time = self.start_time
+        self._k = 0
+
+    def _transfer_plan(self) -> list[tuple[Unit, list[int], Unit, list[int]]]:
+        """Per (source, destination) pair: output and input value references, in order."""
+        pairs: dict[tuple[str, str], tuple[list[int], list[int]]] = {}
+        for src, out, dst, inp in CONNECTIONS:
+            outs, ins = pairs.setdefault((src, dst), ([], []))
+            outs.append(self.units[src].var(out).vr)
+            ins.append(self.units[dst].var(inp).vr)
+        return [(self.units[s], outs, self.units[d], ins) for (s, d), (outs, ins) in pairs.items()]
+
+    def _transfer(self) -> None:
+        for src in self.units.values():
+            for s, sout, dst, din in CONNECTIONS:
+                if s == src.name:
+                    value = src.call("getReal", src.slave.getReal, [src.var(sout).vr])[0]
+                    self.units[dst].set({din: value})
+
+    def run(self, stop_time: float, outputs=None, progress: bool = False) -> Result:
+        """Step to ``stop_time`` [s], recording ``outputs`` (``"<Unit>.<output>"``; default:
+        every output of both units) at every communication point, the current one first."""
+        if outputs is None:
+            outputs = [f"{u.name}.{v.name}" for u in self.units.values()
+                       for v in u.variables.values() if v.causality == "output"]
+        rec = []  # (unit, kind, [vrs], [qualified names])
+        for u in self.units.values():
+            for kind in ("Real", "Integer", "Boolean"):
+                names = [o for o in outputs if self._split(o)[0] is u
+                         and u.var(self._split(o)[1]).kind == kind]
+                if names:
+                    rec.append((u, kind, [u.var(self._split(o)[1]).vr for o in names], names))
+        result = Result(units={o: self._split(o)[0].var(self._split(o)[1]).unit or "1"
+                               for o in outputs})
+        result.columns = {o: [] for o in outputs}
+        points = communication_points(self.time, self.step, stop_time)
+        steps = range(len(points))
+        if progress and len(points) > PROGRESS_MIN_STEPS:
+            from tqdm import tqdm
+
+            steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5)
+        plan = self._plan
+        for k in steps:
+            t = points[k]
+            result.time.append(t)
+            for u, kind, vrs, names in rec:
+                values = getattr(u.slave, f"get{kind}")(vrs)
+                for name, value in zip(names, values, strict=True):
+                    result.columns[name].append(value)
+            if k == len(points) - 1:
+                break
+            for src, outs, dst, ins in plan:
+                dst.call("setReal", dst.slave.setReal, ins,
+                         src.call("getReal", src.slave.getReal, outs))
+            h = points[k + 1] - t
+            for u in self.units.values():
+                u.call(f"doStep at t = {t!r} s", u.slave.doStep, t, h)
+            self.time = points[k + 1]
+        return result
+
+
+def _parse_value(text: str):
+    low = text.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def main(argv=None) -> int:
+    root = Path(__file__).resolve().parents[2]
+    ap = argparse.ArgumentParser(
+        prog="python -m drive_rattle_cosim.harness",
+        description="Co-simulate GearMeshRattle with Driveline (fmpy, fixed step, Jacobi).")
+    ap.add_argument("--mesh", type=Path, default=root / "dist" / f"{MESH}.fmu")
+    ap.add_argument("--driveline", type=Path, default=root / "dist" / f"{DRIVELINE}.fmu")
+    ap.add_argument("--start-time", type=float, default=0.0, help="[s]")
+    ap.add_argument("--stop-time", type=float, default=0.1, help="[s]")
+    ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
+    ap.add_argument("--set", action="append", default=[], metavar="UNIT.NAME=VALUE",
+                    help="parameter value (SI units), e.g. GearMeshRattle.gear.backlash=1.2e-4")
+    ap.add_argument("--record", action="append", default=None, metavar="UNIT.OUTPUT",
+                    help="output to record (repeatable; default: all outputs)")
+    ap.add_argument("--out", type=Path, default=Path("out") / "cosim.csv", help="result CSV")
+    ap.add_argument("--no-progress", action="store_true")
+    args = ap.parse_args(argv)
+    params = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep:
+            ap.error(f"--set {item!r}: expected UNIT.NAME=VALUE")
+        params[key] = _parse_value(value)
+    try:
+        with CoSimulation(args.mesh, args.driveline, params, args.start_time, args.step) as sim:
+            result = sim.run(args.stop_time, args.record, progress=not args.no_progress)
+    except (CoSimulationError, KeyError, ValueError, FileNotFoundError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
+    path = result.to_csv(args.out)
+    print(f"wrote {len(result.time)} points x {len(result.columns)} outputs to {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+

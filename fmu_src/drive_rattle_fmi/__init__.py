@@ -1,0 +1,1 @@
+"""FMI layer of the drive-rattle FMUs (pythonfmu slaves, modelDescription, native status shim)."""

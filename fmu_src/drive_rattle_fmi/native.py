@@ -1,0 +1,160 @@
+"""Native status shim around pythonfmu's binary: build it and put it into an FMU.
+
+pythonfmu 0.7.0's C++ wrapper turns any Python exception into ``fmi2Fatal`` (after which
+freeing the instance corrupts the host process), ignores what the slave methods return (except
+``do_step``: False gives ``fmi2Discard``), hands log messages to the host only with debug
+logging on and as a printf *format* string, and decodes only ``%20`` in the resource URI.
+
+``native/rattle_fmi_shim.c`` is compiled into ``binaries/linux64/<modelIdentifier>.so``; it
+loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
+and forwards every FMI 2.0 call to it, adding:
+
+* the **status protocol** below, so a slave can make any FMI call return Warning, Discard,
+  Error or Fatal, with its message logged to the host whether debug logging is on or not;
+* full percent-decoding of ``file://`` resource URIs (``file:///p``, ``file://localhost/p``),
+  handed to pythonfmu as a plain path;
+* pythonfmu's own log messages passed to the host as ``"%s", message`` (no format injection);
+* after pythonfmu itself returned ``fmi2Fatal`` (a Python exception), no further call reaches
+  it: later calls return Fatal, and ``fmi2FreeInstance`` frees only the shim's part and leaks
+  pythonfmu's instance, whose second release would corrupt the process;
+* an exit handler that resets pythonfmu's static Python state before its C++ static destructor
+  runs (pythonfmu's ELF destructor would otherwise release it a second time at process exit:
+  an invalid read under valgrind, now and then "corrupted double-linked list").  Both
+  libraries stay loaded until the process ends.
+
+Status protocol (Python side)::
+
+    self._fmi_status = ctypes.c_int(0)      # keep alive as long as the slave
+    self._fmi_message = ""
+    ...  # registered LAST, so the public value references stay 0..n-1:
+    self.register_variable(String("_fmi.status_address", causality=Fmi2Causality.local,
+                                  variability=Fmi2Variability.discrete,
+                                  getter=lambda: hex(ctypes.addressof(self._fmi_status))),
+                           nested=False)
+    self.register_variable(String("_fmi.message", causality=Fmi2Causality.local,
+                                  variability=Fmi2Variability.discrete,
+                                  getter=lambda: self._fmi_message), nested=False)
+
+    # to make the current FMI call return fmi2Error with a message:
+    self._fmi_message = "text"              # may contain '%'
+    self._fmi_status.value = 3              # 1 Warning, 2 Discard, 3 Error, 4 Fatal
+
+and then return normally (``do_step`` returns True or False as it wishes; never raise).
+
+The shim reads the address once after ``fmi2Instantiate`` (and again after ``fmi2Reset``,
+which makes pythonfmu construct a new slave object).  After each forwarded call returning an
+``fmi2Status`` it checks the int: if non-zero, it resets it to 0, reads the message, calls the
+host's logger with status = the code and category ``logStatusWarning`` / ``logStatusDiscard`` /
+``logStatusError`` / ``logStatusFatal``, and returns ``max(pythonfmu's status, code)``.  Codes
+outside 1..4 count as Error.  An empty address string disables the protocol (pure
+pass-through); the variable at ``vr_status_address`` must exist and be a String, because
+pythonfmu turns the failed lookup into a Fatal (the instantiation then fails).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree
+
+#: The C source of the shim.
+SHIM_SOURCE: Path = Path(__file__).resolve().parents[1] / "native" / "rattle_fmi_shim.c"
+
+_PLATFORM_DIR = "binaries/linux64"
+_INNER_SUFFIX = "_pythonfmu"
+_MAX_VR = 2**32 - 1
+
+
+def _check_vr(name: str, value: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= _MAX_VR:
+        raise ValueError(f"{name} must be an fmi2ValueReference (0..{_MAX_VR}), got {value!r}")
+
+
+def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr_message: int,
+                 cc: str = "gcc") -> Path:
+    """Compile the shim into ``out_path`` (a shared library) and return ``out_path``.
+
+    ``inner_lib_name`` is the file name (no directory) of pythonfmu's library, which the shim
+    loads from its own directory.  Raises RuntimeError with the compiler's output on failure.
+    """
+    if not re.fullmatch(r"[A-Za-z0-9_.+-]+", inner_lib_name):
+        raise ValueError(f"inner_lib_name must be a plain file name, got {inner_lib_name!r}")
+    _check_vr("vr_status_address", vr_status_address)
+    _check_vr("vr_message", vr_message)
+    out_path = Path(out_path)
+    cmd = [
+        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC",
+        f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
+        f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
+        f"-DRATTLE_VR_MESSAGE={vr_message}u",
+        "-o", str(out_path), str(SHIM_SOURCE), "-ldl",
+    ]
+    try:
+        result = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    except OSError as exc:
+        raise RuntimeError(f"cannot run the C compiler {cc!r}: {exc}") from exc
+    if result.returncode != 0:
+        raise RuntimeError(
+            f"compiling {SHIM_SOURCE.name} failed (exit {result.returncode}):\n{result.stderr}")
+    return out_path
+
+
+def _model_identifier(fmu: zipfile.ZipFile) -> str:
+    root = ElementTree.fromstring(fmu.read("modelDescription.xml"))
+    cosim = root.find("CoSimulation")
+    if cosim is None or not cosim.get("modelIdentifier"):
+        raise ValueError("modelDescription.xml has no CoSimulation modelIdentifier")
+    return cosim.get("modelIdentifier")
+
+
+def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> None:
+    """Put the status shim into the FMU at ``fmu_path`` (rewritten in place).
+
+    ``binaries/linux64/<modelIdentifier>.so`` (pythonfmu's library) becomes
+    ``binaries/linux64/<modelIdentifier>_pythonfmu.so`` and the shim, compiled with gcc for the
+    given value references, takes its place.  Every other member is copied byte for byte.
+    Only linux64 is handled: other platforms (e.g. ``binaries/win64``) keep pythonfmu's plain
+    binary, without the status protocol.  Raises ValueError if the FMU has no linux64 binary
+    or already contains the shim.
+    """
+    fmu_path = Path(fmu_path)
+    with zipfile.ZipFile(fmu_path) as src:
+        model_identifier = _model_identifier(src)
+        binary = f"{_PLATFORM_DIR}/{model_identifier}.so"
+        inner = f"{_PLATFORM_DIR}/{model_identifier}{_INNER_SUFFIX}.so"
+        names = src.namelist()
+        if binary not in names:
+            raise ValueError(f"{fmu_path} has no {binary}")
+        if inner in names:
+            raise ValueError(f"{fmu_path} already contains the shim ({inner} exists)")
+
+        with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
+            shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
+                                vr_status_address, vr_message)
+            fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
+            os.close(fd)
+            try:
+                with zipfile.ZipFile(tmp_fmu, "w") as dst:
+                    for info in src.infolist():
+                        data = src.read(info)
+                        if info.filename == binary:
+                            renamed = zipfile.ZipInfo(inner, date_time=info.date_time)
+                            renamed.compress_type = info.compress_type
+                            renamed.external_attr = info.external_attr
+                            dst.writestr(renamed, data)
+                            added = zipfile.ZipInfo(binary, date_time=info.date_time)
+                            added.compress_type = zipfile.ZIP_DEFLATED
+                            added.external_attr = 0o100755 << 16  # regular file, rwxr-xr-x
+                            dst.writestr(added, shim.read_bytes())
+                        else:
+                            dst.writestr(info, data)
+                shutil.copymode(fmu_path, tmp_fmu)  # mkstemp made it 0600
+                os.replace(tmp_fmu, fmu_path)
+            except BaseException:
+                Path(tmp_fmu).unlink(missing_ok=True)
+                raise
