@@ -92,7 +92,7 @@ def build_one(name: str, out_dir: Path, update_templates: bool = False,
         template.write_text(text, encoding="utf-8")
     elif not template.exists() or template.read_text(encoding="utf-8") != text:
         raise BuildError(
-            f"{name}: the interface differs from {template.relative_to(ROOT)}; review the "
+            f"{name}: the interface differs from {template}; review the "
             "change, run `python build_fmu.py --update-templates` and commit the template diff")
     validate(fmu, use_fmutool)
     return fmu

@@ -32,6 +32,21 @@ class Record:
     onset_flanks: list[int] = field(default_factory=list)
 
 
+def communication_points(start: float, step: float, stop: float) -> list[float]:
+    """Communication points ``t_k = (t0_ns + k step_ns) / 1e9`` from ``start`` to ``stop`` [s].
+
+    Integer nanoseconds, as libcosim places them; the step from t_k is ``t_{k+1} - t_k``, so
+    every master using this grid passes bit-identical times and steps to the units.  Raises
+    ValueError for a step that is not a positive whole number of nanoseconds."""
+    step_ns = round(step * 1e9)
+    if step_ns <= 0 or abs(step_ns - step * 1e9) > 1e-6 * step * 1e9:
+        raise ValueError(
+            f"communication step {step!r} s must be a positive whole number of nanoseconds")
+    t0_ns = round(start * 1e9)
+    n = round((stop - start) * 1e9 / step_ns)
+    return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]
+
+
 def simulate(mesh_params: MeshParameters | None = None,
              driveline_params: DrivelineParameters | None = None,
              stop_time: float = 0.1, step: float = 1e-4, start_time: float = 0.0,
@@ -48,22 +63,22 @@ def simulate(mesh_params: MeshParameters | None = None,
     mesh = WheelStepper(mp, first["pinion.phi"], first["pinion.w"], first["wheel.tau_load"])
     drive = Driveline(dp, start_time, mesh.state.phi, mesh.state.w)
     rec = Record(signals={n: [] for n in names})
-    n_steps = round((stop_time - start_time) / step)
-    for k in range(n_steps + 1):
-        t = start_time + k * step
+    points = communication_points(start_time, step, stop_time)
+    for k, t in enumerate(points):
         d = drive.outputs()
         _record(rec, t, names, d, mesh)
-        if k == n_steps:
+        if k == len(points) - 1:
             break
+        h = points[k + 1] - t
         wheel_phi, wheel_w = mesh.state.phi, mesh.state.w
-        result = mesh.step(step, d["pinion.phi"], d["pinion.w"], d["pinion.a"],
+        result = mesh.step(h, d["pinion.phi"], d["pinion.w"], d["pinion.a"],
                            d["wheel.tau_load"])
         for ev in result.events:
             if ev.kind == "onset":
                 rec.onset_times.append(t + ev.time)
                 rec.onset_speeds.append(ev.speed)
                 rec.onset_flanks.append(ev.flank)
-        drive.step(t, step, wheel_phi, wheel_w)
+        drive.step(t, h, wheel_phi, wheel_w)
     return rec
 
 

@@ -30,6 +30,8 @@ from pathlib import Path
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
+from drive_rattle.system import communication_points
+
 MESH, DRIVELINE = "GearMeshRattle", "Driveline"
 
 #: (source unit, output, destination unit, input): the one definition of the coupling, used by
@@ -49,6 +51,42 @@ INIT_ROUNDS = 2
 PROGRESS_MIN_STEPS = 20_000
 
 _STATUS = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
+
+
+#: Live units by FMI instance name: fmpy's native logger proxy keeps a single Python logger per
+#: process, so one callback serves every instance and routes messages by instance name.
+_INSTANCES: dict[str, Unit] = {}
+_CALLBACKS: list = []
+
+
+def _register_instance(unit: Unit) -> str:
+    n = 1
+    while (name := unit.name if n == 1 else f"{unit.name}#{n}") in _INSTANCES:
+        n += 1
+    _INSTANCES[name] = unit
+    return name
+
+
+def _log(env, instance, status, category, message) -> None:
+    unit = _INSTANCES.get(instance.decode("utf-8", "replace") if instance else "")
+    if unit is not None:
+        unit.messages.append((_STATUS[status] if 0 <= status < 6 else str(status),
+                              message.decode("utf-8", "replace")))
+
+
+def _callbacks() -> fmi2CallbackFunctions:
+    """The process-wide callback struct (logger formatted natively by fmpy's proxy)."""
+    if not _CALLBACKS:
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(_log)
+        with contextlib.suppress(Exception):  # the proxy ships with fmpy on every platform
+            from ctypes import byref
+
+            from fmpy.logging import addLoggerProxy
+
+            addLoggerProxy(byref(cb))
+        _CALLBACKS.append(cb)
+    return _CALLBACKS[0]
 
 
 class CoSimulationError(RuntimeError):
@@ -80,24 +118,11 @@ class Unit:
         }
         self.messages: list[tuple[str, str]] = []  # (status, message) from the logger
         self._dir = extract(str(self.fmu))
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
-        try:  # format the variadic printf arguments natively before they reach Python
-            from ctypes import byref
-
-            from fmpy.logging import addLoggerProxy
-
-            addLoggerProxy(byref(self._callbacks))
-        except Exception:  # pragma: no cover - the proxy ships with fmpy on every platform
-            pass
+        instance_name = _register_instance(self)
         self.slave = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
                                modelIdentifier=self.model_name, instanceName=instance_name)
-        self.slave.instantiate(callbacks=self._callbacks, loggingOn=False)
+        self.slave.instantiate(callbacks=_callbacks(), loggingOn=False)
         self._freed = False
-
-    def _log(self, env, instance, status, category, message):
-        self.messages.append((_STATUS[status] if 0 <= status < 6 else str(status),
-                              message.decode("utf-8", "replace")))
 
     def call(self, what: str, fn, *args):
         """Call an fmpy method; an FMI error becomes CoSimulationError with the logged reason."""
@@ -134,6 +159,7 @@ class Unit:
             with contextlib.suppress(Exception):
                 self.slave.terminate()
             self.slave.freeInstance()
+            _INSTANCES.pop(self.slave.instanceName, None)
             shutil.rmtree(self._dir, ignore_errors=True)
 
 
@@ -159,18 +185,6 @@ class Result:
             for k, t in enumerate(self.time):
                 w.writerow([repr(t)] + [repr(self.columns[n][k]) for n in names])
         return path
-
-
-def communication_points(start: float, step: float, stop: float) -> list[float]:
-    """``t_k = (t0_ns + k step_ns) / 1e9`` up to ``stop``, as libcosim places them.
-
-    Raises ValueError for a step that is not a whole number of nanoseconds."""
-    step_ns = round(step * 1e9)
-    if step_ns <= 0 or abs(step_ns - step * 1e9) > 1e-6 * step * 1e9:
-        raise ValueError(f"communication step {step!r} s must be a positive whole number of ns")
-    t0_ns = round(start * 1e9)
-    n = round((stop - start) * 1e9 / step_ns)
-    return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]
 
 
 class CoSimulation:

@@ -1,0 +1,105 @@
+"""The built FMUs: validators, interface completeness, templates, documentation."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
+
+from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS
+from drive_rattle.parameters import MeshParameters, specs
+
+ROOT = Path(__file__).resolve().parents[2]
+INTERFACE = {
+    "GearMeshRattle": (MeshParameters, MESH_INPUTS, MESH_OUTPUTS),
+    "Driveline": (DrivelineParameters, DRIVELINE_INPUTS, DRIVELINE_OUTPUTS),
+}
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_fmpy_validation_clean(fmus, name):
+    assert validate_fmu(str(fmus[name])) == []
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_fmutool_check_clean(fmus, name):
+    tool = Path(sys.executable).parent / "fmutool"
+    run = subprocess.run([str(tool), "-input", str(fmus[name]), "-check"], capture_output=True,
+                         text=True)
+    report = run.stdout + run.stderr
+    assert run.returncode == 0, report
+    assert "No semantic error" in report and "ERROR" not in report
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_model_description_is_complete(fmus, name):
+    md = read_model_description(str(fmus[name]))
+    params, inputs, outputs = INTERFACE[name]
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert float(md.defaultExperiment.stepSize) == 1e-4
+    units = {u.name: u for u in md.unitDefinitions}
+    by_name = {v.name: v for v in md.modelVariables}
+    expected = ([s.name for _, s in specs(params)] + [s.name for s in inputs]
+                + [s.name for s in outputs])
+    assert [v.name for v in md.modelVariables] == expected
+    for v in md.modelVariables:
+        assert v.description, v.name
+        if v.type == "Real":
+            assert v.unit in units, v.name
+            if v.displayUnit:
+                assert v.displayUnit in [d.name for d in units[v.unit].displayUnits]
+    for _, s in specs(params):
+        v = by_name[s.name]
+        assert v.causality == "parameter" and v.variability == "fixed" and v.initial == "exact"
+        if s.kind in ("Real", "Integer") and s.minimum is not None:
+            assert float(v.min) == s.minimum and float(v.max) == s.maximum
+    # Outputs: no direct feedthrough; all of them initial unknowns.
+    out_idx = [md.modelVariables.index(by_name[s.name]) + 1 for s in outputs]
+    assert [md.modelVariables.index(u.variable) + 1 for u in md.outputs] == out_idx
+    assert all(u.dependencies == [] for u in md.outputs)
+    assert [md.modelVariables.index(u.variable) + 1 for u in md.initialUnknowns] == out_idx
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_model_description_matches_committed_template(fmus, name):
+    from xml.etree import ElementTree
+
+    from drive_rattle_fmi.model_description import normalised_xml
+
+    with zipfile.ZipFile(fmus[name]) as z:
+        xml = ElementTree.fromstring(z.read("modelDescription.xml"))
+    template = ROOT / "modelDescription_templates" / f"{name}.xml"
+    assert normalised_xml(xml) == template.read_text(encoding="utf-8"), (
+        "interface changed: run `python build_fmu.py --update-templates` and review the diff")
+
+
+def test_build_refuses_an_interface_that_differs_from_its_template(build_script, tmp_path,
+                                                                   monkeypatch):
+    fake = tmp_path / "templates"
+    fake.mkdir()
+    for name in ("GearMeshRattle", "Driveline"):
+        text = (ROOT / "modelDescription_templates" / f"{name}.xml").read_text()
+        (fake / f"{name}.xml").write_text(text.replace('name="wheel.J"', 'name="wheel.I"'))
+    monkeypatch.setattr(build_script, "TEMPLATES", fake)
+    with pytest.raises(build_script.BuildError, match="interface differs"):
+        build_script.build_one("GearMeshRattle", tmp_path / "out")
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_fmu_contents(fmus, name):
+    with zipfile.ZipFile(fmus[name]) as z:
+        names = set(z.namelist())
+        html = z.read("documentation/index.html").decode()
+    assert f"binaries/linux64/{name}.so" in names  # the shim
+    assert f"binaries/linux64/{name}_pythonfmu.so" in names
+    assert f"resources/{name}.py" in names
+    assert "resources/drive_rattle/stepper.py" in names
+    # Only the standard-library part of the core is shipped.
+    assert "resources/drive_rattle/analysis.py" not in names
+    _, inputs, outputs = INTERFACE[name]
+    for s in (*inputs, *outputs):
+        assert f"<td>{s.name}</td>" in html
