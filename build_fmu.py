@@ -2,6 +2,7 @@
 them.
 
     python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
+    python build_fmu.py --update-docs     # regenerate the interface tables of docs/fmi.md
 
 Each FMU bundles the slave module, the runtime part of the physics core (standard library
 only), the FMI glue, generated documentation and the native status shim.  The normalised
@@ -120,13 +121,37 @@ def build(out_dir: Path = ROOT / "dist", update_templates: bool = False,
     return [build_one(name, out_dir, update_templates, use_fmutool) for name in MODELS]
 
 
+DOCS = ROOT / "docs" / "fmi.md"
+
+
+def interface_docs(text: str) -> str:
+    """``text`` with each ``<!-- BEGIN <Model> interface -->`` ... ``<!-- END ... -->`` block
+    replaced by the interface table generated from the specs."""
+    from drive_rattle_fmi.documentation import markdown_interface
+
+    for name in MODELS:
+        begin, end = f"<!-- BEGIN {name} interface -->", f"<!-- END {name} interface -->"
+        head, _, rest = text.partition(begin)
+        _, _, tail = rest.partition(end)
+        if not rest:
+            raise BuildError(f"{DOCS} lacks the marker {begin}")
+        text = f"{head}{begin}\n{markdown_interface(_slave_class(name))}{end}{tail}"
+    return text
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=ROOT / "dist", help="output folder")
     ap.add_argument("--update-templates", action="store_true",
                     help="write the normalised modelDescriptions to modelDescription_templates/")
     ap.add_argument("--no-fmutool", action="store_true", help="skip `fmutool -check`")
+    ap.add_argument("--update-docs", action="store_true",
+                    help="regenerate the interface tables in docs/fmi.md and exit")
     args = ap.parse_args(argv)
+    if args.update_docs:
+        DOCS.write_text(interface_docs(DOCS.read_text(encoding="utf-8")), encoding="utf-8")
+        print(f"updated {DOCS}")
+        return 0
     try:
         for fmu in build(args.out, args.update_templates, not args.no_fmutool):
             print(f"built and validated {fmu}")

@@ -103,3 +103,9 @@ def test_fmu_contents(fmus, name):
     _, inputs, outputs = INTERFACE[name]
     for s in (*inputs, *outputs):
         assert f"<td>{s.name}</td>" in html
+
+
+def test_docs_interface_tables_are_generated_from_the_specs(build_script):
+    text = (ROOT / "docs" / "fmi.md").read_text(encoding="utf-8")
+    assert build_script.interface_docs(text) == text, (
+        "docs/fmi.md is stale: run `python build_fmu.py --update-docs`")

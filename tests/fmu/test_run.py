@@ -28,6 +28,28 @@ def test_driveline_alone_under_simulate_fmu(fmus):
     assert np.allclose(r["wheel.tau_load"], 0.15, rtol=1e-12)
 
 
+def test_driveline_alone_with_wheel_input_table(fmus):
+    # The wheel turns steadily at 44 rad/s from t = 0: the shaft starts wound up by the drag
+    # behind it and the vehicle follows at the same speed, so the load stays the drag.
+    w = 44.0
+    table = np.array([(0.0, 0.0, w), (1.0, w, w)],
+                     dtype=[("time", "f8"), ("wheel.phi", "f8"), ("wheel.w", "f8")])
+    r = simulate_fmu(str(fmus["Driveline"]), stop_time=0.05, output_interval=1e-4, input=table)
+    assert np.allclose(r["wheel.tau_load"], 0.15, rtol=1e-9)
+    assert np.allclose(r["vehicle.w"], w, rtol=1e-12)
+    # A wheel at rest, then turned by 0.01 rad at t = 0.02 s: the shaft torque rises by
+    # k * 0.01 and the vehicle starts to follow.
+    jump = np.array([(0.0, 0.0, 0.0), (0.02, 0.0, 0.0), (0.02, 0.01, 0.0), (1.0, 0.01, 0.0)],
+                    dtype=table.dtype)
+    r = simulate_fmu(str(fmus["Driveline"]), stop_time=0.05, output_interval=1e-4,
+                     input=jump, start_values={"vehicle.drag": 1.0})
+    before, after = r["time"] < 0.0199, (r["time"] > 0.0201) & (r["time"] < 0.0205)
+    assert np.allclose(r["wheel.tau_load"][before], 1.0, rtol=1e-12)
+    assert np.allclose(r["vehicle.w"][before], 0.0, atol=1e-15)
+    assert np.allclose(r["wheel.tau_load"][after], 1.0 + 2.0 * 0.01, rtol=1e-4)
+    assert r["vehicle.w"][-1] > 0.0
+
+
 def test_mesh_alone_under_simulate_fmu_with_input_table(fmus):
     T, load = 0.03, 0.15
     table = np.array([(0.0, 0.0, W_P, 0.0, load), (1.0, W_P, W_P, 0.0, load)],
