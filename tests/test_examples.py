@@ -15,11 +15,11 @@ def load(name):
     return mod
 
 
-def test_paper_scenario_example(tmp_path):
+def test_paper_scenario_example(tmp_path, fmus):
     mod = load("paper_scenario")
-    result = mod.run(stop_time=0.2, out_dir=tmp_path)
+    result = mod.run(stop_time=0.2, out_dir=tmp_path, fmu_dir=fmus["GearMeshRattle"].parent)
     names = {f.name for f in result["files"]}
-    assert names == {"comparison.md", "fig3_wheel_speed.png", "fig4_pair_force.png",
+    assert names == {"comparison.md", "cosim.csv", "fig3_wheel_speed.png", "fig4_pair_force.png",
                      "fig5_force_spectrum.png"}
     for f in result["files"]:
         assert f.stat().st_size > (5000 if f.suffix == ".png" else 300)

@@ -77,7 +77,9 @@ class DrivelineParameters(ParameterSet):
         "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
         minimum=0.0, min_exclusive=True, maximum=1e6)
     drag: float = declare(
-        "vehicle.drag", 0.15, "N.m", "constant drag torque on the vehicle side (creep load)",
+        "vehicle.drag", 0.17, "N.m",
+        "constant drag torque on the vehicle side (creep load; default calibrated, see "
+        "docs/model.md section 6)",
         minimum=-1e5, maximum=1e5)
     drag_viscous: float = declare(
         "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
