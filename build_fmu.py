@@ -41,6 +41,22 @@ class BuildError(RuntimeError):
     pass
 
 
+def _stage_references(name: str, staging: Path) -> list[Path]:
+    """The committed regression references of the model, staged for resources/regression/."""
+    from drive_rattle_cosim.regression import reference_files
+
+    files = reference_files(name)
+    if not all(f.is_file() for f in files):
+        print(f"build_fmu.py: no regression references for {name} yet "
+              "(python -m drive_rattle_cosim.regression generate)", file=sys.stderr)
+        return []
+    dest = staging / "regression"
+    dest.mkdir(parents=True)
+    for f in files:
+        shutil.copy2(f, dest / f.name)
+    return [dest]
+
+
 def _stage_packages(staging: Path) -> list[Path]:
     out = []
     for package, modules in (("drive_rattle", CORE_RUNTIME), ("drive_rattle_fmi", FMI_RUNTIME)):
@@ -72,7 +88,7 @@ def build_one(name: str, out_dir: Path, update_templates: bool = False,
     fmu = out_dir / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
         tmp = Path(tmp)
-        packages = _stage_packages(tmp / "stage")
+        packages = _stage_packages(tmp / "stage") + _stage_references(name, tmp / "stage")
         doc = tmp / "documentation"
         doc.mkdir()
         (doc / "index.html").write_text(

@@ -173,7 +173,7 @@ def test_initial_unknowns_in_initialization_mode():
     d.slave.setup_experiment(0.0)
     d.slave.enter_initialization_mode()
     assert d.get("pinion.w") == pytest.approx(86.92 + 0.0, abs=0.01)
-    assert d.get("wheel.tau_load") == pytest.approx(0.15)
+    assert d.get("wheel.tau_load") == pytest.approx(DrivelineParameters().drag)
     d.set(engine__w_mean=100.0)
     assert d.get("pinion.w") == 100.0
 

@@ -25,7 +25,7 @@ def test_driveline_alone_under_simulate_fmu(fmus):
         assert row["pinion.w"] == pytest.approx(w, rel=1e-12)
         assert row["pinion.a"] == pytest.approx(a, rel=1e-9, abs=1e-9)
     # Wheel inputs held at 0: the shaft stays in its steady state, transmitting the drag.
-    assert np.allclose(r["wheel.tau_load"], 0.15, rtol=1e-12)
+    assert np.allclose(r["wheel.tau_load"], DrivelineParameters().drag, rtol=1e-12)
 
 
 def test_driveline_alone_with_wheel_input_table(fmus):
@@ -35,7 +35,7 @@ def test_driveline_alone_with_wheel_input_table(fmus):
     table = np.array([(0.0, 0.0, w), (1.0, w, w)],
                      dtype=[("time", "f8"), ("wheel.phi", "f8"), ("wheel.w", "f8")])
     r = simulate_fmu(str(fmus["Driveline"]), stop_time=0.05, output_interval=1e-4, input=table)
-    assert np.allclose(r["wheel.tau_load"], 0.15, rtol=1e-9)
+    assert np.allclose(r["wheel.tau_load"], DrivelineParameters().drag, rtol=1e-9)
     assert np.allclose(r["vehicle.w"], w, rtol=1e-12)
     # A wheel at rest, then turned by 0.01 rad at t = 0.02 s: the shaft torque rises by
     # k * 0.01 and the vehicle starts to follow.
