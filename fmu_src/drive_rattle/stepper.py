@@ -158,6 +158,12 @@ class WheelStepper:
         check_step_size(h, self.params.h_comm_max)
         run = _StepRun(self, h, phi_p, w_p, a_p, tau_load)
         state, result = run.execute()
+        if not (math.isfinite(state.phi) and math.isfinite(state.w)
+                and math.isfinite(result.tau_pinion_mean) and math.isfinite(result.W_peak)):
+            raise ValueError(
+                f"the step diverged (wheel angle {state.phi!r} rad, speed {state.w!r} rad/s); "
+                "the inputs or parameters are beyond what the integrator resolves "
+                "(reduce solver.h_max or the communication step)")
         self.state = state
         self.pinion = (phi_p + w_p * h + 0.5 * a_p * h * h, w_p + a_p * h)
         self.last = result

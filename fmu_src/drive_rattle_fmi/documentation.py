@@ -18,8 +18,10 @@ def interface_rows(slave_cls) -> list[tuple[str, str, str, str, str, str]]:
         allowed = f"{start}; {limits}".rstrip("; ")
         rows.append((spec.name, "parameter", spec.kind, spec.unit, allowed, spec.description))
     for spec in slave_cls.INPUTS:
-        rows.append((spec.name, "input", spec.kind, spec.unit, repr(spec.start),
-                     spec.description))
+        allowed = repr(spec.start)
+        if spec.minimum is not None:
+            allowed += f"; [{spec.minimum:g}, {spec.maximum:g}] {spec.unit}"
+        rows.append((spec.name, "input", spec.kind, spec.unit, allowed, spec.description))
     for spec in slave_cls.OUTPUTS:
         rows.append((spec.name, "output", spec.kind, spec.unit, "", spec.description))
     return rows

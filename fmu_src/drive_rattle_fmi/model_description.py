@@ -114,7 +114,10 @@ def model_description(slave, generation_time: str | None = None) -> Element:
                 if spec.maximum is not None:
                     type_attrs["max"] = _fmt(spec.maximum)
         elif var.name in {s.name for s in cls.INPUTS}:
-            type_attrs["start"] = _fmt(signal_specs[var.name].start)
+            spec = signal_specs[var.name]
+            type_attrs["start"] = _fmt(spec.start)
+            if spec.minimum is not None:
+                type_attrs["min"], type_attrs["max"] = _fmt(spec.minimum), _fmt(spec.maximum)
         if kind == "Real":
             unit, display = unit_of(var.name)
             check_display_unit(unit, display)

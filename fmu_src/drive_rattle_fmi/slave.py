@@ -232,10 +232,8 @@ class RattleSlave(Fmi2Slave):
         return {s.name: self._values[s.name] for s in self.INPUTS}
 
     def _check_inputs(self, inputs: dict[str, float]) -> None:
-        for name, value in inputs.items():
-            if isinstance(value, float) and not math.isfinite(value):
-                raise ModelError(
-                    f"input '{name}' = {value!r} is not finite; allowed: finite numbers")
+        for spec in self.INPUTS:
+            spec.check(inputs[spec.name])
 
     def _refresh_provisional(self) -> None:
         """Initial unknowns in initialization mode: outputs of a model built from the current
