@@ -165,8 +165,9 @@ def read_speed_table(path: Path) -> tuple[list[float], list[float]]:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
         raise ValueError(
-            f"parameter 'engine.speed_table' = {str(path)!r} cannot be read: {err.strerror}"
-        ) from None
+            f"parameter 'engine.speed_table' = {str(path)!r} cannot be read: {err.strerror}; "
+            "allowed: a readable CSV file of time [s], speed [rad/s], or empty for the engine "
+            "orders") from None
     times: list[float] = []
     speeds: list[float] = []
     for n, row in enumerate(csv.reader(text.splitlines()), start=1):

@@ -148,7 +148,7 @@ class Unit:
             v = self.var(name)
             vrs, vals = groups.setdefault(v.kind, ([], []))
             vrs.append(v.vr)
-            vals.append(value.encode("utf-8") if v.kind == "String" else value)
+            vals.append(value)
         for kind, (vrs, vals) in groups.items():
             self.call(f"set{kind}", getattr(self.slave, f"set{kind}"), vrs, vals)
 

@@ -1,0 +1,56 @@
+"""Bad input through the FMI interface of the built FMUs (the battery runs in a subprocess:
+a crash of the host would be a failed test, not a dead session)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BATTERY = Path(__file__).with_name("fmi_battery.py")
+ERROR = 3
+
+
+@pytest.fixture(scope="module", params=["GearMeshRattle", "Driveline"])
+def battery(request, fmus):
+    run = subprocess.run([sys.executable, str(BATTERY), str(fmus[request.param])],
+                         capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, f"the host process died: rc {run.returncode}\n{run.stderr[-3000:]}"
+    return request.param, json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):
+    _, results = battery
+    calls = [r for r in results
+             if "parameter" not in r and r["case"] != "healthy instance afterwards"]
+    assert len(calls) >= 20
+    for r in calls:
+        assert r["status"] == ERROR, r
+        assert r["message"], r
+        assert r["freed"]
+        if "outputs_kept" in r:
+            assert r["outputs_kept"] and r["continuation_kept"], r
+    inputs = [r for r in calls if r["case"].startswith("input ")]
+    for r in inputs:  # the message names the input and its value
+        name, value = r["case"][len("input "):].split(" = ")
+        assert f"input '{name}' = {value}" in r["message"], r
+
+
+def test_every_parameter_at_and_beyond_its_limits(battery):
+    _, results = battery
+    params = [r for r in results if "parameter" in r]
+    assert params
+    for r in params:
+        if r["kind"] == "beyond":
+            assert r["status"] == ERROR, r
+            assert f"'{r['parameter']}'" in r["message"] and "allowed" in r["message"], r
+        elif r["status"] == 0:  # accepted at the limit: it runs, with finite outputs
+            assert r["steps"] == [0, 0, 0] and r["finite"], r
+        else:  # refused at the limit by a range or a combination check, with the reason
+            assert r["status"] == ERROR and "allowed" in r["message"], r
+
+
+def test_process_keeps_making_healthy_instances(battery):
+    _, results = battery
+    assert results[-1] == {"case": "healthy instance afterwards", "status": 0, "message": ""}
