@@ -21,7 +21,7 @@ N_ORDERS = 4
 def _order(k: int, default: float):
     return declare(f"engine.order[{k}]", default, "1",
                    f"engine order number of fluctuation slot {k} (cycles per revolution)",
-                   minimum=0.0, min_exclusive=True, maximum=100.0)
+                   minimum=0.1, maximum=100.0)
 
 
 def _amplitude(k: int, default: float):
@@ -43,7 +43,7 @@ class DrivelineParameters(ParameterSet):
     # --- input shaft kinematics ---------------------------------------------------------
     w_mean: float = declare(
         "engine.w_mean", 830.0 * RPM, "rad/s", "mean input-shaft (engine) speed",
-        minimum=0.0, min_exclusive=True, maximum=2000.0, display_unit="rpm")
+        minimum=1.0, maximum=2000.0, display_unit="rpm")
     # Engine orders: up to N_ORDERS slots; a slot with zero amplitude is off.
     order_1: float = _order(1, 2.0)
     amplitude_1: float = _amplitude(1, 300.0)
@@ -69,13 +69,13 @@ class DrivelineParameters(ParameterSet):
         "shaft.k", 2.0, "N.m/rad",
         "torsional stiffness of the output shaft (default: a soft coupling, so that the wheel "
         "sees nearly the constant drag like the paper's M_res)",
-        minimum=0.0, min_exclusive=True, maximum=1e9)
+        minimum=1e-3, maximum=1e9)
     c_shaft: float = declare(
         "shaft.c", 0.05, "N.m.s/rad", "torsional damping of the output shaft",
         minimum=0.0, maximum=1e6)
     J_vehicle: float = declare(
         "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
-        minimum=0.0, min_exclusive=True, maximum=1e6)
+        minimum=1e-6, maximum=1e6)
     drag: float = declare(
         "vehicle.drag", 0.17, "N.m",
         "constant drag torque on the vehicle side (creep load; default calibrated, see "
@@ -86,11 +86,11 @@ class DrivelineParameters(ParameterSet):
         minimum=0.0, maximum=1e5)
     h_max: float = declare(
         "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
-        minimum=0.0, min_exclusive=True, maximum=1.0)
+        minimum=1e-8, maximum=1.0)
     h_comm_max: float = declare(
         "solver.h_comm_max", 1e-2, "s",
         "largest communication step accepted (the wheel is extrapolated linearly over a step)",
-        minimum=0.0, min_exclusive=True, maximum=1.0)
+        minimum=1e-7, maximum=1.0)
 
     def order_terms(self) -> list[tuple[float, float, float]]:
         """``(order, amplitude [rad/s^2], phase [rad])`` of the active engine orders."""

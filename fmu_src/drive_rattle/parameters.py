@@ -187,7 +187,7 @@ class MeshParameters(ParameterSet):
         "gear.z_wheel", 39, "1", "number of teeth of the wheel (output gear)",
         minimum=5, maximum=400)
     m_n: float = declare(
-        "gear.m_n", 2.25e-3, "m", "normal module", minimum=0.0, min_exclusive=True,
+        "gear.m_n", 2.25e-3, "m", "normal module", minimum=1e-4,
         maximum=0.1, display_unit="mm")
     alpha_n: float = declare(
         "gear.alpha_n", 20.0 * DEG, "rad", "normal pressure angle",
@@ -200,7 +200,7 @@ class MeshParameters(ParameterSet):
         "addendum coefficient: tip radius r_a = r + h_a m_n (1 = standard full depth, < 1 stub)",
         minimum=0.5, maximum=1.5)
     b: float = declare(
-        "gear.b", 25e-3, "m", "face width in contact", minimum=0.0, min_exclusive=True,
+        "gear.b", 25e-3, "m", "face width in contact", minimum=1e-3,
         maximum=1.0, display_unit="mm")
     backlash: float = declare(
         "gear.backlash", 0.10e-3, "m",
@@ -209,30 +209,30 @@ class MeshParameters(ParameterSet):
     # --- materials (pinion 1, wheel 2) ---------------------------------------------------
     E_pinion: float = declare(
         "material.E_pinion", 210e9, "Pa", "Young's modulus of the pinion",
-        minimum=0.0, min_exclusive=True, maximum=1e13)
+        minimum=1e8, maximum=1e13)
     nu_pinion: float = declare(
         "material.nu_pinion", 0.30, "1", "Poisson's ratio of the pinion",
         minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
     E_wheel: float = declare(
         "material.E_wheel", 210e9, "Pa", "Young's modulus of the wheel",
-        minimum=0.0, min_exclusive=True, maximum=1e13)
+        minimum=1e8, maximum=1e13)
     nu_wheel: float = declare(
         "material.nu_wheel", 0.30, "1", "Poisson's ratio of the wheel",
         minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
     density: float = declare(
         "material.rho", 7850.0, "kg/m3",
         "density of the tooth material (mass of the equivalent ellipsoid, eq. 7)",
-        minimum=0.0, min_exclusive=True, maximum=1e5)
+        minimum=100.0, maximum=1e5)
     # --- wheel dynamics --------------------------------------------------------------------
     J_wheel: float = declare(
         "wheel.J", 1.3e-3, "kg.m2", "mass moment of inertia of the wheel (eq. 10, I_w)",
-        minimum=0.0, min_exclusive=True, maximum=1e3)
+        minimum=1e-7, maximum=1e3)
     # --- Hertzian contact ------------------------------------------------------------------
     r_y: float = declare(
         "contact.r_y", 7.8125, "m",
         "equivalent flank radius along the contact line (eq. 6 read as lead crowning: "
         "r_y = b^2/(8 C_b); default = 10 um crowning over 25 mm)",
-        minimum=0.0, min_exclusive=True, maximum=1e3)
+        minimum=1e-4, maximum=1e3)
     length_weighting: bool = declare(
         "contact.length_weighting", True, "",
         "scale each pair's Hertz stiffness by the fraction of its contact line inside the "
@@ -260,13 +260,13 @@ class MeshParameters(ParameterSet):
         minimum=0.0, maximum=1e10)
     eta: float = declare(
         "lubricant.eta", 0.05, "Pa.s", "dynamic viscosity of the lubricant",
-        minimum=0.0, min_exclusive=True, maximum=1e3)
+        minimum=1e-5, maximum=1e3)
     sigma: float = declare(
         "surface.sigma", 0.4e-6, "m", "composite RMS roughness of the flanks",
-        minimum=0.0, min_exclusive=True, maximum=1e-3, display_unit="um")
+        minimum=1e-9, maximum=1e-3, display_unit="um")
     gamma: float = declare(
         "surface.gamma", 1e-4, "m", "average asperity tip radius (eq. 13)",
-        minimum=0.0, min_exclusive=True, maximum=1.0, display_unit="um")
+        minimum=1e-7, maximum=1.0, display_unit="um")
     # --- initial state -------------------------------------------------------------------
     phi_start: float = declare(
         "wheel.phi_start", 0.0, "rad",
@@ -282,12 +282,12 @@ class MeshParameters(ParameterSet):
     h_max: float = declare(
         "solver.h_max", 1e-5, "s",
         "largest integration substep while teeth are in contact (free flight is exact)",
-        minimum=0.0, min_exclusive=True, maximum=1e-2)
+        minimum=1e-8, maximum=1e-2)
     h_comm_max: float = declare(
         "solver.h_comm_max", 1e-2, "s",
         "largest communication step accepted (the pinion's Taylor polynomial and the held "
         "load torque stop being meaningful beyond a fraction of an engine-order period)",
-        minimum=0.0, min_exclusive=True, maximum=1.0)
+        minimum=1e-7, maximum=1.0)
 
     def _check_combination(self) -> None:
         # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the

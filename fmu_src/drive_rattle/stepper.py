@@ -28,6 +28,16 @@ from .geometry import COAST, DRIVE
 from .mesh import MeshLoads, MeshModel
 from .parameters import MeshParameters
 
+#: Largest flank penetration [m] accepted in a start state given by wheel.phi_start: ten
+#: times the penetrations of loaded operation; more means a wheel angle that does not match the
+#: pinion's (the teeth would start deep inside each other).
+MAX_INITIAL_PENETRATION = 10e-6
+
+#: Largest penetration [m], as a fraction of the normal module, that a step may reach: far
+#: beyond it the Hertz contact of the flanks' surfaces is no longer a model of anything (the
+#: default pair reaches about 1e-3 of the module in rattle).
+MAX_PENETRATION_MODULES = 0.05
+
 #: Samples used to find a positive penetration inside a substep that starts at a contact
 #: onset (penetration ~0) and ends separated: a grazing contact shorter than one substep.
 GRAZING_SAMPLES = 8
@@ -100,6 +110,16 @@ class WheelStepper:
         else:
             self.state = WheelState(params.phi_start, params.w_start)
             self.state.flank = self._flank_in_contact(phi_p, params.phi_start, 0)
+            depth = max(self.mesh.penetration(f, phi_p, params.phi_start) for f in (DRIVE, COAST))
+            if depth > MAX_INITIAL_PENETRATION:
+                g, ratio = self.geometry, self.geometry.ratio
+                half = g.half_backlash / self.mesh.arm_wheel
+                raise ValueError(
+                    f"parameter 'wheel.phi_start' = {params.phi_start!r} rad puts the flanks "
+                    f"{depth * 1e3:.4g} mm into each other at pinion.phi = {phi_p!r} rad; "
+                    f"allowed: within the backlash, |wheel.phi_start - {ratio:.6g} pinion.phi| "
+                    f"<= {half:.4g} rad (plus {MAX_INITIAL_PENETRATION * 1e6:g} um), or "
+                    "init.in_contact = true")
         # Pinion kinematics at the end of the last step, for the "now" outputs.
         self.pinion = (phi_p, w_p)
         self.last = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
@@ -164,6 +184,16 @@ class WheelStepper:
                 f"the step diverged (wheel angle {state.phi!r} rad, speed {state.w!r} rad/s); "
                 "the inputs or parameters are beyond what the integrator resolves "
                 "(reduce solver.h_max or the communication step)")
+        depth = max(result.delta_peak, *(self.mesh.penetration(
+            f, phi_p + h * (w_p + 0.5 * a_p * h), state.phi) for f in (DRIVE, COAST)))
+        limit = MAX_PENETRATION_MODULES * self.params.m_n
+        if depth > limit:
+            raise ValueError(
+                f"the flanks would penetrate {depth * 1e3:.4g} mm in this step, beyond the "
+                f"validity of the Hertz contact (allowed: {limit * 1e3:.4g} mm = "
+                f"{MAX_PENETRATION_MODULES} gear.m_n); the inputs drive the teeth into each "
+                "other far harder than any transmission (check wheel.tau_load and the pinion "
+                "kinematics, or reduce the communication step)")
         self.state = state
         self.pinion = (phi_p + w_p * h + 0.5 * a_p * h * h, w_p + a_p * h)
         self.last = result

@@ -29,7 +29,7 @@ def test_every_parameter_is_fully_declared():
 @pytest.mark.parametrize(
     "name, value, fragment",
     [
-        ("wheel.J", 0.0, "(0, 1000] kg.m2"),
+        ("wheel.J", 0.0, "[1e-07, 1000] kg.m2"),
         ("wheel.J", -1.0, "wheel.J"),
         ("gear.m_n", 0.0, "gear.m_n"),
         ("gear.b", -0.01, "gear.b"),

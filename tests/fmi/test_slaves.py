@@ -129,7 +129,8 @@ def test_unknown_value_reference_and_wrong_type():
 def test_state_rollback_reproduces_outputs_bit_for_bit():
     m = mesh()
     for k in range(5):
-        m.step(k * 1e-4, 1e-4)
+        m.set(pinion__phi=86.92 * k * 1e-4)
+        assert m.step(k * 1e-4, 1e-4) == (0, "")
     saved = m.slave._get_fmu_state()
     blob = m.slave._fmu_state_to_bytes(saved)
     outs = [v.name for v in m.slave.public_variables if v.causality.name == "output"]
@@ -158,13 +159,13 @@ def test_instances_are_independent():
     a, b, c = mesh(), mesh(**{"wheel.tau_load": 0.3}), mesh()
     b_state = json.dumps(b.slave._get_fmu_state(), sort_keys=True)
     for k in range(20):
-        a.set(pinion__a=500.0 * math.sin(k))
-        a.step(k * 1e-4, 1e-4)
+        a.set(pinion__a=500.0 * math.sin(k), pinion__phi=86.92 * k * 1e-4)
+        assert a.step(k * 1e-4, 1e-4) == (0, "")
     # Stepping a changed neither b nor the identical instance c.
     assert json.dumps(b.slave._get_fmu_state(), sort_keys=True) == b_state
     for k in range(20):
-        c.set(pinion__a=500.0 * math.sin(k))
-        c.step(k * 1e-4, 1e-4)
+        c.set(pinion__a=500.0 * math.sin(k), pinion__phi=86.92 * k * 1e-4)
+        assert c.step(k * 1e-4, 1e-4) == (0, "")
     assert c.get("wheel.phi") == a.get("wheel.phi") and c.get("mesh.W") == a.get("mesh.W")
 
 
