@@ -76,12 +76,16 @@ def _check_vr(name: str, value: int) -> None:
 
 
 def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr_message: int,
-                 cc: str = "gcc") -> Path:
+                 cc: str = "gcc", guid: str | None = None) -> Path:
     """Compile the shim into ``out_path`` (a shared library) and return ``out_path``.
 
     ``inner_lib_name`` is the file name (no directory) of pythonfmu's library, which the shim
-    loads from its own directory.  Raises RuntimeError with the compiler's output on failure.
+    loads from its own directory.  With ``guid``, fmi2Instantiate refuses any other GUID (as
+    FMI 2.0 asks; pythonfmu does not check).  Raises RuntimeError with the compiler's output
+    on failure.
     """
+    if guid is not None and not re.fullmatch(r"[A-Za-z0-9{}-]+", guid):
+        raise ValueError(f"guid must consist of letters, digits, braces and '-', got {guid!r}")
     if not re.fullmatch(r"[A-Za-z0-9_.+-]+", inner_lib_name):
         raise ValueError(f"inner_lib_name must be a plain file name, got {inner_lib_name!r}")
     _check_vr("vr_status_address", vr_status_address)
@@ -92,6 +96,7 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
+        *([f'-DRATTLE_GUID="{guid}"'] if guid is not None else []),
         "-o", str(out_path), str(SHIM_SOURCE), "-ldl",
     ]
     try:
@@ -104,12 +109,13 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
     return out_path
 
 
-def _model_identifier(fmu: zipfile.ZipFile) -> str:
+def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:
+    """(modelIdentifier, guid) from the FMU's modelDescription."""
     root = ElementTree.fromstring(fmu.read("modelDescription.xml"))
     cosim = root.find("CoSimulation")
     if cosim is None or not cosim.get("modelIdentifier"):
         raise ValueError("modelDescription.xml has no CoSimulation modelIdentifier")
-    return cosim.get("modelIdentifier")
+    return cosim.get("modelIdentifier"), root.get("guid")
 
 
 def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> None:
@@ -124,7 +130,7 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> Non
     """
     fmu_path = Path(fmu_path)
     with zipfile.ZipFile(fmu_path) as src:
-        model_identifier = _model_identifier(src)
+        model_identifier, guid = _model_identifier(src)
         binary = f"{_PLATFORM_DIR}/{model_identifier}.so"
         inner = f"{_PLATFORM_DIR}/{model_identifier}{_INNER_SUFFIX}.so"
         names = src.namelist()
@@ -135,7 +141,7 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> Non
 
         with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
             shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
-                                vr_status_address, vr_message)
+                                vr_status_address, vr_message, guid=guid)
             fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
             os.close(fd)
             try:

@@ -486,6 +486,19 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     Shim* s;
 
     if (functions == NULL) return NULL;
+#ifdef RATTLE_GUID
+    /* FMI 2.0 2.1.5: the FMU checks that the master's modelDescription is the one it was
+     * built with (pythonfmu does not). */
+    if (fmuGUID == NULL || strcmp(fmuGUID, RATTLE_GUID) != 0) {
+        if (functions->logger != NULL)
+            functions->logger(functions->componentEnvironment, name, fmi2Error,
+                              "logStatusError", "%s%s%s%s",
+                              "rattle FMI shim: fmi2Instantiate: GUID ",
+                              fmuGUID != NULL ? fmuGUID : "(null)",
+                              " does not match this FMU's ", RATTLE_GUID);
+        return NULL;
+    }
+#endif
     if (!ensure_inner()) {
         if (functions->logger != NULL)
             functions->logger(functions->componentEnvironment, name, fmi2Fatal, "logStatusFatal",

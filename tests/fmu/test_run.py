@@ -211,3 +211,20 @@ def test_instances_are_independent_and_both_fmus_load_together(fmus):
     assert _drive(c, 0, 30, a=500.0) == ra
     for x in (a, b, c, d):
         x.close()
+
+
+def test_instantiate_refuses_a_foreign_guid(fmus):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    for name, fmu in fmus.items():
+        md = read_model_description(str(fmu))
+        folder = extract(str(fmu))
+        wrong = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=folder,
+                          modelIdentifier=name, instanceName="wrong")
+        with pytest.raises(Exception, match="Failed to instantiate"):
+            wrong.instantiate()
+        right = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=name,
+                          instanceName="right")
+        right.instantiate()
+        right.freeInstance()
