@@ -26,3 +26,14 @@ def test_paper_scenario_example(tmp_path, fmus):
     rows = dict((q, run) for q, run, _ in result["rows"])
     assert rows["mean wheel speed [rad/s]"] == pytest.approx(86.92 * 20 / 39, rel=0.01)
     assert "| mean wheel speed [rad/s] |" in (tmp_path / "comparison.md").read_text()
+
+
+def test_rattle_maps_example(tmp_path, fmus):
+    mod = load("rattle_maps")
+    result = mod.run(points=2, stop_time=0.01, workers=2, out_dir=tmp_path,
+                     fmu_dir=fmus["GearMeshRattle"].parent, progress=False)
+    names = sorted(f.name for f in result["files"])
+    assert names == ["amplitude_speed.csv", "amplitude_speed.png", "backlash_drag.csv",
+                     "backlash_drag.png"]
+    assert all(c["done"] == 4 and c["failed"] == 0 for c in result["counts"].values())
+    assert (tmp_path / "backlash_drag.png").stat().st_size > 5000

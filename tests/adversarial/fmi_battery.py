@@ -57,6 +57,8 @@ class Case:
 
     def step(self) -> int:
         t = self.k * H
+        if self.model == "GearMeshRattle":  # the pinion moves on with its speed, as driven
+            self.u.set({"pinion.phi": INPUTS[self.model]["pinion.w"] * t})
         st = status_of(self.u.slave.doStep, t, H)
         if st == 0:
             self.k += 1
@@ -100,7 +102,7 @@ def cases(fmu: Path) -> list[dict]:
         for bad in BAD_VALUES:
             def act(c, inp=inp, bad=bad):
                 c.u.set({inp: bad})
-                return c.step()
+                return status_of(c.u.slave.doStep, c.k * H, H)
             out.append(run_case(fmu, f"input {inp} = {bad!r}", act))
     for h in (0.0, -H, math.nan, math.inf, 1e300, 1.0):
         out.append(run_case(fmu, f"step size {h!r}",
@@ -176,6 +178,7 @@ def parameter_cases(fmu: Path) -> list[dict]:
             if st == 0:  # accepted: a few steps must give finite outputs or a clean refusal
                 steps = [c.step() for _ in range(3)]
                 rec["steps"] = steps
+                rec["step_message"] = c.message() if any(steps) else ""
                 rec["finite"] = all(math.isfinite(float(x)) for x in c.outputs())
             c.close()
             out.append(rec)

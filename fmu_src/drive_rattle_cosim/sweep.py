@@ -1,0 +1,288 @@
+"""Parameter sweeps of the co-simulation on dask.distributed, with rattle metrics per case.
+
+A design (full grid or Latin hypercube) over any FMU parameters becomes a list of cases; each
+case is a full co-simulation (the fmpy harness) run in a dask worker process.  Results are
+appended to a CSV file case by case, as they finish, so that an interrupted sweep resumes
+without redoing finished cases; a failed case is recorded with its error and the sweep goes on.
+
+    python -m drive_rattle_cosim.sweep \\
+        --param GearMeshRattle.gear.backlash=0.05e-3:0.2e-3 \\
+        --param Driveline.vehicle.drag=0.1:0.3 --grid 4 --stop-time 0.3 \\
+        --out out/sweep.csv [--workers 2 | --scheduler tcp://host:8786]
+
+Rattle metrics (``rattle_metrics``): impacts per second per flank, mean and peak impact speed,
+peak and RMS total normal force, fraction of time with a pair in contact, band levels of the
+normal-force spectrum, and the **rattle index**: the kinetic energy of the impacts per second,
+``1/2 m_n sum(v_i^2) / T`` [W], with ``m_n`` the wheel's effective mass on the tooth normal and
+``v_i`` the normal approach speed of each contact onset -- the power the mesh turns into impact
+energy, which is what the housing radiates as rattle.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import itertools
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+#: Frequency bands [Hz] of the normal-force spectrum reported per case.
+BANDS = ((20.0, 100.0), (100.0, 500.0), (500.0, 1500.0), (1500.0, 5000.0))
+#: Outputs a case records (the rattle metrics need no more).
+RECORDED = ["GearMeshRattle.wheel.phi", "GearMeshRattle.mesh.W", "GearMeshRattle.mesh.W_peak",
+            "GearMeshRattle.mesh.n_contact", "GearMeshRattle.mesh.v_impact",
+            "GearMeshRattle.mesh.impacts_drive", "GearMeshRattle.mesh.impacts_coast",
+            "GearMeshRattle.mesh.delta_peak"]
+METRICS = ["impacts_per_s_drive", "impacts_per_s_coast", "mean_impact_speed",
+           "peak_impact_speed", "peak_normal_force", "rms_normal_force", "contact_fraction",
+           *(f"band_{int(lo)}_{int(hi)}_Hz_dB" for lo, hi in BANDS), "rattle_index_W",
+           "mean_wheel_speed", "wall_seconds"]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One point of a design: an id that is stable across runs, and its parameters."""
+
+    case_id: str
+    parameters: dict
+
+    @staticmethod
+    def of(parameters: dict) -> Case:
+        blob = json.dumps(parameters, sort_keys=True).encode()
+        return Case(hashlib.sha1(blob).hexdigest()[:12], dict(parameters))
+
+
+def _ranges(params: dict[str, tuple[float, float]]):
+    for name, (lo, hi) in params.items():
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+            raise ValueError(f"sweep parameter {name}: range {lo!r}..{hi!r} is invalid; "
+                             "allowed: finite numbers with lo <= hi")
+    return params
+
+
+def grid_design(params: dict[str, tuple[float, float]], points: int | dict[str, int]) -> list[Case]:
+    """Full factorial grid: ``points`` values per parameter (evenly spaced, ends included)."""
+    params = _ranges(params)
+    counts = {n: (points[n] if isinstance(points, dict) else points) for n in params}
+    axes = [np.linspace(lo, hi, counts[n]) if counts[n] > 1 else np.array([lo])
+            for n, (lo, hi) in params.items()]
+    names = list(params)
+    return [Case.of({n: float(v) for n, v in zip(names, values, strict=True)})
+            for values in itertools.product(*axes)]
+
+
+def latin_hypercube_design(params: dict[str, tuple[float, float]], samples: int,
+                           seed: int = 0) -> list[Case]:
+    """Latin hypercube of ``samples`` cases (scipy.stats.qmc, reproducible by ``seed``)."""
+    from scipy.stats import qmc
+
+    params = _ranges(params)
+    unit = qmc.LatinHypercube(d=len(params), seed=seed).random(samples)
+    lo = np.array([r[0] for r in params.values()])
+    hi = np.array([r[1] for r in params.values()])
+    scaled = qmc.scale(unit, lo, hi) if np.all(hi > lo) else lo + unit * (hi - lo)
+    names = list(params)
+    return [Case.of({n: float(v) for n, v in zip(names, row, strict=True)}) for row in scaled]
+
+
+def rattle_metrics(time_s, signals: dict, normal_mass: float) -> dict[str, float]:
+    """The metrics of one run from the mesh outputs recorded at every communication point."""
+    from drive_rattle.analysis import onsets_from_counters, welch_spectrum
+
+    t = np.asarray(time_s, dtype=float)
+    duration = t[-1] - t[0]
+    W = np.asarray(signals["mesh.W"], dtype=float)
+    _, speeds, flanks = onsets_from_counters(t, signals["mesh.impacts_drive"],
+                                            signals["mesh.impacts_coast"],
+                                            signals["mesh.v_impact"])
+    v = np.asarray(speeds, dtype=float)
+    f = np.asarray(flanks, dtype=int)
+    out = {
+        "impacts_per_s_drive": float(np.sum(f > 0) / duration),
+        "impacts_per_s_coast": float(np.sum(f < 0) / duration),
+        "mean_impact_speed": float(np.mean(v)) if v.size else 0.0,
+        "peak_impact_speed": float(np.max(v)) if v.size else 0.0,
+        "peak_normal_force": float(np.max(signals["mesh.W_peak"])),
+        "rms_normal_force": float(np.sqrt(np.mean(W * W))),
+        "contact_fraction": float(np.mean(np.asarray(signals["mesh.n_contact"]) > 0)),
+        "rattle_index_W": float(0.5 * normal_mass * np.sum(v * v) / duration),
+        "mean_wheel_speed": float((signals["wheel.phi"][-1] - signals["wheel.phi"][0])
+                                  / duration),
+    }
+    spec = welch_spectrum(t, W, segment_seconds=min(0.1, duration / 4))
+    df = spec.frequency[1] - spec.frequency[0]
+    for lo, hi in BANDS:
+        band = (spec.frequency >= lo) & (spec.frequency < hi)
+        power = float(np.sum(spec.psd[band]) * df)
+        out[f"band_{int(lo)}_{int(hi)}_Hz_dB"] = 10.0 * math.log10(power) if power > 0 else -300.0
+    return out
+
+
+def run_case(case: Case, fmu_dir: str, stop_time: float, step: float) -> dict:
+    """One co-simulation (runs in a worker process): the case's parameters, then metrics.
+    Never raises: an error becomes the row's ``error`` field."""
+    row = {"case_id": case.case_id, **case.parameters, "error": ""}
+    start = time.perf_counter()
+    try:
+        from drive_rattle.mesh import MeshModel
+        from drive_rattle.parameters import MeshParameters
+        from drive_rattle_cosim.harness import CoSimulation
+
+        folder = Path(fmu_dir)
+        with CoSimulation(folder / "GearMeshRattle.fmu", folder / "Driveline.fmu",
+                          case.parameters, step=step) as sim:
+            res = sim.run(stop_time, RECORDED)
+        mesh_params = {k.split(".", 1)[1]: v for k, v in case.parameters.items()
+                       if k.startswith("GearMeshRattle.")}
+        normal_mass = MeshModel(MeshParameters.from_public(mesh_params)).normal_mass
+        signals = {k.split(".", 1)[1]: v for k, v in res.columns.items()}
+        row.update(rattle_metrics(res.time, signals, normal_mass))
+    except Exception as err:  # recorded, never stops the sweep
+        row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")[:2000]
+    row["wall_seconds"] = time.perf_counter() - start
+    return row
+
+
+def finished_case_ids(path: Path, retry_failed: bool = False) -> set[str]:
+    """Ids of the cases already in the result file (failed ones too, unless retried)."""
+    if not path.exists():
+        return set()
+    with path.open(newline="", encoding="utf-8") as f:
+        return {r["case_id"] for r in csv.DictReader(f)
+                if not (retry_failed and r.get("error"))}
+
+
+class ResultWriter:
+    """Appends one CSV row per finished case, flushed at once (resume-safe)."""
+
+    def __init__(self, path: Path, parameter_names: list[str]):
+        self.path = Path(path)
+        self.columns = ["case_id", *parameter_names, *METRICS, "error"]
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        if self.path.exists() and self.path.stat().st_size > 0:
+            with self.path.open(newline="", encoding="utf-8") as f:
+                header = next(csv.reader(f))
+            if header != self.columns:
+                raise ValueError(f"{self.path} holds another sweep (columns {header}); "
+                                 "use another --out")
+            self._file = self.path.open("a", newline="", encoding="utf-8")
+            self._csv = csv.DictWriter(self._file, fieldnames=self.columns)
+        else:
+            self._file = self.path.open("w", newline="", encoding="utf-8")
+            self._csv = csv.DictWriter(self._file, fieldnames=self.columns)
+            self._csv.writeheader()
+            self._file.flush()
+
+    def write(self, row: dict) -> None:
+        self._csv.writerow({c: row.get(c, "") for c in self.columns})
+        self._file.flush()
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
+              stop_time: float = 0.3, step: float = 1e-4, workers: int = 2,
+              scheduler: str | None = None, progress: bool = True,
+              retry_failed: bool = False, stop_after: int | None = None) -> dict:
+    """Run the cases not yet in ``out`` on dask (a LocalCluster of ``workers`` processes, or
+    the cluster at ``scheduler``).  ``stop_after`` ends the sweep after that many new cases
+    (an interruption, for tests).  Returns counts of done, skipped and failed cases."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    out = Path(out)
+    names = sorted({n for c in cases for n in c.parameters})
+    done = finished_case_ids(out, retry_failed)
+    todo = [c for c in cases if c.case_id not in done]
+    writer = ResultWriter(out, names)
+    cluster = None
+    counts = {"total": len(cases), "skipped": len(cases) - len(todo), "done": 0, "failed": 0}
+    try:
+        if scheduler:
+            client = Client(scheduler)
+        else:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
+            client = Client(cluster)
+        with client:
+            futures = [client.submit(run_case, c, str(fmu_dir), stop_time, step, pure=False)
+                       for c in todo]
+            stream = as_completed(futures)
+            if progress and todo:
+                from tqdm import tqdm
+
+                stream = tqdm(stream, total=len(todo), unit="case", desc="sweep")
+            for future in stream:
+                row = future.result()
+                writer.write(row)
+                counts["done"] += 1
+                counts["failed"] += bool(row["error"])
+                if stop_after is not None and counts["done"] >= stop_after:
+                    for f in futures:
+                        f.cancel()
+                    break
+    finally:
+        writer.close()
+        if cluster is not None:
+            cluster.close()
+    return counts
+
+
+def read_results(path: Path) -> list[dict]:
+    """Rows of a result file, numbers as floats (empty strings as NaN)."""
+    rows = []
+    with Path(path).open(newline="", encoding="utf-8") as f:
+        for r in csv.DictReader(f):
+            rows.append({k: (v if k in ("case_id", "error") else
+                             (float(v) if v != "" else math.nan)) for k, v in r.items()})
+    return rows
+
+
+def _parse_param(text: str) -> tuple[str, tuple[float, float]]:
+    name, sep, rng = text.partition("=")
+    lo, colon, hi = rng.partition(":")
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f"--param {text!r}: expected UNIT.NAME=LO:HI")
+    try:
+        return name, (float(lo), float(hi if colon else lo))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--param {text!r}: LO and HI must be numbers") from None
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.sweep",
+                                 description="Parameter sweep of the rattle co-simulation.")
+    ap.add_argument("--param", type=_parse_param, action="append", required=True,
+                    metavar="UNIT.NAME=LO:HI", help="a swept parameter and its range (SI)")
+    design = ap.add_mutually_exclusive_group(required=True)
+    design.add_argument("--grid", type=int, metavar="N", help="N values per parameter")
+    design.add_argument("--lhs", type=int, metavar="N", help="N Latin-hypercube cases")
+    ap.add_argument("--seed", type=int, default=0, help="Latin-hypercube seed")
+    ap.add_argument("--stop-time", type=float, default=0.3, help="simulated time per case [s]")
+    ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
+    ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist")
+    ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")
+    ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
+    ap.add_argument("--scheduler", default=None, help="address of an existing dask scheduler")
+    ap.add_argument("--retry-failed", action="store_true")
+    args = ap.parse_args(argv)
+    params = dict(args.param)
+    cases = (grid_design(params, args.grid) if args.grid
+             else latin_hypercube_design(params, args.lhs, args.seed))
+    counts = run_sweep(cases, args.out, args.fmu_dir, args.stop_time, args.step, args.workers,
+                       args.scheduler, retry_failed=args.retry_failed)
+    print(f"{counts['done']} cases run ({counts['failed']} failed), {counts['skipped']} "
+          f"already done, {counts['total']} in the design -> {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,90 @@
+"""Sweeps on dask: designs, metrics against closed forms, a 2-worker run, failure, resume."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drive_rattle_cosim.sweep import (
+    BANDS,
+    Case,
+    grid_design,
+    latin_hypercube_design,
+    rattle_metrics,
+    read_results,
+    run_sweep,
+)
+
+RANGES = {"GearMeshRattle.gear.backlash": (0.05e-3, 0.2e-3), "Driveline.vehicle.drag": (0.1, 0.3)}
+
+
+def test_grid_design():
+    cases = grid_design(RANGES, 3)
+    assert len(cases) == 9 and len({c.case_id for c in cases}) == 9
+    values = sorted({c.parameters["Driveline.vehicle.drag"] for c in cases})
+    assert values == pytest.approx([0.1, 0.2, 0.3])
+    assert grid_design(RANGES, 3) == cases  # ids are stable across runs
+    with pytest.raises(ValueError, match="range"):
+        grid_design({"x.y": (1.0, 0.0)}, 2)
+
+
+def test_latin_hypercube_is_stratified_and_reproducible():
+    cases = latin_hypercube_design(RANGES, 10, seed=3)
+    assert cases == latin_hypercube_design(RANGES, 10, seed=3)
+    for name, (lo, hi) in RANGES.items():
+        strata = sorted(int((c.parameters[name] - lo) / (hi - lo) * 10) for c in cases)
+        assert strata == list(range(10))  # one sample per stratum in every dimension
+
+
+def test_rattle_metrics_against_closed_forms():
+    T, fs = 1.0, 10_000
+    t = np.arange(int(T * fs) + 1) / fs
+    f0, A = 300.0, 2.0
+    W = 5.0 + A * np.sin(2 * np.pi * f0 * t)
+    # Three drive onsets (speeds 1, 2, 3 mm/s) and one coast onset (4 mm/s).
+    drive = np.zeros(t.size, dtype=int)
+    coast = np.zeros(t.size, dtype=int)
+    v = np.zeros(t.size)
+    for k, (flank, speed) in zip((100, 2000, 5000, 8000),
+                                 [(1, 1e-3), (1, 2e-3), (-1, 4e-3), (1, 3e-3)], strict=True):
+        (drive if flank > 0 else coast)[k:] += 1
+        v[k:] = speed
+    signals = {"mesh.W": W, "mesh.W_peak": W, "mesh.n_contact": (W > 5.0).astype(int),
+               "mesh.impacts_drive": drive, "mesh.impacts_coast": coast, "mesh.v_impact": v,
+               "wheel.phi": 44.5 * t}
+    m = 0.76
+    out = rattle_metrics(t, signals, m)
+    assert out["impacts_per_s_drive"] == pytest.approx(3.0)
+    assert out["impacts_per_s_coast"] == pytest.approx(1.0)
+    assert out["rattle_index_W"] == pytest.approx(0.5 * m * (1 + 4 + 16 + 9) * 1e-6)
+    assert out["peak_impact_speed"] == 4e-3 and out["mean_impact_speed"] == pytest.approx(2.5e-3)
+    assert out["mean_wheel_speed"] == pytest.approx(44.5)
+    assert out["rms_normal_force"] == pytest.approx(math.sqrt(25 + A * A / 2), rel=1e-3)
+    assert out["contact_fraction"] == pytest.approx(0.5, abs=1e-3)
+    # The sinusoid's power A^2/2 lands in the band that contains f0.
+    band = next(f"band_{int(lo)}_{int(hi)}_Hz_dB" for lo, hi in BANDS if lo <= f0 < hi)
+    assert out[band] == pytest.approx(10 * math.log10(A * A / 2), abs=0.3)
+
+
+def test_sweep_on_two_workers_records_failures_and_resumes(fmus, tmp_path):
+    bad = Case.of({"GearMeshRattle.gear.backlash": -1.0, "Driveline.vehicle.drag": 0.2})
+    cases = [*grid_design(RANGES, 2), bad]
+    out = tmp_path / "sweep.csv"
+    fmu_dir = fmus["GearMeshRattle"].parent
+    # Interrupted after two cases...
+    first = run_sweep(cases, out, fmu_dir, stop_time=0.01, workers=2, progress=False,
+                      stop_after=2)
+    assert first["done"] == 2 and len(read_results(out)) == 2
+    # ...and resumed: only the remaining three run, every case appears once.
+    second = run_sweep(cases, out, fmu_dir, stop_time=0.01, workers=2, progress=False)
+    assert second["skipped"] == 2 and second["done"] == 3
+    rows = read_results(out)
+    assert sorted(r["case_id"] for r in rows) == sorted(c.case_id for c in cases)
+    failed = [r for r in rows if r["error"]]
+    assert len(failed) == 1 and "gear.backlash" in failed[0]["error"]
+    for r in rows:
+        if not r["error"]:
+            assert math.isfinite(r["rattle_index_W"]) and r["mean_wheel_speed"] > 40
+    # A third run has nothing to do.
+    third = run_sweep(cases, out, fmu_dir, stop_time=0.01, workers=1, progress=False)
+    assert third["done"] == 0 and third["skipped"] == 5
