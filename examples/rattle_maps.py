@@ -68,7 +68,7 @@ def _heat_map(rows, xname, xf, xlabel, yname, yf, ylabel, path: Path, stop_time)
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import LogNorm
+    from matplotlib.colors import LogNorm, Normalize
 
     xs = sorted({r[xname] for r in rows})
     ys = sorted({r[yname] for r in rows})
@@ -76,10 +76,13 @@ def _heat_map(rows, xname, xf, xlabel, yname, yf, ylabel, path: Path, stop_time)
     for r in rows:
         z[ys.index(r[yname]), xs.index(r[xname])] = r["rattle_index_W"]
     positive = z[np.isfinite(z) & (z > 0)]
-    floor = positive.min() if positive.size else 1e-12
+    if positive.size and positive.max() > positive.min():  # log colours over the impacts
+        norm, z = LogNorm(positive.min(), positive.max()), np.maximum(z, positive.min())
+    else:  # no impact, or all equal: a log scale has no range
+        norm = Normalize()
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    mesh = ax.pcolormesh(np.asarray(xs) * xf, np.asarray(ys) * yf, np.maximum(z, floor),
-                         shading="nearest", norm=LogNorm(), cmap="magma")
+    mesh = ax.pcolormesh(np.asarray(xs) * xf, np.asarray(ys) * yf, z, shading="nearest",
+                         norm=norm, cmap="magma")
     fig.colorbar(mesh, ax=ax, label="rattle index: impact energy per second [W]")
     failed = [(r[xname] * xf, r[yname] * yf) for r in rows if r["error"]]
     if failed:

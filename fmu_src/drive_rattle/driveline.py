@@ -71,13 +71,14 @@ class DrivelineParameters(ParameterSet):
         "sees nearly the constant drag like the paper's M_res)",
         minimum=1e-3, maximum=1e9)
     c_shaft: float = declare(
-        "shaft.c", 0.05, "N.m.s/rad", "torsional damping of the output shaft",
+        "shaft.c", 0.005, "N.m.s/rad",
+        "torsional damping of the output shaft (default light: see docs/model.md section 6)",
         minimum=0.0, maximum=1e6)
     J_vehicle: float = declare(
         "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
         minimum=1e-6, maximum=1e6)
     drag: float = declare(
-        "vehicle.drag", 0.17, "N.m",
+        "vehicle.drag", 0.16, "N.m",
         "constant drag torque on the vehicle side (creep load; default calibrated, see "
         "docs/model.md section 6)",
         minimum=-1e5, maximum=1e5)
