@@ -68,37 +68,50 @@ def _stage_packages(staging: Path) -> list[Path]:
     return out
 
 
-def _slave_class(name: str):
+def _slave_class(name: str, script: Path | None = None):
+    if script is not None and str(script.parent) not in sys.path:
+        sys.path.insert(0, str(script.parent))
     module = __import__(name)
     return getattr(module, name)
 
 
-def build_one(name: str, out_dir: Path, update_templates: bool = False,
-              use_fmutool: bool = True) -> Path:
-    """Build, shim, check against the template and validate one FMU; returns its path."""
+def package(script: Path, out_dir: Path, references: bool = True) -> Path:
+    """Build the slave module ``script`` (class = file stem) into ``out_dir/<stem>.fmu`` with
+    the runtime packages, generated documentation and the native status shim."""
     from pythonfmu.builder import FmuBuilder
 
     from drive_rattle_fmi.documentation import HOW_TO_RUN, html_page
-    from drive_rattle_fmi.model_description import normalised_xml
     from drive_rattle_fmi.native import install_shim
     from drive_rattle_fmi.slave import MESSAGE_VARIABLE, STATUS_ADDRESS_VARIABLE
 
-    cls = _slave_class(name)
+    name = script.stem
+    cls = _slave_class(name, script)
     out_dir.mkdir(parents=True, exist_ok=True)
     fmu = out_dir / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
         tmp = Path(tmp)
-        packages = _stage_packages(tmp / "stage") + _stage_references(name, tmp / "stage")
+        packages = _stage_packages(tmp / "stage")
+        if references:
+            packages += _stage_references(name, tmp / "stage")
         doc = tmp / "documentation"
         doc.mkdir()
         (doc / "index.html").write_text(
             html_page(cls, HOW_TO_RUN.format(name=name)), encoding="utf-8")
-        FmuBuilder.build_FMU(SRC / f"{name}.py", dest=fmu, project_files=packages,
+        FmuBuilder.build_FMU(script, dest=fmu, project_files=packages,
                              documentation_folder=doc, canGetAndSetFMUstate=True,
                              canSerializeFMUstate=True)
     slave = cls(instance_name="build")
     vrs = {v.name: v.value_reference for v in slave.vars.values()}
     install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE])
+    return fmu
+
+
+def build_one(name: str, out_dir: Path, update_templates: bool = False,
+              use_fmutool: bool = True) -> Path:
+    """Build, shim, check against the template and validate one FMU; returns its path."""
+    from drive_rattle_fmi.model_description import normalised_xml
+
+    fmu = package(SRC / f"{name}.py", out_dir)
 
     with zipfile.ZipFile(fmu) as z:
         xml = ElementTree.fromstring(z.read("modelDescription.xml"))

@@ -33,6 +33,8 @@ class Driveline(RattleSlave):
     def _outputs(self, model):
         return model.outputs()
 
+    _quick_outputs = _outputs  # all cheap, and all read by the mesh every step
+
     def _model_state(self, model):
         return {"shaft": [model.shaft.state.phi, model.shaft.state.w, model.shaft.tau_load],
                 "time": model.time}

@@ -31,6 +31,9 @@ class GearMeshRattle(RattleSlave):
     def _outputs(self, model):
         return mesh_outputs(model)
 
+    def _quick_outputs(self, model):
+        return {"wheel.phi": model.state.phi, "wheel.w": model.state.w}
+
     def _model_state(self, model):
         last = model.last
         return {

@@ -35,5 +35,10 @@ def test_rattle_maps_example(tmp_path, fmus):
     names = sorted(f.name for f in result["files"])
     assert names == ["amplitude_speed.csv", "amplitude_speed.png", "backlash_drag.csv",
                      "backlash_drag.png"]
-    assert all(c["done"] == 4 and c["failed"] == 0 for c in result["counts"].values())
+    errors = [r["error"] for f in result["files"] if f.suffix == ".csv"
+              for r in __import__("drive_rattle_cosim.sweep", fromlist=["read_results"])
+              .read_results(f) if r["error"]]
+    assert errors == []
+    assert all(c["done"] == 4 and c["failed"] == 0 for c in result["counts"].values()), (
+        result["counts"])
     assert (tmp_path / "backlash_drag.png").stat().st_size > 5000

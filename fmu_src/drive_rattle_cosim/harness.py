@@ -24,8 +24,10 @@ import contextlib
 import csv
 import shutil
 import sys
+from ctypes import c_double, c_int, c_uint
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import ClassVar
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
@@ -102,6 +104,37 @@ class Variable:
     unit: str
 
 
+class _Raw:
+    """getX/setX of a fixed list of value references on preallocated ctypes arrays."""
+
+    _CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
+
+    def __init__(self, unit: Unit, kind: str, vrs: list[int]):
+        n = len(vrs)
+        self.unit, self.kind, self.n = unit, kind, n
+        self.vrs = (c_uint * n)(*vrs)
+        self.values = (self._CTYPES[kind] * n)()
+        self._get = unit.slave._functions[f"fmi2Get{kind}"]
+        self._set = unit.slave._functions[f"fmi2Set{kind}"]
+        self.component = unit.slave.component
+
+    def fetch(self):
+        """Read into the value array (returned)."""
+        status = self._get(self.component, self.vrs, self.n, self.values)
+        if status > 1:
+            self.unit.fail(f"get{self.kind}", status)
+        return self.values
+
+    def get(self) -> list:
+        values = self.fetch()
+        return [bool(v) for v in values] if self.kind == "Boolean" else values[:]
+
+    def put(self, values) -> None:
+        status = self._set(self.component, self.vrs, self.n, values)
+        if status > 1:
+            self.unit.fail(f"set{self.kind}", status)
+
+
 class Unit:
     """One FMU instance with name-based, typed access."""
 
@@ -131,9 +164,13 @@ class Unit:
         try:
             return fn(*args)
         except FMICallException as err:
-            reason = self.messages[-1][1] if self.messages else "no message logged"
-            raise CoSimulationError(
-                f"{self.name}: {what} returned {_STATUS[err.status]}: {reason}") from None
+            self.fail(what, err.status)
+
+    def fail(self, what: str, status: int):
+        """Raise CoSimulationError for a call that returned ``status``, with the logged reason."""
+        reason = self.messages[-1][1] if self.messages else "no message logged"
+        name = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+        raise CoSimulationError(f"{self.name}: {what} returned {name}: {reason}")
 
     def var(self, name: str) -> Variable:
         try:
@@ -279,22 +316,30 @@ class CoSimulation:
             from tqdm import tqdm
 
             steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5)
-        plan = self._plan
+        # Hot loop on the FMUs' raw ctypes functions with preallocated arrays: fmpy's
+        # convenience wrappers cost several microseconds per call.
+        raw_rec = [(_Raw(u, kind, vrs), names) for u, kind, vrs, names in rec]
+        raw_plan = [(_Raw(src, "Real", outs), _Raw(dst, "Real", ins))
+                    for src, outs, dst, ins in self._plan]
+        steppers = [(u, u.slave._functions["fmi2DoStep"], u.slave.component)
+                    for u in self.units.values()]
+        columns = result.columns
+        last = len(points) - 1
         for k in steps:
             t = points[k]
             result.time.append(t)
-            for u, kind, vrs, names in rec:
-                values = getattr(u.slave, f"get{kind}")(vrs)
-                for name, value in zip(names, values, strict=True):
-                    result.columns[name].append(value)
-            if k == len(points) - 1:
+            for raw, names in raw_rec:
+                for name, value in zip(names, raw.get(), strict=True):
+                    columns[name].append(value)
+            if k == last:
                 break
-            for src, outs, dst, ins in plan:
-                dst.call("setReal", dst.slave.setReal, ins,
-                         src.call("getReal", src.slave.getReal, outs))
+            for src, dst in raw_plan:
+                dst.put(src.fetch())
             h = points[k + 1] - t
-            for u in self.units.values():
-                u.call(f"doStep at t = {t!r} s", u.slave.doStep, t, h)
+            for u, do_step, component in steppers:
+                status = do_step(component, t, h, 1)
+                if status > 1:
+                    u.fail(f"doStep at t = {t!r} s", status)
             self.time = points[k + 1]
         return result
 

@@ -74,6 +74,10 @@ class RattleSlave(Fmi2Slave):
         self._time = 0.0  # communication point the next step must start from
         self._model = None
         self._provisional = None  # outputs computed in initialization mode
+        # Outputs are computed when first read after a step (``_stale``); the quick ones
+        # (``_quick_outputs``, e.g. the wheel's angle and speed) right after the step.
+        self._stale = False
+        self._output_set = frozenset(s.name for s in self.OUTPUTS)
         for _attr, spec in specs(self.PARAMETERS):
             self._param_specs[spec.name] = spec
             self._register(spec.name, spec.kind, Fmi2Causality.parameter,
@@ -94,6 +98,12 @@ class RattleSlave(Fmi2Slave):
         self.register_variable(String(
             MESSAGE_VARIABLE, causality=Fmi2Causality.local, variability=Fmi2Variability.discrete,
             getter=lambda: self._fmi_message), nested=False)
+        # Per value reference: FMI type and getter, for the hot get/set paths.
+        self._vr_kind = [self._kinds.get(v.name, "String") for v in self.vars.values()]
+        self._vr_getter = [v.getter for v in self.vars.values()]
+        self._vr_setter = [v.setter for v in self.vars.values()]
+        self._vrs_of_kind = {kind: frozenset(vr for vr, k in enumerate(self._vr_kind) if k == kind)
+                             for kind in ("Real", "Integer", "Boolean", "String")}
 
     # ------------------------------------------------------------------ registration
     def _register(self, name, kind, causality, variability, start, description) -> None:
@@ -141,24 +151,22 @@ class RattleSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ values
     def _get(self, name: str):
-        if name in self._provisional_names():
-            self._refresh_provisional()
-            if self._provisional is not None:
+        if name in self._output_set:
+            if self._mode == "initialization":
+                self._refresh_provisional()
                 return self._provisional[name]
+            if self._stale:
+                self._refresh_outputs()
         return self._values[name]
 
-    def _provisional_names(self):
-        if self._mode != "initialization":
-            return ()
-        return self._output_names
-
-    @property
-    def _output_names(self) -> frozenset:
-        return frozenset(s.name for s in self.OUTPUTS)
+    def _refresh_outputs(self) -> None:
+        """Compute the outputs of the last step (they depend only on the model's state)."""
+        self._values.update(self._outputs(self._model))
+        self._stale = False
 
     def _set(self, name: str, value) -> None:
         kind = self._kinds[name]
-        if name in self._output_names:
+        if name in self._output_set:
             raise ModelError(f"'{name}' is an output and cannot be set")
         if name in self._param_specs and self._mode not in ("instantiated", "initialization"):
             raise ModelError(
@@ -176,25 +184,32 @@ class RattleSlave(Fmi2Slave):
         self._provisional = None
 
     def _set_values(self, vrs, values, kind: str) -> None:
+        kinds, setters = self._vr_kind, self._vr_setter
+        n = len(kinds)
+
         def apply():
             for vr, value in zip(vrs, values, strict=True):
-                var = self.vars.get(vr)
-                if var is None or var.name.startswith("_fmi.") or self._kinds[var.name] != kind:
+                if not (0 <= vr < n and kinds[vr] == kind and setters[vr] is not None):
                     raise ModelError(f"no {kind} variable with value reference {vr}")
-                var.setter(value)
+                setters[vr](value)
         self._guard(f"set{kind}", apply)
 
     def _get_values(self, vrs, kind: str, default) -> list:
+        getters = self._vr_getter
+        if self._vrs_of_kind[kind].issuperset(vrs):
+            try:  # fast path: every getter at once (they only read stored values)
+                return [getters[vr]() for vr in vrs]
+            except Exception:  # redone value by value below, with the reports
+                pass
+        kinds = self._vr_kind
+        n = len(kinds)
         out = []
         for vr in vrs:
-            var = self.vars.get(vr)
-            if var is None or (not var.name.startswith("_fmi.")
-                               and self._kinds[var.name] != kind) or (
-                    var.name.startswith("_fmi.") and kind != "String"):
+            if not (0 <= vr < n and kinds[vr] == kind):
                 self._report(ERROR, f"get{kind}: no {kind} variable with value reference {vr}")
                 out.append(default)
                 continue
-            value = self._guard(f"get{kind} '{var.name}'", var.getter)
+            value = self._guard(f"get{kind} vr {vr}", getters[vr])
             out.append(default if value is _FAILED else value)
         return out
 
@@ -299,11 +314,11 @@ class RattleSlave(Fmi2Slave):
                     f"which ended at {self._time!r} s (tolerance {tol:.3g} s)")
             inputs = self.inputs()
             self._check_inputs(inputs)
-            model_state = self._step(current_time, step_size, inputs)
-            outputs = self._outputs(self._model)
-            self._values.update(outputs)
+            self._step(current_time, step_size, inputs)
+            quick = self._quick_outputs(self._model)
+            self._values.update(quick)
+            self._stale = len(quick) < len(self._output_set)
             self._time = current_time + step_size
-            return model_state
         failed = self._guard("doStep", step) is _FAILED
         # With the shim the status channel carries the failure (and True keeps pythonfmu from
         # flagging the instance as terminated); without it, Discard is the only non-OK status.
@@ -318,6 +333,8 @@ class RattleSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ FMU state
     def _get_fmu_state(self) -> dict:
+        if self._stale:
+            self._guard("getFMUstate", self._refresh_outputs)
         state = self._guard("getFMUstate", lambda: copy.deepcopy({
             "mode": self._mode,
             "start_time": self._start_time,
@@ -347,6 +364,7 @@ class RattleSlave(Fmi2Slave):
                 self._restore_model_state(model, s["model"])
             self._values = values
             self._model = model
+            self._stale = False
             self._mode = s["mode"]
             self._start_time = s["start_time"]
             self._time = s["time"]
@@ -384,6 +402,11 @@ class RattleSlave(Fmi2Slave):
     def _outputs(self, model) -> dict[str, Any]:
         """Output values of a model."""
         raise NotImplementedError
+
+    def _quick_outputs(self, model) -> dict[str, Any]:
+        """Outputs cheap enough to refresh right after every step (those a master reads every
+        step); the rest are computed when first read.  Default: none."""
+        return {}
 
     def _model_state(self, model) -> Any:
         """JSON-able snapshot of the model's complete state."""

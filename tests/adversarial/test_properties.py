@@ -95,8 +95,9 @@ def _energy(stepper) -> float:
        weighting=st.booleans())
 def test_free_wheel_creates_no_energy(phi_p, w0, backlash, J, r_y, h, weighting):
     """Pinion at rest, friction off, no damping, no load: the wheel bounces between the flanks
-    and its kinetic plus contact energy must not grow beyond the integrator's tolerance (the
-    1e-4 relative bound the single-impact closed-form test holds)."""
+    and its kinetic plus contact energy must not grow beyond the integrator's error: 1e-4 of
+    the start energy plus, per impact, 4e-5 (twice the largest single-impact energy error the
+    closed-form tests measure at the default solver.h_max: rebound speed within 2e-5)."""
     p = MeshParameters(init_in_contact=False, friction_enabled=False, damping=0.0,
                        backlash=backlash, J_wheel=J, r_y=r_y, length_weighting=weighting,
                        phi_start=phi_p * 20 / 39, w_start=w0)
@@ -106,5 +107,5 @@ def test_free_wheel_creates_no_energy(phi_p, w0, backlash, J, r_y, h, weighting)
     for _ in range(300):
         r = wheel.step(h, phi_p, 0.0, 0.0, 0.0)
         impacts += r.onsets_drive + r.onsets_coast
-        assert _energy(wheel) <= e0 * (1 + 1e-4)
+        assert _energy(wheel) <= e0 * (1 + 1e-4 + 4e-5 * impacts)
     assert impacts >= 1 or w0 * 20 / 39 * 300 * h < backlash / wheel.mesh.arm_wheel
