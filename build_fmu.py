@@ -31,7 +31,7 @@ MODELS = ("GearMeshRattle", "Driveline")
 
 #: Modules of the core that run inside the FMUs (the rest needs numpy/scipy or is tooling).
 CORE_RUNTIME = ("__init__", "parameters", "geometry", "hertz", "lubrication", "mesh", "roots",
-                "stepper", "driveline", "interface")
+                "stepper", "driveline", "interface", "kernel")
 FMI_RUNTIME = ("__init__", "slave", "model_description", "units")
 
 sys.path.insert(0, str(SRC))
@@ -58,6 +58,9 @@ def _stage_references(name: str, staging: Path) -> list[Path]:
 
 
 def _stage_packages(staging: Path) -> list[Path]:
+    """The runtime packages, with the compiled kernel next to drive_rattle/kernel.py."""
+    from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
+
     out = []
     for package, modules in (("drive_rattle", CORE_RUNTIME), ("drive_rattle_fmi", FMI_RUNTIME)):
         dest = staging / package
@@ -65,6 +68,7 @@ def _stage_packages(staging: Path) -> list[Path]:
         for m in modules:
             shutil.copy2(SRC / package / f"{m}.py", dest / f"{m}.py")
         out.append(dest)
+    compile_kernel(staging / "drive_rattle" / LIBRARY_NAME)
     return out
 
 

@@ -2,10 +2,13 @@
 an FMI 2.0 co-simulation slave.  Thin: the physics is drive_rattle, the FMI glue
 drive_rattle_fmi; this module only maps the two."""
 
+from pathlib import Path
+
 from drive_rattle.interface import MESH_INPUTS, MESH_OUTPUTS, mesh_outputs
+from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
 from drive_rattle.parameters import MeshParameters
 from drive_rattle.stepper import StepResult, WheelState, WheelStepper
-from drive_rattle_fmi.slave import RattleSlave
+from drive_rattle_fmi.slave import WARNING, RattleSlave
 
 
 class GearMeshRattle(RattleSlave):
@@ -21,18 +24,33 @@ class GearMeshRattle(RattleSlave):
     OUTPUTS = MESH_OUTPUTS
 
     def _build(self, params, inputs):
-        return WheelStepper(params, inputs["pinion.phi"], inputs["pinion.w"],
-                            inputs["wheel.tau_load"])
+        args = (params, inputs["pinion.phi"], inputs["pinion.w"], inputs["wheel.tau_load"])
+        if params.compiled:
+            # This FMU's own kernel (the drive_rattle package in sys.modules may come from
+            # another FMU of the process, whose folder the host may have deleted).
+            lib = load_kernel(Path(self.resources or ".") / "drive_rattle" / LIBRARY_NAME)
+            lib = lib or load_kernel()
+            if lib is not None:
+                return CompiledWheelStepper(*args, library=lib)
+            self._report(WARNING, "the compiled kernel is not available here: running the "
+                                  "pure-Python core (same results, slower)")
+        return WheelStepper(*args)
 
     def _step(self, t, h, inputs):
         self._model.step(h, inputs["pinion.phi"], inputs["pinion.w"], inputs["pinion.a"],
                          inputs["wheel.tau_load"])
 
     def _outputs(self, model):
+        if isinstance(model, CompiledWheelStepper):
+            return model.outputs()
         return mesh_outputs(model)
 
     def _quick_outputs(self, model):
-        return {"wheel.phi": model.state.phi, "wheel.w": model.state.w}
+        if isinstance(model, CompiledWheelStepper):
+            phi, w = model.wheel_angle_speed()
+        else:
+            phi, w = model.state.phi, model.state.w
+        return {"wheel.phi": phi, "wheel.w": w}
 
     def _model_state(self, model):
         last = model.last

@@ -7,7 +7,7 @@ Pure Python on plain SI floats; knows nothing of FMI.  See docs/model.md.
 # interpreter, and a host that unpacks one of our FMUs, runs it and deletes its folder (fmpy's
 # simulate_fmu does) would otherwise leave a package whose remaining submodules cannot be found
 # when the other FMU is instantiated.
-from . import driveline, interface, lubrication, roots  # noqa: F401
+from . import driveline, interface, kernel, lubrication, roots  # noqa: F401
 from .geometry import COAST, DRIVE, HelicalPairGeometry
 from .mesh import MeshLoads, MeshModel, PairLoad
 from .parameters import MAX_PAIR_SLOTS, MeshParameters, ParameterSpec, specs

@@ -294,13 +294,22 @@ class CompiledWheelStepper(WheelStepper):
         self.last = result = StepResult(tw, tp, Wp, dp, int(od), int(oc), [], int(nrhs))
         return result
 
+    def wheel_angle_speed(self) -> tuple[float, float]:
+        """``(state.phi, state.w)`` without building the WheelState (cheap, for hot paths)."""
+        if self._state_dirty:
+            s = self._state_obj
+            return s.phi, s.w
+        a = self._state
+        return a[0], a[1]
+
     @property
     def last_event_count(self) -> int:
         """Number of contact events (onsets and releases) in the last step."""
         return int(self._result[7])
 
-    def outputs(self) -> dict[str, float]:
-        """The values of ``interface.MESH_OUTPUTS`` now (as ``interface.mesh_outputs``)."""
+    def output_values(self) -> list[float]:
+        """The values of ``interface.MESH_OUTPUTS`` now, in their declared order (Integer
+        outputs as int); cheaper than :meth:`outputs` where the names are known."""
         if self._state_dirty:
             self._pack_state()
         last = self.last
@@ -314,7 +323,11 @@ class CompiledWheelStepper(WheelStepper):
         values = self._out_mv.tolist()
         for i in _INTEGER_INDICES:
             values[i] = int(values[i])
-        return dict(zip(OUTPUT_NAMES, values, strict=True))
+        return values
+
+    def outputs(self) -> dict[str, float]:
+        """The values of ``interface.MESH_OUTPUTS`` now (as ``interface.mesh_outputs``)."""
+        return dict(zip(OUTPUT_NAMES, self.output_values(), strict=True))
 
 
 def new_stepper(params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,

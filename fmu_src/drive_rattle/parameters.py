@@ -283,6 +283,10 @@ class MeshParameters(ParameterSet):
         "solver.h_max", 1e-5, "s",
         "largest integration substep while teeth are in contact (free flight is exact)",
         minimum=1e-8, maximum=1e-2)
+    compiled: bool = declare(
+        "solver.compiled", True, "",
+        "run the compiled kernel (C, bit-identical to the Python core, ~10-30x faster) when "
+        "it is available; false = the pure-Python core")
     h_comm_max: float = declare(
         "solver.h_comm_max", 1e-2, "s",
         "largest communication step accepted (the pinion's Taylor polynomial and the held "

@@ -19,6 +19,8 @@ import copy
 import ctypes
 import json
 import math
+import os
+import sys
 import traceback
 from typing import Any, ClassVar
 
@@ -42,6 +44,25 @@ COMMUNICATION_POINT_TOLERANCE = 1e-9
 _VARIABLE_TYPES = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
 
 
+#: Instance name pythonfmu's builder instantiates the slave with to render the description.
+_BUILDER_INSTANCE = "dummyInstance"
+
+
+def _forget_resources_path(resources) -> None:
+    """Take this FMU's resources folder back out of ``sys.path``.
+
+    pythonfmu inserts it at the front of the host's ``sys.path`` on every instantiation, to
+    import the slave module.  Left there, it grows the path by one entry per instance and makes
+    the host import *this FMU's* partial copy of ``drive_rattle`` (without its tooling
+    modules) -- also in processes the host starts later, which inherit the path.  Every module
+    the FMU needs is imported by now (the packages import their modules eagerly)."""
+    if not resources:
+        return
+    target = os.path.normcase(os.path.abspath(str(resources)))
+    sys.path[:] = [p for p in sys.path
+                   if not p or os.path.normcase(os.path.abspath(p)) != target]
+
+
 #: Returned by RattleSlave._guard when the guarded call failed.
 _FAILED = object()
 
@@ -63,6 +84,8 @@ class RattleSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        if self.instance_name != _BUILDER_INSTANCE:  # the builder removes its path itself
+            _forget_resources_path(self.resources)
         self._fmi_status = ctypes.c_int(OK)
         self._fmi_message = ""
         self._shim_attached = False  # set when the native shim reads the status address

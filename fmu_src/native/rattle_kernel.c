@@ -137,6 +137,9 @@ static void set_err(char* err, int errlen, const char* fmt, ...)
 }
 
 /* ------------------------------------------------------------------ Python semantics */
+/* For messages: printf writes a NaN with its sign bit as "-nan", Python's repr as "nan". */
+static inline double unsigned_nan(double x) { return isnan(x) ? fabs(x) : x; }
+
 /* max(a, b): a unless b > a. */
 static inline double py_max(double a, double b) { return b > a ? b : a; }
 
@@ -1013,12 +1016,13 @@ static int step_impl(const double* model, double* state, double h, double phi_p,
     for (int i = 0; i < 4; i++) {
         if (!isfinite(values[i])) {
             set_err(err, errlen, "input %s = %.17g is not a finite number", names[i],
-                    values[i]);
+                    unsigned_nan(values[i]));
             return 2;
         }
     }
     if (!(h > 0.0 && isfinite(h))) {
-        set_err(err, errlen, "step size h = %.17g s is invalid; allowed: finite and > 0", h);
+        set_err(err, errlen, "step size h = %.17g s is invalid; allowed: finite and > 0",
+                unsigned_nan(h));
         return 3;
     }
     if (h > M.h_comm_max) {
@@ -1094,7 +1098,7 @@ static int step_impl(const double* model, double* state, double h, double phi_p,
         set_err(err, errlen,
                 "the step diverged (wheel angle %.17g rad, speed %.17g rad/s); the inputs or "
                 "parameters are beyond what the integrator resolves (reduce solver.h_max or "
-                "the communication step)", st->phi, st->w);
+                "the communication step)", unsigned_nan(st->phi), unsigned_nan(st->w));
         return 5;
     }
     double phi_end = phi_p + h * (w_p + 0.5 * a_p * h);

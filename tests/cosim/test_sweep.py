@@ -81,7 +81,8 @@ def test_sweep_on_two_workers_records_failures_and_resumes(fmus, tmp_path):
     rows = read_results(out)
     assert sorted(r["case_id"] for r in rows) == sorted(c.case_id for c in cases)
     failed = [r for r in rows if r["error"]]
-    assert len(failed) == 1 and "gear.backlash" in failed[0]["error"]
+    assert len(failed) == 1 and "gear.backlash" in failed[0]["error"], [
+        r["error"] for r in failed]
     for r in rows:
         if not r["error"]:
             assert math.isfinite(r["rattle_index_W"]) and r["mean_wheel_speed"] > 40

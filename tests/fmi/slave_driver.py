@@ -13,13 +13,32 @@ from Driveline import Driveline  # noqa: E402
 from GearMeshRattle import GearMeshRattle  # noqa: E402
 
 SLAVES = {"GearMeshRattle": GearMeshRattle, "Driveline": Driveline}
+_RESOURCES: list[str] = []
+
+
+def kernel_resources() -> str:
+    """A resources folder holding drive_rattle/_rattle_kernel.so, compiled once per session,
+    so that the slaves run the compiled kernel as they do inside a built FMU."""
+    if not _RESOURCES:
+        import atexit
+        import shutil
+        import tempfile
+
+        from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
+
+        folder = Path(tempfile.mkdtemp(prefix="slave_resources_"))
+        atexit.register(shutil.rmtree, folder, ignore_errors=True)
+        (folder / "drive_rattle").mkdir()
+        compile_kernel(folder / "drive_rattle" / LIBRARY_NAME)
+        _RESOURCES.append(str(folder))
+    return _RESOURCES[0]
 
 
 class Driven:
     """A slave instance with name-based access and the status channel read back."""
 
     def __init__(self, cls, name="inst", resources=None):
-        self.slave = cls(instance_name=name, resources=resources)
+        self.slave = cls(instance_name=name, resources=resources or kernel_resources())
         self.vr = {v.name: v.value_reference for v in self.slave.vars.values()}
         self.kind = dict(self.slave._kinds)
 

@@ -228,3 +228,15 @@ def test_instantiate_refuses_a_foreign_guid(fmus):
                           instanceName="right")
         right.instantiate()
         right.freeInstance()
+
+
+def test_loading_the_fmus_leaves_the_host_import_path_alone(fmus):
+    # pythonfmu puts each instance's resources folder in front of sys.path; the slaves take it
+    # out again, so the host keeps importing its own packages (and sys.path does not grow).
+    import sys
+
+    before = list(sys.path)
+    for _ in range(3):
+        for name in ("GearMeshRattle", "Driveline"):
+            Unit(fmus[name], name).close()
+    assert sys.path == before
