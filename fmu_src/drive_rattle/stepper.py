@@ -148,7 +148,13 @@ class WheelStepper:
                     "mesh torque does not reach it within 10 mm penetration (friction "
                     "dominates the normal force?); set init.in_contact = false")
             r_hi = residual(hi)
-        delta = roots.brent(residual, 0.0, hi, fb=r_hi, xtol=1e-18)
+        r_0 = residual(0.0)
+        if (r_0 >= 0.0) == (flank == DRIVE):
+            # A load so small that the rounding-level penetration of the touching state
+            # (~1e-18 m) already carries it: the flanks just touch.
+            delta = 0.0
+        else:
+            delta = roots.brent(residual, 0.0, hi, fa=r_0, fb=r_hi, xtol=1e-18)
         return WheelState(self._wheel_angle(flank, phi_p, delta), w_w, flank)
 
     def _wheel_angle(self, flank: int, phi_p: float, delta: float) -> float:
