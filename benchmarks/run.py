@@ -139,7 +139,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="shorter horizons (a smoke run)")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "benchmarks")
     args = ap.parse_args(argv)
-    T = 0.3 if args.quick else 1.0
+    T = 0.3 if args.quick else 2.0
     report = [f"# Benchmarks ({time.strftime('%Y-%m-%d %H:%M')}, best of {REPEATS}, "
               f"paper scenario, {T:g} s simulated)\n"]
 

@@ -37,10 +37,11 @@ class Driveline(RattleSlave):
 
     def _model_state(self, model):
         return {"shaft": [model.shaft.state.phi, model.shaft.state.w, model.shaft.tau_load],
-                "time": model.time}
+                "time": model.time, "last_step": model.last_step}
 
     def _restore_model_state(self, model, state):
         phi, w, tau = state["shaft"]
         model.shaft.state = ShaftState(phi, w)
         model.shaft.tau_load = tau
         model.time = state["time"]
+        model.last_step = state["last_step"]

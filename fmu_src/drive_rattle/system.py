@@ -50,9 +50,12 @@ def communication_points(start: float, step: float, stop: float) -> list[float]:
 def simulate(mesh_params: MeshParameters | None = None,
              driveline_params: DrivelineParameters | None = None,
              stop_time: float = 0.1, step: float = 1e-4, start_time: float = 0.0,
-             signals=None) -> Record:
+             signals=None, stepper=WheelStepper) -> Record:
     """Co-simulate mesh and driveline from ``start_time`` to ``stop_time`` [s] with the
-    communication step ``step`` [s]; record ``signals`` (default all) at every point."""
+    communication step ``step`` [s]; record ``signals`` (default all) at every point.
+
+    ``stepper`` builds the mesh's stepper: the pure-Python ``WheelStepper`` (default, the
+    reference twin) or e.g. ``kernel.new_stepper`` for the same numbers faster."""
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
@@ -60,7 +63,7 @@ def simulate(mesh_params: MeshParameters | None = None,
     # outputs (its wheel inputs still at their start values 0), the mesh's equilibrium under
     # its load torque, then the driveline built behind the mesh's initial wheel state.
     first = Driveline(dp, start_time, 0.0, 0.0).outputs()
-    mesh = WheelStepper(mp, first["pinion.phi"], first["pinion.w"], first["wheel.tau_load"])
+    mesh = stepper(mp, first["pinion.phi"], first["pinion.w"], first["wheel.tau_load"])
     drive = Driveline(dp, start_time, mesh.state.phi, mesh.state.w)
     rec = Record(signals={n: [] for n in names})
     points = communication_points(start_time, step, stop_time)
