@@ -20,7 +20,6 @@ Machines here are shared and noisy: each timing is the best of ``REPEATS`` runs.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 import sys
 import tempfile
@@ -37,6 +36,7 @@ from drive_rattle.analysis import (
     welch_spectrum,
 )
 from drive_rattle.reference import solve
+from drive_rattle_cosim.fmus import build_fmus, build_script
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.sweep import grid_design, run_sweep
 
@@ -48,10 +48,8 @@ RECORD = ["GearMeshRattle.wheel.phi", "GearMeshRattle.wheel.w", "GearMeshRattle.
 
 
 def _build(out: Path) -> dict[str, Path]:
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    build_fmu = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(build_fmu)
-    paths = {p.stem: p for p in build_fmu.build(out, use_fmutool=False)}
+    build_fmu = build_script()
+    paths = build_fmus(out)
     null = build_fmu.package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
     build_fmu.validate(null, use_fmutool=False)
     paths["NullMeshRattle"] = null

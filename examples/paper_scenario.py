@@ -10,7 +10,6 @@ The FMUs are built into dist/ first (build_fmu.py) unless --fmu-dir points to bu
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import sys
 import time
 from pathlib import Path
@@ -26,6 +25,7 @@ from drive_rattle.analysis import (
     welch_spectrum,
 )
 from drive_rattle.driveline import DrivelineParameters
+from drive_rattle_cosim.fmus import build_fmus
 from drive_rattle_cosim.harness import CoSimulation
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -34,21 +34,13 @@ MESH_OUTPUTS = ["wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak", "mesh.delta_pea
                 *(f"pair[{k}].W" for k in range(8))]
 
 
-def build_fmus(out_dir: Path) -> Path:
-    """Build both FMUs with build_fmu.py into ``out_dir``."""
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    module.build(out_dir, use_fmutool=False)
-    return out_dir
-
-
 def run(stop_time: float = 2.0, step: float = 1e-4, out_dir: str | Path = "out/paper_scenario",
         fmu_dir: str | Path | None = None, show_plot: bool = False, progress: bool = False) -> dict:
     """Run the scenario; returns the statistics, the comparison rows and the written files."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    fmu_dir = Path(fmu_dir) if fmu_dir is not None else build_fmus(ROOT / "dist")
+    if fmu_dir is None:
+        fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
     wall = time.perf_counter()
     with CoSimulation(fmu_dir / "GearMeshRattle.fmu", fmu_dir / "Driveline.fmu",
                       step=step) as sim:

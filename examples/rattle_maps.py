@@ -14,13 +14,13 @@ interrupted run resumes where it stopped.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import math
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from drive_rattle_cosim.fmus import build_fmus
 from drive_rattle_cosim.sweep import grid_design, read_results, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,21 +37,14 @@ MAPS = (
 )
 
 
-def build_fmus(out_dir: Path) -> Path:
-    spec = importlib.util.spec_from_file_location("build_fmu", ROOT / "build_fmu.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    module.build(out_dir, use_fmutool=False)
-    return out_dir
-
-
 def run(points: int = 5, stop_time: float = 0.3, workers: int = 2,
         out_dir: str | Path = "out/rattle_maps", fmu_dir: str | Path | None = None,
         progress: bool = True) -> dict:
     """Sweep both planes and draw the maps; returns the written files and the sweep counts."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    fmu_dir = Path(fmu_dir) if fmu_dir is not None else build_fmus(ROOT / "dist")
+    if fmu_dir is None:
+        fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
     files, counts = [], {}
     for stem, xname, xr, xf, xlabel, yname, yr, yf, ylabel in MAPS:
         results = out / f"{stem}.csv"
