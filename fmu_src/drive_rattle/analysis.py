@@ -71,6 +71,7 @@ class RattleStatistics:
     impacts_per_second_drive: float
     impacts_per_second_coast: float
     median_impact_speed: float  # m/s
+    mean_impact_speed: float  # m/s
     peak_impact_speed: float  # m/s
     max_penetration: float  # m
     rms_normal_force: float  # N
@@ -115,6 +116,7 @@ def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks,
         impacts_per_second_drive=float(np.sum(flanks > 0) / duration),
         impacts_per_second_coast=float(np.sum(flanks < 0) / duration),
         median_impact_speed=float(np.median(speeds)) if len(speeds) else 0.0,
+        mean_impact_speed=float(np.mean(speeds)) if len(speeds) else 0.0,
         peak_impact_speed=float(np.max(speeds)) if len(speeds) else 0.0,
         max_penetration=float(np.max(signals["mesh.delta_peak"])),
         rms_normal_force=float(np.sqrt(np.mean(W * W))),

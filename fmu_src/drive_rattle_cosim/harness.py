@@ -270,29 +270,31 @@ class CoSimulation:
             u.set(per_unit[u.name])
             u.call("setupExperiment", u.slave.setupExperiment, None, self.start_time)
             u.call("enterInitializationMode", u.slave.enterInitializationMode)
+        self._plan = self._transfer_plan()
         for _ in range(INIT_ROUNDS):
             self._transfer()
         for u in self.units.values():
             u.call("exitInitializationMode", u.slave.exitInitializationMode)
-        self._plan = self._transfer_plan()
         self.time = self.start_time
         self._k = 0
 
     def _transfer_plan(self) -> list[tuple[Unit, list[int], Unit, list[int]]]:
-        """Per (source, destination) pair: output and input value references, in order."""
+        """Per (source, destination) pair, sources in unit order: output and input value
+        references, in order."""
         pairs: dict[tuple[str, str], tuple[list[int], list[int]]] = {}
-        for src, out, dst, inp in CONNECTIONS:
-            outs, ins = pairs.setdefault((src, dst), ([], []))
-            outs.append(self.units[src].var(out).vr)
-            ins.append(self.units[dst].var(inp).vr)
+        for unit in self.units:
+            for src, out, dst, inp in CONNECTIONS:
+                if src == unit:
+                    outs, ins = pairs.setdefault((src, dst), ([], []))
+                    outs.append(self.units[src].var(out).vr)
+                    ins.append(self.units[dst].var(inp).vr)
         return [(self.units[s], outs, self.units[d], ins) for (s, d), (outs, ins) in pairs.items()]
 
     def _transfer(self) -> None:
-        for src in self.units.values():
-            for s, sout, dst, din in CONNECTIONS:
-                if s == src.name:
-                    value = src.call("getReal", src.slave.getReal, [src.var(sout).vr])[0]
-                    self.units[dst].set({din: value})
+        """One output-to-input exchange along the plan (initialization mode)."""
+        for src, outs, dst, ins in self._plan:
+            dst.call("setReal", dst.slave.setReal, ins,
+                     src.call("getReal", src.slave.getReal, outs))
 
     def run(self, stop_time: float, outputs=None, progress: bool = False) -> Result:
         """Step to ``stop_time`` [s], recording ``outputs`` (``"<Unit>.<output>"``; default:

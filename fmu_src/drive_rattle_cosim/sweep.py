@@ -95,29 +95,25 @@ def latin_hypercube_design(params: dict[str, tuple[float, float]], samples: int,
 
 def rattle_metrics(time_s, signals: dict, normal_mass: float) -> dict[str, float]:
     """The metrics of one run from the mesh outputs recorded at every communication point."""
-    from drive_rattle.analysis import onsets_from_counters, welch_spectrum
+    from drive_rattle.analysis import onsets_from_counters, rattle_statistics, welch_spectrum
 
     t = np.asarray(time_s, dtype=float)
-    duration = t[-1] - t[0]
-    W = np.asarray(signals["mesh.W"], dtype=float)
     _, speeds, flanks = onsets_from_counters(t, signals["mesh.impacts_drive"],
                                             signals["mesh.impacts_coast"],
                                             signals["mesh.v_impact"])
-    v = np.asarray(speeds, dtype=float)
-    f = np.asarray(flanks, dtype=int)
+    s = rattle_statistics(t, signals, speeds, flanks, normal_mass)
     out = {
-        "impacts_per_s_drive": float(np.sum(f > 0) / duration),
-        "impacts_per_s_coast": float(np.sum(f < 0) / duration),
-        "mean_impact_speed": float(np.mean(v)) if v.size else 0.0,
-        "peak_impact_speed": float(np.max(v)) if v.size else 0.0,
-        "peak_normal_force": float(np.max(signals["mesh.W_peak"])),
-        "rms_normal_force": float(np.sqrt(np.mean(W * W))),
-        "contact_fraction": float(np.mean(np.asarray(signals["mesh.n_contact"]) > 0)),
-        "rattle_index_W": float(0.5 * normal_mass * np.sum(v * v) / duration),
-        "mean_wheel_speed": float((signals["wheel.phi"][-1] - signals["wheel.phi"][0])
-                                  / duration),
+        "impacts_per_s_drive": s.impacts_per_second_drive,
+        "impacts_per_s_coast": s.impacts_per_second_coast,
+        "mean_impact_speed": s.mean_impact_speed,
+        "peak_impact_speed": s.peak_impact_speed,
+        "peak_normal_force": s.peak_normal_force,
+        "rms_normal_force": s.rms_normal_force,
+        "contact_fraction": s.contact_fraction,
+        "rattle_index_W": s.impact_energy_rate,
+        "mean_wheel_speed": s.mean_wheel_speed,
     }
-    spec = welch_spectrum(t, W, segment_seconds=min(0.1, duration / 4))
+    spec = welch_spectrum(t, signals["mesh.W"], segment_seconds=min(0.1, s.duration / 4))
     df = spec.frequency[1] - spec.frequency[0]
     for lo, hi in BANDS:
         band = (spec.frequency >= lo) & (spec.frequency < hi)

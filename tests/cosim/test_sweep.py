@@ -51,7 +51,7 @@ def test_rattle_metrics_against_closed_forms():
         v[k:] = speed
     signals = {"mesh.W": W, "mesh.W_peak": W, "mesh.n_contact": (W > 5.0).astype(int),
                "mesh.impacts_drive": drive, "mesh.impacts_coast": coast, "mesh.v_impact": v,
-               "wheel.phi": 44.5 * t}
+               "wheel.phi": 44.5 * t, "mesh.delta_peak": np.zeros(t.size)}
     m = 0.76
     out = rattle_metrics(t, signals, m)
     assert out["impacts_per_s_drive"] == pytest.approx(3.0)
