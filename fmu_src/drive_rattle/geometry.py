@@ -15,9 +15,14 @@ Conventions (docs/model.md, section 2):
   forward, on the coast line towards smaller ``s``.
 * A helical tooth pair touches along a straight contact line inclined at the base helix
   angle; across the face width it spans ``w = b tan(beta_b)`` of roll coordinate.  A pair is
-  in the zone of action while that span overlaps the path of contact
-  ``[s_start, s_end]``; the overlap gives the pair's representative roll position (its
-  centre) and its engaged fraction.
+  in the zone of action while that span overlaps the path of contact ``[s_start, s_end]``.
+* The flanks are lead-crowned (``contact.crowning`` C_b, composite, along the contact normal):
+  along its contact line a pair's gap grows parabolically from the face centre, C_b at the face
+  ends.  A pair therefore touches at one point, the lowest point of its engaged contact line:
+  the face centre (roll coordinate ``s_n``) while that lies in the path of contact, else the end
+  of the path nearest to it, where the crown leaves the offset ``g = C_b (d / (w/2))^2`` (d the
+  roll distance from the face centre).  Since eps_alpha >= 1, at least one pair always has its
+  face centre in the path, so the flank's first contact is always at zero offset.
 """
 
 from __future__ import annotations
@@ -68,8 +73,22 @@ class HelicalPairGeometry:
         self.eps_gamma = self.eps_alpha + self.eps_beta
         # Transverse extent of one contact line across the face (= eps_beta * p_bt).
         self.line_span = p.b * math.tan(self.beta_b)
+        # Lead crowning: gap g = crown_factor * d^2 at roll distance d from the face centre
+        # (C_b at d = w/2), and the flank radius along the contact line it implies (eq. 6 read
+        # as crowning): a distance l along the line is l sin(beta_b) of roll, and the axial face
+        # end lies at l = b / (2 cos beta_b), so r_y = (b / (2 cos beta_b))^2 / (2 C_b).
+        self.crowning = p.crowning
+        half_span = 0.5 * self.line_span
+        self.crown_factor = p.crowning / (half_span * half_span) if half_span > 0.0 else 0.0
+        half_line = 0.5 * p.b / math.cos(self.beta_b)
+        self.r_y = half_line * half_line / (2.0 * p.crowning)
         # Rigid-body kinematics onto the tooth normal: delta = cos(beta_b)*(rb_p phi_p - rb_w phi_w)
         self.normal_factor = math.cos(self.beta_b)
+        # Direction cosines of the normal force: cos(beta_b) cos(alpha_t) tangential,
+        # cos(beta_b) sin(alpha_t) radial, sin(beta_b) axial.
+        self.cos_alpha_t = math.cos(self.alpha_t)
+        self.sin_alpha_t = math.sin(self.alpha_t)
+        self.sin_beta_b = math.sin(self.beta_b)
         self.half_backlash = 0.5 * p.backlash
         # Roll coordinate of the reference pair at phi_p = 0 (tooth centreline on the line of
         # centres: the flank is a quarter base pitch ahead of the pitch point), both flanks.
@@ -122,41 +141,50 @@ class HelicalPairGeometry:
         """
         return self.flank_phase + flank * self.rb_pinion * phi_p
 
-    def pairs(self, flank: int, phi_p: float) -> list[tuple[int, float, float]]:
+    def pairs(self, flank: int, phi_p: float) -> list[tuple[int, float, float, float]]:
         """Tooth pairs in the zone of action on ``flank`` at pinion angle ``phi_p``.
 
-        Returns ``(slot, s, fraction)`` per pair: the slot (pair number modulo
+        Returns ``(slot, s, g, dg)`` per pair: the slot (pair number modulo
         ``MAX_PAIR_SLOTS``, so a slot follows one pair through its passage), the roll
-        coordinate of the centre of its engaged contact line [m] and the engaged fraction of
-        its contact line (1 for spur gears).
+        coordinate ``s`` of its contact point [m] (the lowest point of its engaged contact
+        line), the crown offset ``g`` of that point [m] (the pair touches when the flank's
+        penetration exceeds it) and ``dg = dg/ds_n`` [1], the offset's rate per unit roll of
+        the pair's face centre.
         """
         return self.pairs_at_roll(self.flank_roll(flank, phi_p))
 
-    def pairs_at_roll(self, u: float) -> list[tuple[int, float, float]]:
+    def pairs_at_roll(self, u: float) -> list[tuple[int, float, float, float]]:
         """As :meth:`pairs`, from the roll coordinate ``u`` of :meth:`flank_roll`."""
         pb = self.base_pitch
         half = 0.5 * self.line_span
         s0, s1 = self.s_start, self.s_end
+        k = self.crown_factor
         n_lo = math.floor((u - s1 - half) / pb) + 1
         n_hi = math.ceil((u - s0 + half) / pb) - 1
         out = []
         for n in range(n_lo, n_hi + 1):
-            s = u - n * pb
+            s = u - n * pb  # roll coordinate of the pair's face centre
             if half > 0.0:
-                lo = s - half if s - half > s0 else s0
-                hi = s + half if s + half < s1 else s1
-                if hi > lo:
-                    out.append((n % MAX_PAIR_SLOTS, 0.5 * (lo + hi), (hi - lo) / (2.0 * half)))
+                if s + half > s0 and s - half < s1:
+                    if s < s0:
+                        d = s0 - s
+                        out.append((n % MAX_PAIR_SLOTS, s0, k * d * d, -2.0 * k * d))
+                    elif s > s1:
+                        d = s - s1
+                        out.append((n % MAX_PAIR_SLOTS, s1, k * d * d, 2.0 * k * d))
+                    else:
+                        out.append((n % MAX_PAIR_SLOTS, s, 0.0, 0.0))
             elif s0 < s < s1:
-                out.append((n % MAX_PAIR_SLOTS, s, 1.0))
+                out.append((n % MAX_PAIR_SLOTS, s, 0.0, 0.0))
         return out
 
     def _roll_breakpoints(self) -> tuple[float, ...]:
-        """Roll coordinates (mod base pitch) where a pair enters, leaves, or its engaged
-        contact line stops growing or starts shrinking; between them every pair quantity
+        """Roll coordinates (mod base pitch) of a pair's face centre where the pair enters or
+        leaves the zone of action (s_start - w/2, s_end + w/2) or its contact point starts or
+        stops following the face centre (s_start, s_end); between them every pair quantity
         is a smooth function of the pinion angle."""
         half = 0.5 * self.line_span
-        raw = {self.s_start - half, self.s_start + half, self.s_end - half, self.s_end + half}
+        raw = {self.s_start - half, self.s_start, self.s_end, self.s_end + half}
         return tuple(sorted(v % self.base_pitch for v in raw))
 
     def next_breakpoint(self, u_a: float, u_b: float) -> float | None:
@@ -193,6 +221,20 @@ class HelicalPairGeometry:
         rw = (self.line_length - s) / c
         return rp, rw, rp * rw / (rp + rw)
 
+    def radius_ratio_range(self) -> tuple[float, float]:
+        """Bounds of ln(R/r), R and r the larger and smaller of r_x and r_y, over the contact
+        points the path of contact allows (s in [s_start, s_end])."""
+        samples = [self.s_start, self.s_end]
+        mid = 0.5 * self.line_length  # r_x(s) = s (L - s) / (L cos beta_b) peaks there
+        if self.s_start < mid < self.s_end:
+            samples.append(mid)
+        r_x = [self.normal_radii(s)[2] for s in samples]
+        r_lo, r_hi = min(r_x), max(r_x)
+        candidates = [abs(math.log(self.r_y / r)) for r in (r_lo, r_hi)]
+        if r_lo <= self.r_y <= r_hi:
+            candidates.append(0.0)
+        return min(candidates), max(candidates)
+
     def summary(self) -> dict[str, float]:
         """Derived quantities of the pair, SI units, for reports and documentation."""
         return {
@@ -209,4 +251,5 @@ class HelicalPairGeometry:
             "eps_alpha [1]": self.eps_alpha,
             "eps_beta [1]": self.eps_beta,
             "eps_gamma [1]": self.eps_gamma,
+            "flank radius along the contact line r_y [m]": self.r_y,
         }

@@ -1,7 +1,26 @@
-"""Hertzian point contact of the equivalent ellipsoid (paper eq. 1, 2, 7, 8, 14).
+"""Hertzian point contact of two crowned flanks and its dissipation (paper eq. 1, 2, 7, 8, 14;
+Johnson, *Contact Mechanics*, 1985, section 4.2; Hunt and Crossley 1975).
 
-Plain functions of SI floats.  The closed-form impact solution is code here too, so that
-tests hold the integrated motion against it (MODEL_NOTES section 4).
+Plain functions and a small law object on SI floats.  The closed-form solutions (undamped Hertz
+impact, exact elliptical contact, Hunt-Crossley restitution) are code here too, so that tests
+hold the integrated motion against them (MODEL_NOTES section 4).
+
+Two load-approach laws for the contact of radii ``r_x`` (across the contact line) and ``r_y``
+(along it), both of the form ``W = K delta^(3/2)``:
+
+* law 0, **exact** elliptical Hertz contact: the ellipse's aspect ratio ``q = b/a`` follows from
+  the curvature ratio through complete elliptic integrals, and K, the semi-major axis ``a`` and
+  the area ``pi a b`` from ``q`` (Johnson eq. 3.x/4.x, written out in :func:`exact_ellipse`);
+* law 1, the paper's **equivalent sphere** (eq. 2), ``K = 4/3 E* (r_x r_y)^(1/4)``, with the
+  ellipse ``sqrt(ab) = (3 W sqrt(r_x r_y) / (4 E*))^(1/3)``, ``a/b = (R/r)^(2/3)`` (Johnson's
+  approximation).  For the elongated contacts of crowned teeth (``r_y/r_x ~ 1000``) it is about
+  2x softer than the exact law.
+
+The exact law depends on the radii only through ``rho = R/r >= 1`` (larger over smaller radius):
+``K = E* sqrt(R) kappa(rho)``, ``a = (W R / E*)^(1/3) alpha(rho)``, ``A = (W R / E*)^(2/3)
+zeta(rho)``.  A gear pair's contact points span a fixed range of ``rho``, so :class:`ContactLaw`
+fits the three dimensionless functions once, as Chebyshev series in ``ln rho`` accurate to
+rounding (checked when the law is built), and evaluates them with Clenshaw's recurrence.
 """
 
 from __future__ import annotations
@@ -9,9 +28,24 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from . import roots
+
 #: Contact duration of an undamped Hertz impact in units of delta_max / v:
 #: t_c = 2 delta_max / v * integral_0^1 (1 - x^(5/2))^(-1/2) dx = (4/5) B(2/5, 1/2) delta_max / v.
 CONTACT_DURATION_FACTOR = 0.8 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9)
+
+LAW_EXACT = 0
+LAW_EQUIVALENT_SPHERE = 1
+
+#: Largest number of Chebyshev coefficients of a fitted function of ln(rho).
+MAX_CHEBYSHEV_TERMS = 32
+#: Relative accuracy a fitted series must reach at the points between its nodes.
+CHEBYSHEV_TOLERANCE = 1e-13
+#: Curvature ratio below which an ellipse counts as a circle (q = 1 to rounding).
+CIRCLE_RATIO = 1.0 + 1e-9
+#: Convergence of the arithmetic-geometric mean (relative difference of the two means).
+AGM_TOLERANCE = 1e-16
+AGM_MAX_ITERATIONS = 60
 
 
 def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
@@ -23,54 +57,200 @@ def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
     return 1.0 / ((1.0 - nu1 * nu1) / E1 + (1.0 - nu2 * nu2) / E2)
 
 
-def stiffness(E_star: float, r_x: float, r_y: float) -> float:
-    """Contact stiffness non-linearity K [N/m^1.5] of eq. (2): K = 4/3 E* (r_x r_y)^(1/4)."""
+def sphere_stiffness(E_star: float, r_x: float, r_y: float) -> float:
+    """Stiffness non-linearity K [N/m^1.5] of the equivalent sphere, eq. (2):
+    K = 4/3 E* (r_x r_y)^(1/4)."""
     return (4.0 / 3.0) * E_star * math.sqrt(math.sqrt(r_x * r_y))
 
 
-def contact_radius(W: float, r_x: float, r_y: float, E_star: float) -> float:
-    """Geometric-mean semi-axis sqrt(a b) [m] of the contact ellipse under load W [N]
-    (Hertz): (3 W sqrt(r_x r_y) / (4 E*))^(1/3)."""
-    return (3.0 * W * math.sqrt(r_x * r_y) / (4.0 * E_star)) ** (1.0 / 3.0)
+# ---------------------------------------------------------------- exact elliptical contact
+def elliptic_integrals(q: float) -> tuple[float, float]:
+    """Complete elliptic integrals for the ellipse of axis ratio ``q = b/a`` in (0, 1]
+    (modulus e = sqrt(1 - q^2)): returns ``(K(e), S)`` with ``E(e) = K(e) (1 - S)``.
+
+    Arithmetic-geometric mean (Abramowitz and Stegun 17.6): K = pi / (2 AGM(1, q)) and
+    S = sum_n 2^(n-1) c_n^2 with c_0 = e, so that K - E = K S carries no cancellation."""
+    a, b = 1.0, q
+    c = math.sqrt((1.0 - q) * (1.0 + q))
+    S = 0.5 * c * c
+    weight = 0.5
+    for _ in range(AGM_MAX_ITERATIONS):
+        if a - b <= AGM_TOLERANCE * a:
+            break
+        c = 0.5 * (a - b)
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        weight *= 2.0
+        S += weight * c * c
+    return math.pi / (2.0 * a), S
 
 
-def contact_semi_axes(W: float, r_x: float, r_y: float, E_star: float) -> tuple[float, float]:
-    """Semi-axes (a along y, b along x) [m] of the contact ellipse.
-
-    sqrt(ab) from Hertz and a/b = (r_y/r_x)^(2/3) (Johnson's approximation; the paper prints
-    the inverse ratio, which would make the ellipse long across the contact line).
-    """
-    c = contact_radius(W, r_x, r_y, E_star)
-    q = (r_y / r_x) ** (1.0 / 3.0)  # sqrt(a/b)
-    return c * q, c / q
+def _curvature_ratio(q: float) -> float:
+    """B/A = R/r of the ellipse with axis ratio q (Johnson eq. 3.x):
+    R/r = ((a/b)^2 E - K) / (K - E) = (e^2 - S) / (q^2 S)."""
+    _, S = elliptic_integrals(q)
+    e2 = (1.0 - q) * (1.0 + q)
+    return (e2 - S) / (q * q * S)
 
 
-def apparent_area(W: float, r_x: float, r_y: float, E_star: float) -> float:
-    """Apparent Hertzian contact area A = pi a b [m^2] (eq. 14)."""
-    c = contact_radius(W, r_x, r_y, E_star)
-    return math.pi * c * c
+class ExactEllipse(NamedTuple):
+    """Dimensionless exact elliptical Hertz contact for the radius ratio rho = R/r >= 1."""
+
+    q: float  # axis ratio b/a
+    kappa: float  # K = E* sqrt(R) kappa
+    alpha: float  # a = (W R / E*)^(1/3) alpha  (a along the larger radius R)
+    zeta: float  # area pi a b = (W R / E*)^(2/3) zeta
 
 
-def footprint_length(W: float, r_y: float, E_star: float) -> float:
-    """Length l of the equivalent ellipsoid [m], eq. (8) with E*^2 (MODEL_NOTES erratum):
-    l = 2 (9 W^2 r_y^2 / (16 E*^2))^(1/6) = 2 (3 W r_y / (4 E*))^(1/3)."""
-    return 2.0 * (3.0 * W * r_y / (4.0 * E_star)) ** (1.0 / 3.0)
+def exact_ellipse(rho: float) -> ExactEllipse:
+    """Exact elliptical Hertz contact of two bodies with principal relative radii R >= r,
+    rho = R/r (Johnson 1985, section 4.2):
+
+    * the axis ratio q = b/a solves R/r = ((a/b)^2 E(e) - K(e)) / (K(e) - E(e));
+    * from A = 1/(2R) = 3W (K - E) / (2 pi E* e^2 a^3):  a^3 = 3 W R K S / (pi E* e^2);
+    * the approach delta = 3 W K(e) / (2 pi a E*) then gives W = K_H delta^(3/2) with
+      K_H = (2 sqrt(2) pi / 3) E* sqrt(R) sqrt(S) / (K e).
+    For rho -> 1 these tend to the sphere: K_H = 4/3 E* sqrt(R), a = (3 W R / (4 E*))^(1/3)."""
+    if not rho >= 1.0:
+        raise ValueError(f"radius ratio rho = {rho!r} must be >= 1 (larger over smaller)")
+    if rho <= CIRCLE_RATIO:
+        third = (3.0 / 4.0) ** (1.0 / 3.0)
+        return ExactEllipse(1.0, 4.0 / 3.0, third, math.pi * third * third)
+    target = math.log(rho)
+
+    def residual(y: float) -> float:  # y = ln q
+        return math.log(_curvature_ratio(math.exp(y))) - target
+
+    y_lo = -1.0
+    while residual(y_lo) < 0.0:
+        y_lo *= 2.0
+        if y_lo < -200.0:
+            raise ValueError(f"radius ratio rho = {rho!r} too large for an elliptical contact")
+    y_hi = -1e-9
+    y = roots.brent(residual, y_lo, y_hi, xtol=1e-15) if residual(y_hi) < 0.0 else y_hi
+    q = math.exp(y)
+    K, S = elliptic_integrals(q)
+    e2 = (1.0 - q) * (1.0 + q)
+    e = math.sqrt(e2)
+    kappa = (2.0 * math.sqrt(2.0) * math.pi / 3.0) * math.sqrt(S) / (K * e)
+    alpha = (3.0 * K * S / (math.pi * e2)) ** (1.0 / 3.0)
+    return ExactEllipse(q, kappa, alpha, math.pi * q * alpha * alpha)
 
 
-def energy_balance_delta_max(
-    v: float, K: float, r_x: float, r_y: float, E_star: float, density: float
-) -> float:
-    """delta_max [m] of eq. (7)-(8): the equivalent ellipsoid of mass m = rho pi r_x^2 l
-    striking at speed v [m/s], with 1/2 m v^2 = 2/5 K delta_max^(5/2).
+def chebyshev_fit(f, lo: float, hi: float, terms: int) -> list[float]:
+    """Coefficients c_0..c_{n-1} of the Chebyshev interpolant of ``f`` on [lo, hi] at the n
+    Chebyshev points of the first kind (c_0 halved, ready for :func:`chebyshev_value`)."""
+    n = terms
+    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    values = [f(mid + half * math.cos(math.pi * (k + 0.5) / n)) for k in range(n)]
+    coeffs = []
+    for j in range(n):
+        acc = 0.0
+        for k in range(n):
+            acc += values[k] * math.cos(math.pi * j * (k + 0.5) / n)
+        coeffs.append(2.0 * acc / n)
+    coeffs[0] *= 0.5
+    return coeffs
 
-    l is evaluated at the peak load W = K delta_max^(3/2), so m = C sqrt(delta_max) with
-    C = 2 rho pi r_x^2 (3 K r_y / (4 E*))^(1/3), and the balance gives the closed form
-    delta_max = v sqrt(5 C / (4 K)).
-    """
-    C = 2.0 * density * math.pi * r_x * r_x * (3.0 * K * r_y / (4.0 * E_star)) ** (1.0 / 3.0)
+
+def chebyshev_value(coeffs, t: float) -> float:
+    """Clenshaw's recurrence for sum_j c_j T_j(t), t in [-1, 1]."""
+    b1 = 0.0
+    b2 = 0.0
+    j = len(coeffs) - 1
+    while j > 0:
+        b1, b2 = 2.0 * t * b1 - b2 + coeffs[j], b1
+        j -= 1
+    return t * b1 - b2 + coeffs[0]
+
+
+class ContactLaw:
+    """Load-approach law, contact ellipse and energy-balance film term of one pair's crowned
+    point contact, for radii r_x (varying along the path of contact) and a fixed r_y.
+
+    ``x_range`` bounds ln(R/r) over the contact points the geometry can produce; the exact
+    law's dimensionless functions are fitted over it (and checked against the direct
+    evaluation between the nodes)."""
+
+    def __init__(self, law: int, E_star: float, r_y: float, x_range: tuple[float, float]):
+        self.law = law
+        self.E_star = E_star
+        self.r_y = r_y
+        self.x_lo, self.x_hi = x_range
+        self.kappa = self.alpha = self.zeta = ()
+        self.t_mid = 0.5 * (self.x_lo + self.x_hi)
+        half = 0.5 * (self.x_hi - self.x_lo)
+        self.t_scale = 1.0 / half if half > 0.0 else 0.0
+        if law == LAW_EXACT:
+            self.kappa, self.alpha, self.zeta = self._fit()
+        elif law != LAW_EQUIVALENT_SPHERE:
+            raise ValueError(f"contact law {law!r} unknown; allowed: 0, 1")
+
+    def _fit(self):
+        lo, hi = self.x_lo, self.x_hi
+        if hi - lo < 1e-12:  # a single ratio: constant series
+            ell = exact_ellipse(math.exp(lo))
+            return [ell.kappa], [ell.alpha], [ell.zeta]
+        cache: dict[float, ExactEllipse] = {}
+
+        def ell(x):
+            if x not in cache:
+                cache[x] = exact_ellipse(math.exp(x))
+            return cache[x]
+
+        checks = [lo + (hi - lo) * (k + 0.5) / 23.0 for k in range(23)]
+        for terms in range(8, MAX_CHEBYSHEV_TERMS + 1, 4):
+            fits = [chebyshev_fit(lambda x, i=i: ell(x)[i], lo, hi, terms) for i in (1, 2, 3)]
+            worst = 0.0
+            for x in checks:
+                t = (x - self.t_mid) * self.t_scale
+                for i, c in zip((1, 2, 3), fits, strict=True):
+                    exact = ell(x)[i]
+                    worst = max(worst, abs(chebyshev_value(c, t) - exact) / exact)
+            if worst <= CHEBYSHEV_TOLERANCE:
+                return fits
+        raise ValueError(
+            f"the exact Hertz law cannot be tabulated for ln(R/r) in [{lo:.4g}, {hi:.4g}] to "
+            f"{CHEBYSHEV_TOLERANCE:g} (reached {worst:.3g}); use contact.hertz_law = 1")
+
+    # ------------------------------------------------------------------ evaluation
+    def shape(self, r_x: float) -> tuple[float, float, float, float]:
+        """``(K, R, ka, kz)`` at the contact radius r_x: the stiffness non-linearity K
+        [N/m^1.5], the larger radius R [m] and the coefficients of the semi-major axis
+        a = ka W^(1/3) [m] and of the area A = kz W^(2/3) [m^2]."""
+        r_y = self.r_y
+        E = self.E_star
+        if self.law == LAW_EXACT:
+            if r_y >= r_x:
+                R, rho = r_y, r_y / r_x
+            else:
+                R, rho = r_x, r_x / r_y
+            t = (math.log(rho) - self.t_mid) * self.t_scale
+            K = E * math.sqrt(R) * chebyshev_value(self.kappa, t)
+            c = (R / E) ** (1.0 / 3.0)
+            return K, R, c * chebyshev_value(self.alpha, t), c * c * chebyshev_value(self.zeta, t)
+        # Equivalent sphere (eq. 2) with Johnson's approximate ellipse: sqrt(ab) from Hertz,
+        # a/b = (R/r)^(2/3) with a along the larger radius.
+        K = (4.0 / 3.0) * E * math.sqrt(math.sqrt(r_x * r_y))
+        g = (3.0 * math.sqrt(r_x * r_y) / (4.0 * E)) ** (1.0 / 3.0)  # sqrt(ab) / W^(1/3)
+        if r_y >= r_x:
+            R, stretch = r_y, (r_y / r_x) ** (1.0 / 3.0)
+        else:
+            R, stretch = r_x, (r_x / r_y) ** (1.0 / 3.0)
+        return K, R, g * stretch, math.pi * g * g
+
+
+def film_delta_max(v: float, K: float, r_x: float, ka: float, density: float) -> float:
+    """delta_max [m] of eq. (7)-(8): the equivalent ellipsoid of mass m = rho pi r_x^2 l, with
+    l = 2a its contact ellipse's long diameter at the peak load W = K delta_max^(3/2),
+    striking at speed v [m/s]: 1/2 m v^2 = 2/5 K delta_max^(5/2).
+
+    With a = ka W^(1/3), m = C sqrt(delta_max) where C = 2 rho pi r_x^2 ka K^(1/3), and the
+    balance has the closed form delta_max = |v| sqrt(5 C / (4 K))."""
+    C = 2.0 * density * math.pi * r_x * r_x * ka * K ** (1.0 / 3.0)
     return abs(v) * math.sqrt(5.0 * C / (4.0 * K))
 
 
+# ---------------------------------------------------------------- closed-form impacts
 class HertzImpact(NamedTuple):
     """Closed-form undamped Hertz impact of a mass on W = K delta^(3/2)."""
 
@@ -87,3 +267,45 @@ def hertz_impact(m: float, K: float, v: float) -> HertzImpact:
     v = abs(v)
     d = (5.0 * m * v * v / (4.0 * K)) ** 0.4
     return HertzImpact(d, K * d**1.5, CONTACT_DURATION_FACTOR * d / v, v)
+
+
+def _hunt_crossley_balance(alpha: float, e: float) -> float:
+    """G(alpha, e) = alpha - ln(1 + alpha) + alpha e + ln(1 - alpha e); zero on the
+    restitution curve of the Hunt-Crossley impact (see :func:`hunt_crossley_restitution`)."""
+    return alpha - math.log1p(alpha) + alpha * e + math.log1p(-alpha * e)
+
+
+def hunt_crossley_restitution(alpha: float) -> float:
+    """Coefficient of restitution e of an impact on W = K delta^n (1 + d delta_dot) at approach
+    speed v, alpha = d v >= 0 (any n, K and mass).
+
+    With the speed u = delta_dot as variable, m u du = -K delta^n (1 + d u) d delta separates:
+    u/d - ln(1 + d u)/d^2 changes by -(K/m) integral delta^n d delta, which is zero from the
+    onset back to the release, so alpha - ln(1 + alpha) = -alpha e - ln(1 - alpha e), with
+    0 <= e < 1/alpha (the force never turns tensile).  Exact, solved by Brent's method."""
+    if not (alpha >= 0.0 and math.isfinite(alpha)):
+        raise ValueError(f"alpha = d v = {alpha!r} must be finite and >= 0")
+    if alpha == 0.0:
+        return 1.0
+    # G falls in e from G(alpha, 0) > 0 towards -inf at e = 1/alpha; at e = 1 it is
+    # 2 alpha - 2 artanh(alpha) < 0.  Past alpha ~ 40 the root is 1/alpha to rounding.
+    hi = min(1.0, 1.0 / alpha) * (1.0 - 1e-15)
+    if _hunt_crossley_balance(alpha, hi) >= 0.0:
+        return hi
+    return roots.brent(lambda e: _hunt_crossley_balance(alpha, e), 0.0, hi, xtol=1e-16)
+
+
+def hunt_crossley_factor(e: float, v: float) -> float:
+    """Hunt-Crossley damping factor d [s/m] for which an impact at speed v [m/s] rebounds with
+    the coefficient of restitution e in (0, 1] (the inverse of
+    :func:`hunt_crossley_restitution`; e = 1 gives d = 0)."""
+    if not (0.0 < e <= 1.0) or not (v > 0.0):
+        raise ValueError(f"restitution e = {e!r} must be in (0, 1] and speed v = {v!r} > 0")
+    if e == 1.0:
+        return 0.0
+    # Bracket: e(alpha) falls from 1 (alpha = 0) towards 0 and stays below 1/alpha.
+    hi = 1.0
+    while hunt_crossley_restitution(hi) > e:
+        hi *= 2.0
+    alpha = roots.brent(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=1e-15)
+    return alpha / v

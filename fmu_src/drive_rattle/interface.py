@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 from . import lubrication
+from .geometry import DRIVE
 from .parameters import MAX_PAIR_SLOTS
 from .stepper import WheelStepper
 
@@ -88,6 +89,26 @@ MESH_OUTPUTS = (
                kind="Integer"),
     SignalSpec("mesh.impacts_coast", "1", "cumulative contact onsets on the coast flank",
                kind="Integer"),
+    SignalSpec("mesh.transmission_error", "m",
+               "dynamic transmission error: the signed rigid-body approach of the flanks along "
+               "the tooth normal, cos(beta_b) (r_bp pinion.phi - r_bw wheel.phi), positive when "
+               "the pinion leads, 0 at the centre of the backlash", display_unit="um"),
+    SignalSpec("mesh.force_tangential", "N",
+               "tangential component (pitch circle, wheel's forward direction) of the mesh's "
+               "normal force on the wheel now: sum W_i cos(beta_b) cos(alpha_t), signed by "
+               "the flank"),
+    SignalSpec("mesh.force_radial", "N",
+               "radial component of the mesh's normal force on the wheel now, positive pushing "
+               "the gears apart: sum W_i cos(beta_b) sin(alpha_t)"),
+    SignalSpec("mesh.force_axial", "N",
+               "axial component of the mesh's normal force on the wheel now: sum W_i "
+               "sin(beta_b), positive in the direction a drive-flank load pushes the wheel"),
+    SignalSpec("mesh.impact_energy", "J",
+               "kinetic energy of the last contact onset on the tooth normal, "
+               "1/2 m_n mesh.v_impact^2 (m_n = wheel.J / (r_bw cos beta_b)^2)"),
+    SignalSpec("mesh.rattle_index", "W",
+               "rattle index: impact kinetic energy per second, exponentially averaged with "
+               "the time constant rattle.time_constant"),
     *(SignalSpec(f"pair[{k}].W", "N",
                  f"normal force of pair slot {k} (tooth pairs numbered in mesh order, slot = "
                  f"number mod {MAX_PAIR_SLOTS}; either flank)")
@@ -115,6 +136,7 @@ DRIVELINE_OUTPUTS = (
 def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
     """Values of ``MESH_OUTPUTS`` for the stepper's current state (SI units)."""
     st, last = stepper.state, stepper.last
+    mesh, g = stepper.mesh, stepper.geometry
     loads = stepper.loads_now()
     loaded = [p for p in loads.pairs if p.W > 0.0]
     if loaded:
@@ -122,10 +144,12 @@ def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
         h, lam, psi = top.h, top.film_parameter, top.dry_fraction
     else:
         v_imp = st.v_impact_drive if loads.flank > 0 else st.v_impact_coast
-        d_max = stepper.mesh.energy_balance_delta_max(loads.flank, stepper.pinion[0], v_imp)
+        d_max = mesh.energy_balance_delta_max(loads.flank, stepper.pinion[0], v_imp)
         h = lubrication.film_thickness(-loads.delta, d_max)
         lam = h / stepper.params.sigma
-        psi = lubrication.dry_fraction(lam, 0.0, 0.0)
+        psi = lubrication.dry_fraction(lam)
+    W = loads.W
+    transverse = W * g.normal_factor
     out = {
         "wheel.tau_mesh": last.tau_wheel_mean,
         "pinion.tau_mesh": last.tau_pinion_mean,
@@ -143,7 +167,14 @@ def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
         "mesh.n_contact": len(loaded),
         "mesh.impacts_drive": st.impacts_drive,
         "mesh.impacts_coast": st.impacts_coast,
+        "mesh.transmission_error": mesh.penetration(DRIVE, stepper.pinion[0], st.phi)
+        + g.half_backlash,
+        "mesh.force_tangential": loads.flank * transverse * g.cos_alpha_t,
+        "mesh.force_radial": transverse * g.sin_alpha_t,
+        "mesh.force_axial": loads.flank * W * g.sin_beta_b,
+        "mesh.impact_energy": 0.5 * mesh.normal_mass * st.v_impact_last * st.v_impact_last,
+        "mesh.rattle_index": st.rattle_index,
     }
-    for k, f in enumerate(stepper.mesh.pair_forces(loads)):
+    for k, f in enumerate(mesh.pair_forces(loads)):
         out[f"pair[{k}].W"] = f
     return out

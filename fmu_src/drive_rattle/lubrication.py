@@ -12,7 +12,7 @@ LAMBDA_BOUNDARY = 1.0
 #: Film parameter above which the contact is in full-film lubrication (psi = 0).
 LAMBDA_FULL_FILM = 3.0
 
-FORM_SPLIT = 0
+FORM_LOAD_SHARING = 0
 FORM_APPARENT_AREA = 1
 FORM_AS_PRINTED = 2
 
@@ -30,16 +30,20 @@ def asperity_area(W: float, E_star: float, gamma: float, sigma: float) -> float:
     return 3.2 * W / E_star * math.sqrt(gamma / sigma)
 
 
-def dry_fraction(lam: float, A_e: float, A: float) -> float:
-    """Proportion psi of dry (asperity) contact, eq. (12)-(15):
-    1 for lambda <= 1 (boundary), 0 for lambda >= 3 (full film), A_e/A in between,
-    clamped to [0, 1]."""
+def dry_fraction(lam: float) -> float:
+    """Proportion psi of the load carried by asperity (boundary) contact, eq. (12)-(15) read
+    continuously: 1 for lambda <= 1 (boundary), 0 for lambda >= 3 (full film), and linear in
+    between, psi = (3 - lambda) / 2.
+
+    The paper's psi = A_e/A in the mixed regime jumps at both limits (to A_e/A ~ 0.03 at
+    lambda = 1+, which cut the friction 38-fold, and from A_e/A to 0 at lambda = 3); the linear
+    share joins the boundary and full-film readings of every friction form continuously
+    (docs/model.md section 4)."""
     if lam <= LAMBDA_BOUNDARY:
         return 1.0
-    if lam >= LAMBDA_FULL_FILM or A <= 0.0:
+    if lam >= LAMBDA_FULL_FILM:
         return 0.0
-    psi = A_e / A
-    return psi if psi < 1.0 else 1.0
+    return (LAMBDA_FULL_FILM - lam) / (LAMBDA_FULL_FILM - LAMBDA_BOUNDARY)
 
 
 def friction_force(
@@ -47,14 +51,14 @@ def friction_force(
 ) -> float:
     """Magnitude of the flank friction force [N], eq. (12) in the chosen reading.
 
-    form 0 (split, default): psi A_e tau_s + (1 - psi) A eta U / h -- boundary shear on the real
-    asperity area, viscous shear on the apparent area;
+    form 0 (load sharing, default): psi A_e tau_s + (1 - psi) A eta U / h -- boundary shear on
+    the real asperity area of eq. (13), viscous shear of the film on the apparent area;
     form 1 (apparent area): A (psi tau_s + (1 - psi) eta U / h);
     form 2 (as printed): A_e (psi tau_s + (1 - psi) eta U / h).
     The viscous term is only evaluated where psi < 1, which implies h > lambda_boundary sigma > 0.
     """
     viscous = eta * abs(U) / h if psi < 1.0 else 0.0
-    if form == FORM_SPLIT:
+    if form == FORM_LOAD_SHARING:
         return psi * A_e * tau_s + (1.0 - psi) * A * viscous
     if form == FORM_APPARENT_AREA:
         return A * (psi * tau_s + (1.0 - psi) * viscous)

@@ -7,20 +7,31 @@ The rigid-body approach along the tooth normal is common to all pairs of a flank
     x     = cos(beta_b) * (rb_p phi_p - rb_w phi_w)        (> 0 when the pinion leads)
     delta = flank * x - backlash / 2                       (penetration; < 0 is a gap)
 
-Each pair in the zone of action carries W_i = K_i delta^(3/2); K_i comes from the pair's own
-roll position.  Torques (each gear positive in its own forward direction):
+Each pair in the zone of action touches at its own contact point with its own crown offset
+g_i (geometry.py), so its penetration is delta_i = delta - g_i, and it carries the Hertz force
+with Hunt-Crossley dissipation on its own penetration rate,
 
-    wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn(v_s,i) F_i rho_w,i
-    pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn(v_s,i) F_i rho_p,i
+    W_i = K_i delta_i^(3/2) (1 + d ddelta_i/dt),   W_i >= 0,
+
+K_i from the contact law at the pair's radii.  Torques (each gear positive in its own forward
+direction), with F_i the pair's friction force and sgn_i the sign of its sliding speed:
+
+    wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
+    pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from . import hertz, lubrication
 from .geometry import HelicalPairGeometry
 from .parameters import MAX_PAIR_SLOTS, MeshParameters
+
+DISSIPATION_NONE = 0
+DISSIPATION_RESTITUTION = 1
+DISSIPATION_FACTOR = 2
 
 
 @dataclass
@@ -28,10 +39,11 @@ class PairLoad:
     """Loads of one tooth pair (SI units)."""
 
     slot: int  # pair number modulo MAX_PAIR_SLOTS
-    s: float  # roll coordinate of the engaged contact-line centre [m]
-    fraction: float  # engaged fraction of the contact line [1]
-    r_x: float  # equivalent radius in the normal plane [m]
-    K: float  # stiffness non-linearity used for this pair [N/m^1.5]
+    s: float  # roll coordinate of the contact point [m]
+    offset: float  # crown offset of the contact point [m]
+    r_x: float  # equivalent radius across the contact line [m]
+    K: float  # stiffness non-linearity of the contact [N/m^1.5]
+    delta: float  # penetration of the pair, delta - offset [m]
     W: float  # normal force [N]
     F: float  # friction force magnitude [N]
     sliding_speed: float  # v_s = w_p rho_p - w_w rho_w [m/s]
@@ -47,7 +59,7 @@ class MeshLoads:
     """Mesh state on one flank (SI units)."""
 
     flank: int
-    delta: float  # penetration (negative: clearance) [m]
+    delta: float  # penetration of the flank's rigid-body approach (negative: clearance) [m]
     tau_wheel: float  # torque of the mesh on the wheel [N.m]
     tau_pinion: float  # torque of the mesh on the pinion [N.m]
     W: float  # total normal force [N]
@@ -55,14 +67,26 @@ class MeshLoads:
     pairs: list[PairLoad] = field(default_factory=list)
 
 
+def damping_factor(params: MeshParameters) -> float:
+    """Hunt-Crossley factor d [s/m] of the parameters' contact.dissipation model."""
+    if params.dissipation == DISSIPATION_RESTITUTION:
+        return hertz.hunt_crossley_factor(params.restitution, params.restitution_speed)
+    if params.dissipation == DISSIPATION_FACTOR:
+        return params.damping
+    return 0.0
+
+
 class MeshModel:
     """Evaluates the mesh loads for given gear angles and speeds."""
 
-    def __init__(self, params: MeshParameters):
+    def __init__(self, params: MeshParameters, geometry: HelicalPairGeometry | None = None):
         self.params = params
-        self.geometry = g = HelicalPairGeometry(params)
+        self.geometry = g = geometry if geometry is not None else HelicalPairGeometry(params)
         self.E_star = hertz.effective_modulus(
             params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
+        self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
+                                    g.radius_ratio_range())
+        self.damping = damping_factor(params)
         # Arms of the normal force about each axis: cos(beta_b) * base radius.
         self.arm_wheel = g.normal_factor * g.rb_wheel
         self.arm_pinion = g.normal_factor * g.rb_pinion
@@ -79,63 +103,87 @@ class MeshModel:
         """d(delta)/dt [m/s] of ``flank``."""
         return flank * (self.arm_pinion * w_p - self.arm_wheel * w_w)
 
+    def pair_rate(self, flank: int, w_p: float, dg: float) -> float:
+        """Rate [m/s] at which a pair's crown offset grows (dg/ds_n times the roll speed of
+        its face centre, flank rb_p w_p)."""
+        return dg * (flank * self.geometry.rb_pinion * w_p)
+
+    def sliding_speed(self, s: float, w_p: float, w_w: float) -> float:
+        """Sliding speed v_s [m/s] at the contact point with roll coordinate s."""
+        return lubrication.sliding_speed(w_p, s, w_w, self.geometry.line_length - s)
+
     # ------------------------------------------------------------------ loads
-    def torques(
-        self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float, v_impact: float
-    ) -> tuple[float, float, float]:
-        """``(tau_wheel, tau_pinion, W)`` on ``flank``: the integrator's right-hand side."""
-        loads = self._loads(flank, phi_p, w_p, phi_w, w_w, v_impact, detail=False)
+    def torques(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
+                v_impact: float, signs=None) -> tuple[float, float, float]:
+        """``(tau_wheel, tau_pinion, W)`` on ``flank``: the integrator's right-hand side.
+
+        ``signs`` (optional, per pair slot) fixes the direction of each pair's friction for a
+        substep between located reversals; without it the sign of the sliding speed is used."""
+        loads = self._loads(flank, phi_p, w_p, phi_w, w_w, v_impact, signs, False)
         return loads.tau_wheel, loads.tau_pinion, loads.W
 
-    def loads(
-        self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float, v_impact: float
-    ) -> MeshLoads:
+    def loads(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
+              v_impact: float, signs=None) -> MeshLoads:
         """Mesh loads on ``flank`` with the per-pair breakdown."""
-        return self._loads(flank, phi_p, w_p, phi_w, w_w, v_impact, detail=True)
+        return self._loads(flank, phi_p, w_p, phi_w, w_w, v_impact, signs, True)
 
-    def stiffness_sum(self, flank: int, phi_p: float) -> float:
-        """Sum of the pairs' stiffness non-linearities K_i [N/m^1.5] at pinion angle phi_p,
-        so that the flank's total normal force is stiffness_sum * delta^(3/2)."""
-        return sum(self._pair_stiffness(s, frac)[2] for _, s, frac in
-                   self.geometry.pairs(flank, phi_p))
+    def static_force(self, flank: int, phi_p: float, delta: float) -> float:
+        """Total normal force [N] of ``flank`` at penetration ``delta`` without dissipation:
+        sum_i K_i (delta - g_i)^(3/2) over the pairs that touch."""
+        law = self.law
+        total = 0.0
+        for _slot, s, g, _dg in self.geometry.pairs(flank, phi_p):
+            d = delta - g
+            if d > 0.0:
+                K = law.shape(self.geometry.normal_radii(s)[2])[0]
+                total += K * (d * math.sqrt(d))
+        return total
 
-    def energy_balance_delta_max(self, flank: int, phi_p: float, v_impact: float) -> float:
-        """Largest eq. (7)-(8) delta_max [m] over the pairs in the zone of action of
-        ``flank`` for an impact at normal speed ``v_impact`` [m/s]."""
-        p = self.params
-        out = 0.0
-        for _, s, frac in self.geometry.pairs(flank, phi_p):
-            r_x, K_full, _ = self._pair_stiffness(s, frac)
-            d = hertz.energy_balance_delta_max(v_impact, K_full, r_x, p.r_y, self.E_star,
-                                               p.density)
-            out = max(out, d)
-        return out
+    def contact_rates(self, flank: int, phi_p: float, w_p: float, delta: float,
+                      delta_dot: float) -> tuple[float, float]:
+        """``(k, c)``: the contact's stiffness dW/d(delta) [N/m] and damping dW/d(delta_dot)
+        [N.s/m] summed over the touching pairs at penetration ``delta`` and rate
+        ``delta_dot``; they set the contact's time scales sqrt(m/k) and m/c."""
+        law, d = self.law, self.damping
+        k_sum = c_sum = 0.0
+        for _slot, s, g, dg in self.geometry.pairs(flank, phi_p):
+            pen = delta - g
+            if pen > 0.0:
+                K = law.shape(self.geometry.normal_radii(s)[2])[0]
+                root = math.sqrt(pen)
+                factor = 1.0 + d * (delta_dot - self.pair_rate(flank, w_p, dg))
+                if factor > 0.0:
+                    k_sum += 1.5 * K * root * factor
+                c_sum += K * d * (pen * root)
+        return k_sum, c_sum
 
-    def _pair_stiffness(self, s: float, fraction: float) -> tuple[float, float, float]:
-        """``(r_x, K_full, K)`` of a pair at roll coordinate s with engaged fraction."""
-        p = self.params
-        _, _, r_x = self.geometry.normal_radii(s)
-        K_full = hertz.stiffness(self.E_star, r_x, p.r_y)
-        return r_x, K_full, (K_full * fraction if p.length_weighting else K_full)
-
-    def _loads(self, flank, phi_p, w_p, phi_w, w_w, v_impact, detail) -> MeshLoads:
+    def _loads(self, flank, phi_p, w_p, phi_w, w_w, v_impact, signs, detail) -> MeshLoads:
         p = self.params
         g = self.geometry
+        law = self.law
         delta = self.penetration(flank, phi_p, phi_w)
         out = MeshLoads(flank, delta, 0.0, 0.0, 0.0, 0.0)
         if delta <= 0.0:
             return out
         delta_dot = self.approach_rate(flank, w_p, w_w)
-        shape = delta * delta**0.5
-        if p.damping > 0.0:
-            shape *= 1.0 + p.damping * delta_dot
-            if shape < 0.0:  # the flanks never pull on each other
-                shape = 0.0
+        damping = self.damping
         E_star = self.E_star
         tau_w = tau_p = W_sum = F_net = 0.0
-        for slot, s, frac in g.pairs(flank, phi_p):
-            r_x, K_full, K = self._pair_stiffness(s, frac)
-            W = K * shape
+        for slot, s, offset, dg in g.pairs(flank, phi_p):
+            pen = delta - offset
+            if pen <= 0.0:
+                if detail:
+                    r_x = g.normal_radii(s)[2]
+                    out.pairs.append(PairLoad(slot, s, offset, r_x, law.shape(r_x)[0], pen, 0.0,
+                                              0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+                continue
+            r_x = g.normal_radii(s)[2]
+            K, _R, ka, kz = law.shape(r_x)
+            W = K * (pen * math.sqrt(pen))
+            if damping > 0.0:
+                W *= 1.0 + damping * (delta_dot - self.pair_rate(flank, w_p, dg))
+                if W < 0.0:  # the flanks never pull on each other
+                    W = 0.0
             tau_w += flank * W * self.arm_wheel
             tau_p -= flank * W * self.arm_pinion
             W_sum += W
@@ -146,24 +194,43 @@ class MeshModel:
             h = lam = psi = d_max = 0.0
             if (p.friction_enabled or detail) and W > 0.0:
                 A_e = lubrication.asperity_area(W, E_star, p.gamma, p.sigma)
-                A = hertz.apparent_area(W, r_x, p.r_y, E_star)
-                d_max = hertz.energy_balance_delta_max(
-                    v_impact, K_full, r_x, p.r_y, E_star, p.density)
-                h = lubrication.film_thickness(-delta, d_max)
+                A = kz * W ** (2.0 / 3.0)
+                d_max = hertz.film_delta_max(v_impact, K, r_x, ka, p.density)
+                h = lubrication.film_thickness(-pen, d_max)
                 lam = h / p.sigma
-                psi = lubrication.dry_fraction(lam, A_e, A)
+                psi = lubrication.dry_fraction(lam)
                 if p.friction_enabled:
                     U = u if p.shear_speed == 0 else v_s
                     F = lubrication.friction_force(
                         p.friction_form, psi, A_e, A, p.tau_s, p.eta, U, h)
-                    if v_s != 0.0:
-                        sgn = 1.0 if v_s > 0.0 else -1.0
+                    if signs is not None:
+                        sgn = signs[slot]
+                    elif v_s > 0.0:
+                        sgn = 1.0
+                    elif v_s < 0.0:
+                        sgn = -1.0
+                    else:
+                        sgn = 0.0
+                    if sgn != 0.0:
                         tau_w += sgn * F * rho_w
                         tau_p -= sgn * F * rho_p
                         F_net += sgn * F
             if detail:
-                out.pairs.append(PairLoad(slot, s, frac, r_x, K, W, F, v_s, u, h, lam, psi, d_max))
+                out.pairs.append(PairLoad(slot, s, offset, r_x, K, pen, W, F, v_s, u, h, lam,
+                                          psi, d_max))
         out.tau_wheel, out.tau_pinion, out.W, out.F = tau_w, tau_p, W_sum, F_net
+        return out
+
+    def energy_balance_delta_max(self, flank: int, phi_p: float, v_impact: float) -> float:
+        """Largest eq. (7)-(8) delta_max [m] over the pairs in the zone of action of
+        ``flank`` for an impact at normal speed ``v_impact`` [m/s]."""
+        out = 0.0
+        for _, s, _g, _dg in self.geometry.pairs(flank, phi_p):
+            r_x = self.geometry.normal_radii(s)[2]
+            K, _R, ka, _kz = self.law.shape(r_x)
+            d = hertz.film_delta_max(v_impact, K, r_x, ka, self.params.density)
+            if d > out:
+                out = d
         return out
 
     def pair_forces(self, loads: MeshLoads) -> list[float]:

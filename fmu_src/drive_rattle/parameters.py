@@ -167,9 +167,20 @@ DEG = math.pi / 180.0
 
 #: friction.form codes (see docs/model.md, eq. 12)
 FRICTION_FORMS = {
-    0: "split: psi*A_e*tau_s + (1-psi)*A*eta*U/h",
+    0: "load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h",
     1: "apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)",
     2: "as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h)",
+}
+#: contact.hertz_law codes
+HERTZ_LAWS = {
+    0: "exact elliptical Hertz contact (Johnson 1985, complete elliptic integrals)",
+    1: "equivalent sphere of eq. 2, K = 4/3 E* (r_x r_y)^(1/4)",
+}
+#: contact.dissipation codes
+DISSIPATION_MODELS = {
+    0: "none (the paper's equations: friction is the only loss)",
+    1: "Hunt-Crossley, factor from contact.restitution at contact.restitution_speed",
+    2: "Hunt-Crossley, factor contact.damping",
 }
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
@@ -228,20 +239,35 @@ class MeshParameters(ParameterSet):
         "wheel.J", 1.3e-3, "kg.m2", "mass moment of inertia of the wheel (eq. 10, I_w)",
         minimum=1e-7, maximum=1e3)
     # --- Hertzian contact ------------------------------------------------------------------
-    r_y: float = declare(
-        "contact.r_y", 7.8125, "m",
-        "equivalent flank radius along the contact line (eq. 6 read as lead crowning: "
-        "r_y = b^2/(8 C_b); default = 10 um crowning over 25 mm)",
-        minimum=1e-4, maximum=1e3)
-    length_weighting: bool = declare(
-        "contact.length_weighting", True, "",
-        "scale each pair's Hertz stiffness by the fraction of its contact line inside the "
-        "zone of action (pairs enter and leave the mesh smoothly); false = the paper's "
-        "reading, full stiffness for any pair in the path of contact")
+    crowning: float = declare(
+        "contact.crowning", 10e-6, "m",
+        "composite lead crowning of the pair: separation of the flanks along the contact normal "
+        "at the face ends relative to the face centre; every tooth pair touches at the lowest "
+        "point of its engaged contact line with its own crown-drop offset, and the crown gives "
+        "the flank radius along the contact line (eq. 6 read as crowning: "
+        "r_y = b^2 / (8 C_b cos^2 beta_b))",
+        minimum=1e-6, maximum=1e-3, display_unit="um")
+    hertz_law: int = declare(
+        "contact.hertz_law", 0, "1", "load-approach law of each elliptical point contact: "
+        + "; ".join(f"{k} = {v}" for k, v in HERTZ_LAWS.items()),
+        minimum=0, maximum=1, choices=HERTZ_LAWS)
+    dissipation: int = declare(
+        "contact.dissipation", 1, "1", "contact dissipation: "
+        + "; ".join(f"{k} = {v}" for k, v in DISSIPATION_MODELS.items()),
+        minimum=0, maximum=2, choices=DISSIPATION_MODELS)
+    restitution: float = declare(
+        "contact.restitution", 0.8, "1",
+        "coefficient of restitution of a single lubricated tooth impact at "
+        "contact.restitution_speed (contact.dissipation = 1); sets the Hunt-Crossley factor "
+        "exactly, see docs/model.md section 3", minimum=0.01, maximum=1.0)
+    restitution_speed: float = declare(
+        "contact.restitution_speed", 4e-3, "m/s",
+        "normal impact speed at which contact.restitution holds (default: the paper's typical "
+        "impact velocity)", minimum=1e-5, maximum=10.0, display_unit="mm/s")
     damping: float = declare(
         "contact.damping", 0.0, "s/m",
-        "Hunt-Crossley damping factor d in W = K*delta^1.5*(1 + d*delta_dot); not in the "
-        "paper, 0 = undamped", minimum=0.0, maximum=1e3)
+        "Hunt-Crossley damping factor d in W = K*delta^1.5*(1 + d*delta_dot), used with "
+        "contact.dissipation = 2", minimum=0.0, maximum=1e3)
     # --- lubricant, surfaces, friction (eq. 11-17) ----------------------------------------
     friction_enabled: bool = declare(
         "friction.enabled", True, "", "include flank friction (eq. 12-17)")
@@ -267,6 +293,12 @@ class MeshParameters(ParameterSet):
     gamma: float = declare(
         "surface.gamma", 1e-4, "m", "average asperity tip radius (eq. 13)",
         minimum=1e-7, maximum=1.0, display_unit="um")
+    # --- outputs --------------------------------------------------------------------------
+    rattle_time: float = declare(
+        "rattle.time_constant", 1.0, "s",
+        "time constant of the rattle index: the impact kinetic energy per second, exponentially "
+        "averaged like a sound level meter's time weighting (1 s = 'slow')",
+        minimum=1e-3, maximum=1e4)
     # --- initial state -------------------------------------------------------------------
     phi_start: float = declare(
         "wheel.phi_start", 0.0, "rad",

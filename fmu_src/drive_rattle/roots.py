@@ -75,13 +75,18 @@ def brent(
 
 
 def first_crossing(c0: float, c1: float, c2: float, t_max: float, rising: bool) -> float | None:
-    """Smallest ``t`` in ``(0, t_max]`` where ``q(t) = c0 + c1 t + c2 t^2`` crosses zero
+    """Smallest ``t`` in ``[0, t_max]`` where ``q(t) = c0 + c1 t + c2 t^2`` crosses zero
     upwards (``rising``) or downwards, or None.
 
     Roots come from the cancellation-free form of the quadratic formula; a root is accepted
     only where the slope ``c1 + 2 c2 t`` has the requested sign, which gives the event its
-    direction and rejects the root a state sits on right after the opposite event.
+    direction and rejects the root a state sits on right after the opposite event.  A state
+    exactly on the zero (``c0 == 0``) crosses at ``t = 0`` when it moves the requested way: its
+    slope has the requested sign, or the slope is zero and the curvature has it (exact touch).
     """
+    sign = 1.0 if rising else -1.0
+    if c0 == 0.0 and (sign * c1 > 0.0 or (c1 == 0.0 and sign * c2 > 0.0)):
+        return 0.0
     roots: list[float] = []
     if c2 == 0.0:
         if c1 != 0.0:

@@ -9,13 +9,21 @@ and the load torque is held.  The wheel alternates between two modes:
 * **free flight** (no flank in contact): the wheel's acceleration is constant, so the normal
   approach is a quadratic in time; the next contact onset is its exact root (no substeps);
 * **contact** on one flank: classical RK4 on substeps of a fixed grid ``t_j = j H / n``
-  (``n = ceil(H / h_max)``), split wherever a pair enters or leaves the zone of action
-  (kinematic, exact) and ended at the release, located by Brent's method on the RK4 step
-  from the substep start (so the event is consistent with the integrator).
+  (``n = ceil(H / h_max)``), split wherever a pair enters or leaves the zone of action or its
+  contact point changes its law of motion (kinematic, exact), subdivided where the contact's
+  own time scales (sqrt(m/k) of its stiffness, m/c of its damping) are shorter than the grid,
+  and ended at the release or at a friction reversal (a pair's sliding speed changing sign at
+  the pitch point), both located by Brent's method on the RK4 step from the substep start (so
+  the events are consistent with the integrator).  Between reversals each pair's friction
+  keeps its direction, so the right-hand side is smooth on every substep.
+
+A flank exactly touching (zero penetration) and moving into contact -- or at rest and being
+accelerated into it -- is a contact onset (exact touch).
 
 Every time inside the step is a grid point ``j H / n`` or a located event offset from one;
 no time is accumulated across substeps or steps.  A rejected step (non-finite input,
-non-positive step) raises ValueError before anything is changed.
+non-positive step, a contact too stiff to resolve) raises ValueError before anything is
+changed.
 """
 
 from __future__ import annotations
@@ -26,7 +34,7 @@ from dataclasses import dataclass, field
 from . import roots
 from .geometry import COAST, DRIVE
 from .mesh import MeshLoads, MeshModel
-from .parameters import MeshParameters
+from .parameters import MAX_PAIR_SLOTS, MeshParameters
 
 #: Largest flank penetration [m] accepted in a start state given by wheel.phi_start: ten
 #: times the penetrations of loaded operation; more means a wheel angle that does not match the
@@ -42,6 +50,19 @@ MAX_PENETRATION_MODULES = 0.05
 #: onset (penetration ~0) and ends separated: a grazing contact shorter than one substep.
 GRAZING_SAMPLES = 8
 
+#: Largest product of a contact substep and the contact's fastest rate, sqrt(k/m) + c/m.
+#: RK4 is stable to about 2.8 on both the imaginary and the negative real axis; 0.5 keeps an
+#: impact's restitution within ~1e-5 of the closed form and leaves the default grid (10 us)
+#: untouched at the default pair's rattle speeds (it acts above ~10 mm/s).
+CONTACT_RATE_SAFETY = 0.5
+
+#: Largest number of contact substeps in one communication step; beyond it the contact is
+#: stiffer than the stepper resolves at a sensible cost and the step is refused.
+MAX_CONTACT_SUBSTEPS = 200_000
+
+#: xtol [s] of Brent's method for the release and the friction reversals.
+EVENT_XTOL = 1e-15
+
 
 @dataclass
 class WheelState:
@@ -55,16 +76,17 @@ class WheelState:
     v_impact_last: float = 0.0  # normal approach speed at the last onset on either flank [m/s]
     impacts_drive: int = 0  # cumulative contact onsets, drive flank
     impacts_coast: int = 0  # cumulative contact onsets, coast flank
+    rattle_index: float = 0.0  # exponentially averaged impact kinetic energy per second [W]
 
     def as_tuple(self) -> tuple:
         return (self.phi, self.w, self.flank, self.v_impact_drive, self.v_impact_coast,
-                self.v_impact_last, self.impacts_drive, self.impacts_coast)
+                self.v_impact_last, self.impacts_drive, self.impacts_coast, self.rattle_index)
 
     @classmethod
     def from_tuple(cls, values) -> WheelState:
-        phi, w, flank, vd, vc, vl, nd, nc = values
+        phi, w, flank, vd, vc, vl, nd, nc, ri = values
         return cls(float(phi), float(w), int(flank), float(vd), float(vc), float(vl),
-                   int(nd), int(nc))
+                   int(nd), int(nc), float(ri))
 
 
 @dataclass
@@ -72,7 +94,7 @@ class ContactEvent:
     """A located contact onset or release."""
 
     time: float  # time from the start of the step [s]
-    kind: str  # "onset" or "release"
+    kind: str  # "onset", "release" or "reversal" (a pair's friction changes direction)
     flank: int  # +1 drive, -1 coast
     speed: float  # normal approach speed d(delta)/dt at the event [m/s]
 
@@ -89,6 +111,7 @@ class StepResult:
     onsets_coast: int  # contact onsets in this step, coast flank
     events: list[ContactEvent] = field(default_factory=list)
     rhs_evaluations: int = 0  # cost counter
+    contact_substeps: int = 0  # cost counter
 
 
 class WheelStepper:
@@ -109,7 +132,7 @@ class WheelStepper:
             self.state = self.equilibrium_state(phi_p, w_p, tau_load)
         else:
             self.state = WheelState(params.phi_start, params.w_start)
-            self.state.flank = self._flank_in_contact(phi_p, params.phi_start, 0)
+            self.state.flank = self.contact_flank(phi_p, w_p, 0.0, tau_load, self.state)
             depth = max(self.mesh.penetration(f, phi_p, params.phi_start) for f in (DRIVE, COAST))
             if depth > MAX_INITIAL_PENETRATION:
                 g, ratio = self.geometry, self.geometry.ratio
@@ -163,15 +186,26 @@ class WheelStepper:
         x = flank * (self.geometry.half_backlash + delta)
         return (m.arm_pinion * phi_p - x) / m.arm_wheel
 
-    def _flank_in_contact(self, phi_p: float, phi_w: float, current: int) -> int:
-        """Flank in contact given the angles; keeps ``current`` while it still penetrates."""
-        pen = self.mesh.penetration
-        if current != 0 and pen(current, phi_p, phi_w) > 0.0:
-            return current
-        if pen(DRIVE, phi_p, phi_w) > 0.0:
-            return DRIVE
-        if pen(COAST, phi_p, phi_w) > 0.0:
-            return COAST
+    def contact_flank(self, phi_p: float, w_p: float, a_p: float, tau_load: float,
+                      state: WheelState) -> int:
+        """Flank in contact for the wheel ``state`` against the pinion (``phi_p``, ``w_p``,
+        ``a_p``) under the load ``tau_load``: the flank that penetrates (the current one
+        first), or one exactly touching that the motion drives into contact -- approaching,
+        or at rest and accelerated towards it (exact touch)."""
+        mesh = self.mesh
+        accel_w = -tau_load / self.params.J_wheel  # free wheel; no force at zero penetration
+        for flank in (state.flank, DRIVE, COAST):
+            if flank == 0:
+                continue
+            pen = mesh.penetration(flank, phi_p, state.phi)
+            if pen > 0.0:
+                return flank
+            if pen == 0.0:
+                rate = mesh.approach_rate(flank, w_p, state.w)
+                if rate > 0.0:
+                    return flank
+                if rate == 0.0 and mesh.approach_rate(flank, a_p, accel_w) > 0.0:
+                    return flank
         return 0
 
     # ------------------------------------------------------------------ stepping
@@ -239,6 +273,14 @@ class _StepRun:
         self.state = WheelState(*s.as_tuple())
         self.result = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
         self.int_tau_pinion = 0.0
+        # Friction direction of each pair slot on the current substep, and the directions
+        # a located reversal prescribes for the substep after it.
+        self.signs = [0.0] * MAX_PAIR_SLOTS
+        self.reversed: dict[int, float] = {}
+        self.friction = p.friction_enabled
+        # Impact energy entering the rattle index, weighted to the step end.
+        self.rattle_time = p.rattle_time
+        self.rattle_gain = 0.0
 
     # pinion kinematics at time t from the step start
     def phi_p(self, t: float) -> float:
@@ -255,7 +297,7 @@ class _StepRun:
         st = self.state
         mesh = self.mesh
         # Inputs may move the pinion discontinuously between steps: re-establish the mode.
-        flank = self.stepper._flank_in_contact(self.phi_p0, st.phi, st.flank)
+        flank = self.stepper.contact_flank(self.phi_p0, self.w_p0, self.a_p, self.tau_load, st)
         if flank != st.flank:
             if st.flank != 0:
                 self._event(0.0, "release", st.flank)
@@ -270,6 +312,7 @@ class _StepRun:
         dw = st.w - self.stepper.state.w
         r.tau_wheel_mean = (self.J * dw + self.tau_load * self.H) / self.H
         r.tau_pinion_mean = self.int_tau_pinion / self.H
+        st.rattle_index = st.rattle_index * math.exp(-self.H / self.rattle_time) + self.rattle_gain
         if st.flank != 0:
             r.delta_peak = max(r.delta_peak, mesh.penetration(st.flank, self.phi_p(self.H), st.phi))
             r.W_peak = max(r.W_peak, self._rhs(self.H, st.phi, st.w)[2])
@@ -285,8 +328,14 @@ class _StepRun:
 
     def _onset(self, t: float, flank: int) -> None:
         st = self.state
-        v = max(self._event(t, "onset", flank).speed, 0.0)
+        v = self._event(t, "onset", flank).speed
+        if v < 0.0:
+            v = 0.0
         st.v_impact_last = v
+        # Kinetic energy of the impact on the tooth normal, into the rattle index (an
+        # exponential average: each impact adds E / tau, decayed to the step end).
+        energy = 0.5 * self.mesh.normal_mass * v * v
+        self.rattle_gain += energy / self.rattle_time * math.exp(-(self.H - t) / self.rattle_time)
         if flank == DRIVE:
             st.v_impact_drive = v
             st.impacts_drive += 1
@@ -329,7 +378,7 @@ class _StepRun:
         flank = st.flank
         v_imp = st.v_impact_drive if flank == DRIVE else st.v_impact_coast
         tau_w, tau_p, W = self.mesh.torques(
-            flank, self.phi_p(t), self.w_p(t), phi_w, w_w, v_imp)
+            flank, self.phi_p(t), self.w_p(t), phi_w, w_w, v_imp, self.signs)
         self.result.rhs_evaluations += 1
         return (tau_w - self.tau_load) / self.J, tau_p, W
 
@@ -349,8 +398,9 @@ class _StepRun:
         return phi_new, w_new, h / 6.0 * (p1 + 2.0 * p2 + 2.0 * p3 + p4)
 
     def _contact_substep(self, t: float) -> float:
-        """One RK4 substep in contact, ended at the next grid point, pair breakpoint or
-        release, whichever comes first."""
+        """One RK4 substep in contact, ended at the next grid point, pair breakpoint, release
+        or friction reversal, whichever comes first, and no longer than the contact's own
+        time scales allow."""
         st, m, g = self.state, self.mesh, self.geometry
         flank = st.flank
         j = min(int(t * self.n_sub / self.H), self.n_sub - 1)
@@ -366,29 +416,129 @@ class _StepRun:
                                       rising=bp > u_a)
             if dt is not None:
                 t_end = t + dt
-        h = t_end - t
-        k1 = self._rhs(t, st.phi, st.w)
-        self.result.W_peak = max(self.result.W_peak, k1[2])
-        phi_b, w_b, q = self._rk4(t, h, st.phi, st.w, k1)
+        h = self._resolved_substep(t, t_end - t)
+        t_end = t + h
+        self._friction_directions(t)
         delta_a = m.penetration(flank, self.phi_p(t), st.phi)
-        delta_b = m.penetration(flank, self.phi_p(t_end), phi_b)
-        released = False
-        if delta_b <= 0.0:
-            dt = self._release_time(t, h, delta_a, delta_b, k1)
-            if dt is not None:
-                released = True
-                if dt < h:
-                    h = dt
-                    t_end = t + h
-                    phi_b, w_b, q = self._rk4(t, h, st.phi, st.w, k1)
-                delta_b = 0.0
+        flipped: set[int] = set()
+        while True:
+            k1 = self._rhs(t, st.phi, st.w)
+            phi_b, w_b, q = self._rk4(t, h, st.phi, st.w, k1)
+            delta_b = m.penetration(flank, self.phi_p(t_end), phi_b)
+            released = False
+            reversal = None
+            dt_event = h
+            if delta_b <= 0.0:
+                dt = self._release_time(t, h, delta_a, delta_b, k1)
+                if dt is not None:
+                    released = True
+                    dt_event = dt
+            reversals = self._reversal_times(t, h, w_b, k1, flipped)
+            # A reversal at the substep start to rounding (sliding speed zero at t): the pair's
+            # friction takes its new direction for the whole substep; redo it.
+            instant = [slot for slot, dt in reversals if t + dt <= t]
+            if not instant:
+                break
+            for slot in instant:
+                self.signs[slot] = -self.signs[slot]
+                flipped.add(slot)
+        self.result.W_peak = max(self.result.W_peak, k1[2])
+        for slot, dt in reversals:
+            if dt < dt_event:
+                dt_event, reversal, released = dt, slot, False
+        if dt_event < h:
+            h = dt_event
+            t_end = t + h
+            phi_b, w_b, q = self._rk4(t, h, st.phi, st.w, k1)
+        if released:
+            delta_b = 0.0
+        else:
+            delta_b = m.penetration(flank, self.phi_p(t_end), phi_b)
         self._track_peak(t, h, flank, delta_a, st.phi, st.w, delta_b, phi_b, w_b)
         st.phi, st.w = phi_b, w_b
         self.int_tau_pinion += q
+        if reversal is not None:
+            self.reversed[reversal] = -self.signs[reversal]
+            self._event(t_end, "reversal", flank)
         if released or delta_b <= 0.0:
             self._event(t_end, "release", flank)
             st.flank = 0
         return t_end
+
+    def _resolved_substep(self, t: float, span: float) -> float:
+        """Length of the next contact substep: ``span`` divided into equal parts no longer
+        than CONTACT_RATE_SAFETY over the contact's fastest rate sqrt(k/m) + c/m, estimated
+        at the penetration the substep can reach, delta + max(ddelta/dt, 0) span."""
+        st, m = self.state, self.mesh
+        flank = st.flank
+        delta = m.penetration(flank, self.phi_p(t), st.phi)
+        rate = m.approach_rate(flank, self.w_p(t), st.w)
+        reach = delta + rate * span if rate > 0.0 else delta
+        k, c = m.contact_rates(flank, self.phi_p(t), self.w_p(t), reach, rate)
+        mass = m.normal_mass
+        fastest = math.sqrt(k / mass) + c / mass
+        r = self.result
+        r.contact_substeps += 1
+        if fastest * span <= CONTACT_RATE_SAFETY:
+            return span
+        parts = math.ceil(fastest * span / CONTACT_RATE_SAFETY)
+        if r.contact_substeps + parts > MAX_CONTACT_SUBSTEPS:
+            raise ValueError(
+                f"the contact is too stiff to resolve: its fastest time scale "
+                f"{1.0 / fastest:.3g} s (stiffness {k:.4g} N/m, damping {c:.4g} N.s/m on the "
+                f"wheel's normal mass {mass:.4g} kg) needs more than {MAX_CONTACT_SUBSTEPS} "
+                "substeps in this step; reduce the communication step, the impact speed "
+                "(inputs) or contact.damping, or raise wheel.J")
+        return span / parts
+
+    def _friction_directions(self, t: float) -> None:
+        """Fix each pair's friction direction for the substep from ``t``: the sign of its
+        sliding speed, or the one a reversal located at ``t`` prescribes (its sliding speed is
+        zero to rounding there)."""
+        st, m = self.state, self.mesh
+        signs = self.signs
+        for k in range(MAX_PAIR_SLOTS):
+            signs[k] = 0.0
+        w_p = self.w_p(t)
+        for slot, s, _g, _dg in self.geometry.pairs(st.flank, self.phi_p(t)):
+            forced = self.reversed.get(slot)
+            if forced is not None:
+                signs[slot] = forced
+                continue
+            v_s = m.sliding_speed(s, w_p, st.w)
+            signs[slot] = 1.0 if v_s > 0.0 else (-1.0 if v_s < 0.0 else 0.0)
+        self.reversed.clear()
+
+    def _reversal_times(self, t: float, h: float, w_b: float, k1, flipped):
+        """``(slot, dt)`` for each pair (not in ``flipped``) whose sliding speed ends the
+        substep with the sign opposite to its friction direction: the located offset of the
+        reversal in [0, h].  None without friction (the directions do not matter)."""
+        st, m = self.state, self.mesh
+        flank = st.flank
+        out = []
+        if not self.friction:
+            return out
+        for slot, s, _g, _dg in self.geometry.pairs(flank, self.phi_p(t + h)):
+            sign = self.signs[slot]
+            if slot in flipped or sign == 0.0 or sign * m.sliding_speed(
+                    s, self.w_p(t + h), w_b) >= 0.0:
+                continue
+
+            def speed(dt: float, w: float, slot=slot) -> float:
+                for other, s_k, _g_k, _dg_k in self.geometry.pairs(flank, self.phi_p(t + dt)):
+                    if other == slot:
+                        return m.sliding_speed(s_k, self.w_p(t + dt), w)
+                return 0.0
+
+            def slide(dt: float, speed=speed) -> float:
+                return speed(dt, self._rk4(t, dt, st.phi, st.w, k1)[1])
+
+            f_a = speed(0.0, st.w)
+            f_b = speed(h, w_b)
+            if f_a == 0.0 or (f_a > 0.0) == (f_b > 0.0):
+                continue  # no sign change on the substep's own RK4 path
+            out.append((slot, roots.brent(slide, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL)))
+        return out
 
     def _release_time(self, t: float, h: float, delta_a: float, delta_b: float, k1):
         """Offset in (0, h] of the release (penetration crossing zero downwards) in the
@@ -410,7 +560,7 @@ class _StepRun:
                     break
             else:
                 return None
-        return roots.brent(delta_after, lo, h, fa=f_lo, fb=delta_b, xtol=1e-15)
+        return roots.brent(delta_after, lo, h, fa=f_lo, fb=delta_b, xtol=EVENT_XTOL)
 
     def _track_peak(self, t, h, flank, d_a, phi_a, w_a, d_b, phi_b, w_b) -> None:
         """Peak penetration and force inside the substep from the cubic Hermite interpolant
@@ -432,8 +582,7 @@ class _StepRun:
              + (-2 * s3 + 3 * s2) * d_b + (s3 - s2) * dd_b)
         if d > r.delta_peak:
             r.delta_peak = d
-            K = m.stiffness_sum(flank, self.phi_p(t + s * h))
-            r.W_peak = max(r.W_peak, K * d**1.5)
+            r.W_peak = max(r.W_peak, m.static_force(flank, self.phi_p(t + s * h), d))
 
 
 def check_step_size(h: float, h_max: float) -> None:
