@@ -3,6 +3,7 @@ them.
 
     python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
     python build_fmu.py --update-docs     # regenerate the interface tables of docs/fmi.md
+    python build_fmu.py --update-kernel-header  # regenerate fmu_src/native/rattle_kernel_layout.h
 
 Each FMU bundles the slave module, the runtime part of the physics core (standard library
 only), the FMI glue, generated documentation and the native status shim.  The normalised
@@ -31,7 +32,7 @@ MODELS = ("GearMeshRattle", "Driveline")
 
 #: Modules of the core that run inside the FMUs (the rest needs numpy/scipy or is tooling).
 CORE_RUNTIME = ("__init__", "parameters", "geometry", "hertz", "lubrication", "mesh", "roots",
-                "stepper", "driveline", "interface", "kernel")
+                "stepper", "driveline", "interface", "kernel", "kernel_layout")
 FMI_RUNTIME = ("__init__", "slave", "model_description", "units")
 
 sys.path.insert(0, str(SRC))
@@ -61,6 +62,8 @@ def _stage_packages(staging: Path) -> list[Path]:
     """The runtime packages, with the compiled kernel next to drive_rattle/kernel.py."""
     from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
 
+    update_kernel_header()
+
     out = []
     for package, modules in (("drive_rattle", CORE_RUNTIME), ("drive_rattle_fmi", FMI_RUNTIME)):
         dest = staging / package
@@ -70,6 +73,15 @@ def _stage_packages(staging: Path) -> list[Path]:
         out.append(dest)
     compile_kernel(staging / "drive_rattle" / LIBRARY_NAME)
     return out
+
+
+def update_kernel_header() -> None:
+    """Write fmu_src/native/rattle_kernel_layout.h from drive_rattle/kernel_layout.py when it
+    differs (the generated header is committed; the kernel tests fail while it is stale)."""
+    from drive_rattle import kernel_layout
+
+    if kernel_layout.write_header():
+        print(f"build_fmu.py: regenerated {kernel_layout.HEADER}; commit it", file=sys.stderr)
 
 
 def _slave_class(name: str, script: Path | None = None):
@@ -180,7 +192,12 @@ def main(argv=None) -> int:
     ap.add_argument("--no-fmutool", action="store_true", help="skip `fmutool -check`")
     ap.add_argument("--update-docs", action="store_true",
                     help="regenerate the interface tables in docs/fmi.md and exit")
+    ap.add_argument("--update-kernel-header", action="store_true",
+                    help="regenerate the compiled kernel's layout header and exit")
     args = ap.parse_args(argv)
+    if args.update_kernel_header:
+        update_kernel_header()
+        return 0
     if args.update_docs:
         DOCS.write_text(interface_docs(DOCS.read_text(encoding="utf-8")), encoding="utf-8")
         print(f"updated {DOCS}")

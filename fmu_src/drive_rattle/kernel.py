@@ -6,6 +6,9 @@ the same libm calls -- so its results are identical to the pure-Python stepper's
 bit, only faster (docs/kernel.md).  The Python stepper stays the reference, the fallback
 when the shared library is absent, and the way to get the located contact events.
 
+The arrays shared with the C code are declared in :mod:`kernel_layout`; a refused step is
+reported with the messages of :mod:`stepper`, so no layout and no message is written twice.
+
 Standard library only at run time; compiling the kernel needs a C compiler (gcc).
 """
 
@@ -16,84 +19,35 @@ import os
 import struct
 from pathlib import Path
 
-from . import geometry, lubrication, roots
-from .interface import MESH_OUTPUTS
-from .parameters import MAX_PAIR_SLOTS, MeshParameters
+from . import kernel_layout as layout
+from .parameters import MeshParameters
 from .stepper import (
-    GRAZING_SAMPLES,
-    MAX_PENETRATION_MODULES,
     StepResult,
     WheelState,
     WheelStepper,
     _check_finite,
     check_step_size,
+    diverged_error,
+    penetration_error,
+    stiffness_error,
 )
 
 #: File name of the shared library, next to this module (in an FMU: resources/drive_rattle/).
 LIBRARY_NAME = "_rattle_kernel.so"
-#: The C source.
+#: The C source; it includes the generated layout header next to it.
 SOURCE = Path(__file__).resolve().parents[1] / "native" / "rattle_kernel.c"
 #: Compiler flags: IEEE semantics without contraction (no FMA), as the bit-for-bit identity
 #: with the Python stepper requires.
 CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-fPIC", "-shared")
 
-#: Layout version of the arrays shared with the C code (RK_ABI_VERSION there).
-ABI_VERSION = 1
-_MAGIC = 7261747465.0
-
-#: The model array, in the order of the C enum (M_...).
-MODEL_FIELDS = (
-    "magic", "abi", "size",
-    "rb_pinion", "flank_phase", "base_pitch", "line_span", "s_start", "s_end",
-    "line_length", "normal_factor", "half_backlash", "n_breakpoints",
-    "bp0", "bp1", "bp2", "bp3",
-    "E_star", "arm_wheel", "arm_pinion",
-    "J_wheel", "r_y", "length_weighting", "damping", "friction_enabled", "friction_form",
-    "shear_speed", "tau_s", "eta", "sigma", "gamma", "density", "h_max", "h_comm_max", "m_n",
-    "pen_modules", "pen_limit", "bp_tol", "grazing_samples", "brent_max_iter", "brent_rtol",
-    "release_xtol", "max_pair_slots", "lambda_boundary", "lambda_full_film", "sum_mode",
-)
-STATE_SIZE = 8  # WheelState.as_tuple()
-#: The result array: the StepResult aggregates, the event count and the step-end pinion.
-RESULT_FIELDS = (
-    "tau_wheel_mean", "tau_pinion_mean", "W_peak", "delta_peak", "onsets_drive",
-    "onsets_coast", "rhs_evaluations", "events", "pinion_phi", "pinion_w",
-)
-#: rk_outputs writes the values of MESH_OUTPUTS in their declared order.
-OUTPUT_NAMES = tuple(s.name for s in MESH_OUTPUTS)
-_C_OUTPUT_NAMES = (
-    "wheel.tau_mesh", "pinion.tau_mesh", "wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak",
-    "mesh.F", "mesh.delta", "mesh.delta_peak", "mesh.v_impact", "mesh.h", "mesh.lambda",
-    "mesh.psi", "mesh.n_contact", "mesh.impacts_drive", "mesh.impacts_coast",
-    *(f"pair[{k}].W" for k in range(MAX_PAIR_SLOTS)),
-)
-INTEGER_OUTPUTS = tuple(s.name for s in MESH_OUTPUTS if s.kind == "Integer")
+#: Names of the arrays' entries (kernel_layout declares them).
+MODEL_SIZE = layout.MODEL_SIZE
+STATE_FIELDS = layout.STATE_FIELDS
+RESULT_FIELDS = layout.RESULT_FIELDS
+OUTPUT_NAMES = layout.OUTPUT_FIELDS
+INTEGER_OUTPUTS = layout.OUTPUT_INTEGERS
 _ERRLEN = 1024
-
-#: xtol of the release location: the literal in stepper._StepRun._release_time.
-RELEASE_XTOL = 1e-15
-
-
-def _float_sum_mode() -> int | None:
-    """How this Python's sum() adds floats: 0 left to right (<= 3.11), 1 Neumaier's
-    compensated sum (>= 3.12), None unknown (the kernel cannot reproduce it)."""
-    s = sum([0.1] * 10)
-    if s == 0.9999999999999999 and sum([1.0, 1e100, 1.0, -1e100]) == 0.0:
-        return 0
-    if s == 1.0 and sum([1.0, 1e100, 1.0, -1e100]) == 2.0:
-        return 1
-    return None
-
-
-_SUM_MODE = _float_sum_mode()
-
-
-def _brent_rtol() -> float:
-    """The default rtol of roots.brent (the release location uses it)."""
-    code = roots.brent.__code__
-    names = code.co_varnames[:code.co_argcount]
-    defaults = roots.brent.__defaults__
-    return dict(zip(names[-len(defaults):], defaults, strict=True))["rtol"]
+_CODE = {name: i for i, name in enumerate(layout.ERROR_CODES)}
 
 
 # ------------------------------------------------------------------ building and loading
@@ -105,15 +59,22 @@ def default_library_path() -> Path:
 def compile_kernel(out_path, cc: str = "gcc", source=None) -> Path:
     """Compile the kernel into the shared library ``out_path`` (written atomically).
 
-    ``source`` defaults to :data:`SOURCE`.  Raises RuntimeError with the compiler's output
-    when the compiler is missing or fails."""
+    ``source`` defaults to :data:`SOURCE`; it includes ``rattle_kernel_layout.h`` from the
+    folder of :data:`SOURCE`.  Raises RuntimeError when that header is stale (it no longer
+    matches :mod:`kernel_layout`), or with the compiler's output when the compiler is missing
+    or fails."""
     import subprocess  # build time only
 
+    if not layout.header_is_current():
+        raise RuntimeError(
+            f"{layout.HEADER} does not match drive_rattle/kernel_layout.py; regenerate it "
+            "with `python build_fmu.py --update-kernel-header` (every build does it) and "
+            "commit it")
     src = Path(source) if source is not None else SOURCE
     out = Path(out_path)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    cmd = [cc, *CFLAGS, "-o", str(tmp), str(src), "-lm"]
+    cmd = [cc, *CFLAGS, "-I", str(layout.HEADER.parent), "-o", str(tmp), str(src), "-lm"]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     except OSError as exc:
@@ -132,80 +93,54 @@ _LOADED: dict[str, ctypes.CDLL] = {}
 
 def load_kernel(path=None) -> ctypes.CDLL | None:
     """The kernel library at ``path`` (default: :func:`default_library_path`), or None when it
-    is absent, cannot be loaded, was built from a different kernel version, or this Python
-    sums floats in a way the kernel does not reproduce.  Never raises for these."""
+    is absent, cannot be loaded or was built for another layout (its compiled layout hash
+    differs from :data:`kernel_layout.LAYOUT_HASH`).  Never raises for these."""
     p = Path(path) if path is not None else default_library_path()
     key = str(p.resolve()) if p.exists() else str(p)
     lib = _LOADED.get(key)
     if lib is not None:
         return lib
-    if _SUM_MODE is None or not p.is_file():
+    if not p.is_file():
         return None
     try:
         lib = ctypes.CDLL(key)
-        abi = lib.rk_abi_version
-        step, outputs = lib.rk_step, lib.rk_outputs
-        lib.rk_step_v, lib.rk_outputs_v  # noqa: B018 (present?)
+        layout_hash = lib.rk_layout_hash
+        lib.rk_step, lib.rk_outputs  # noqa: B018 (present?)
     except (OSError, AttributeError):
         return None
-    abi.argtypes, abi.restype = [], ctypes.c_int
-    if abi() != ABI_VERSION * 1000 + len(MODEL_FIELDS):
+    layout_hash.argtypes, layout_hash.restype = [], ctypes.c_ulonglong
+    if layout_hash() != layout.LAYOUT_HASH:
         return None
-    dp, dbl = ctypes.POINTER(ctypes.c_double), ctypes.c_double
-    step.argtypes = [dp, dp, dbl, dbl, dbl, dbl, dbl, dp, ctypes.POINTER(ctypes.c_char),
-                     ctypes.c_int]
-    step.restype = ctypes.c_int
-    outputs.argtypes = [dp, dp, dp, dbl, dbl, dp]
-    outputs.restype = ctypes.c_int
-    # The array variants take pointers and an int only; without argtypes ctypes passes the
-    # arrays as pointers with the least per-call work (the hot path).
-    lib.rk_step_v.argtypes, lib.rk_step_v.restype = None, ctypes.c_int
-    lib.rk_outputs_v.argtypes, lib.rk_outputs_v.restype = None, ctypes.c_int
+    # Pointers and an int only: without argtypes ctypes passes the arrays as pointers with
+    # the least per-call work (the hot path).
+    lib.rk_step.argtypes, lib.rk_step.restype = None, ctypes.c_int
+    lib.rk_outputs.argtypes, lib.rk_outputs.restype = None, ctypes.c_int
     _LOADED[key] = lib
     return lib
 
 
 def pack_model(stepper: WheelStepper) -> list[float]:
-    """The model array of ``stepper``: its geometry, mesh constants and parameters exactly as
-    the Python objects hold them (nothing is re-derived in C)."""
-    g, m, p = stepper.geometry, stepper.mesh, stepper.params
-    bps = tuple(g._breakpoints)
-    if len(bps) > 4:
-        raise ValueError(f"{len(bps)} roll breakpoints; the kernel handles at most 4")
-    if _SUM_MODE is None:
-        raise RuntimeError("this Python's float sum() is not reproduced by the kernel")
-    values = {
-        "magic": _MAGIC, "abi": float(ABI_VERSION), "size": float(len(MODEL_FIELDS)),
-        "rb_pinion": g.rb_pinion, "flank_phase": g.flank_phase, "base_pitch": g.base_pitch,
-        "line_span": g.line_span, "s_start": g.s_start, "s_end": g.s_end,
-        "line_length": g.line_length, "normal_factor": g.normal_factor,
-        "half_backlash": g.half_backlash, "n_breakpoints": float(len(bps)),
-        **{f"bp{i}": (bps[i] if i < len(bps) else 0.0) for i in range(4)},
-        "E_star": m.E_star, "arm_wheel": m.arm_wheel, "arm_pinion": m.arm_pinion,
-        "J_wheel": p.J_wheel, "r_y": p.r_y, "length_weighting": float(p.length_weighting),
-        "damping": p.damping, "friction_enabled": float(p.friction_enabled),
-        "friction_form": float(p.friction_form), "shear_speed": float(p.shear_speed),
-        "tau_s": p.tau_s, "eta": p.eta, "sigma": p.sigma, "gamma": p.gamma,
-        "density": p.density, "h_max": p.h_max, "h_comm_max": p.h_comm_max, "m_n": p.m_n,
-        "pen_modules": MAX_PENETRATION_MODULES,
-        "pen_limit": MAX_PENETRATION_MODULES * p.m_n,  # as WheelStepper.step computes it
-        "bp_tol": geometry.BREAKPOINT_TOLERANCE, "grazing_samples": float(GRAZING_SAMPLES),
-        "brent_max_iter": float(roots.MAX_ITERATIONS), "brent_rtol": _brent_rtol(),
-        "release_xtol": RELEASE_XTOL, "max_pair_slots": float(MAX_PAIR_SLOTS),
-        "lambda_boundary": lubrication.LAMBDA_BOUNDARY,
-        "lambda_full_film": lubrication.LAMBDA_FULL_FILM, "sum_mode": float(_SUM_MODE),
-    }
-    return [float(values[name]) for name in MODEL_FIELDS]
+    """The model array of ``stepper`` (:func:`kernel_layout.pack_model`)."""
+    return layout.pack_model(stepper)
 
 
 # ------------------------------------------------------------------ the stepper
-_DoubleState = ctypes.c_double * STATE_SIZE
+_DoubleState = ctypes.c_double * len(STATE_FIELDS)
 _DoubleResult = ctypes.c_double * len(RESULT_FIELDS)
-_DoubleInputs = ctypes.c_double * 5
-_DoubleOutputs = ctypes.c_double * len(_C_OUTPUT_NAMES)
-_pack_inputs = struct.Struct("5d").pack_into  # h, phi_p, w_p, a_p, tau_load
-# The aggregates of `last` and the pinion, into an array of the result layout.
-_pack_last = struct.Struct("4d32x2d").pack_into
+_DoubleInputs = ctypes.c_double * len(layout.INPUT_FIELDS)
+_DoubleOutputs = ctypes.c_double * len(OUTPUT_NAMES)
+_DoubleErrorValues = ctypes.c_double * layout.ERROR_VALUES
+_pack_inputs = struct.Struct(f"{len(layout.INPUT_FIELDS)}d").pack_into
+if layout.INPUT_FIELDS != ("h", "phi_p", "w_p", "a_p", "tau_load"):
+    raise ImportError("kernel_layout.INPUT_FIELDS changed; update CompiledWheelStepper.step")
+# StepResult from the result array: (attribute, index, integer?) of each aggregate.
+_RESULT_AGGREGATES = tuple((name, RESULT_FIELDS.index(name), name in layout.RESULT_INTEGERS)
+                           for name in layout.RESULT_AGGREGATES)
+_R_EVENT_COUNT = RESULT_FIELDS.index("event_count")
+_R_PINION = (RESULT_FIELDS.index("pinion_phi"), RESULT_FIELDS.index("pinion_w"))
+# The `last` array of rk_outputs: the aggregates the outputs read, and the pinion.
+_LAST_FLOATS = tuple((name, RESULT_FIELDS.index(name)) for name in
+                     ("tau_wheel_mean", "tau_pinion_mean", "W_peak", "delta_peak"))
 _INTEGER_INDICES = tuple(OUTPUT_NAMES.index(name) for name in INTEGER_OUTPUTS)
 
 
@@ -229,11 +164,9 @@ class CompiledWheelStepper(WheelStepper):
             raise RuntimeError(
                 f"the compiled rattle kernel {LIBRARY_NAME} is not available "
                 f"(looked in {default_library_path().parent}); use WheelStepper")
-        if OUTPUT_NAMES != _C_OUTPUT_NAMES:
-            raise RuntimeError("interface.MESH_OUTPUTS changed; update the kernel's outputs")
         self._lib = lib
-        self._rk_step_v = lib.rk_step_v
-        self._rk_outputs_v = lib.rk_outputs_v
+        self._rk_step = lib.rk_step
+        self._rk_outputs = lib.rk_outputs
         self._state = _DoubleState()
         self._state_obj: WheelState | None = None
         self._state_dirty = False  # True: the WheelState object is the authoritative state
@@ -241,22 +174,20 @@ class CompiledWheelStepper(WheelStepper):
         self._inputs_b = memoryview(self._inputs).cast("B")
         self._result = _DoubleResult()
         self._result_mv = memoryview(self._result).cast("B").cast("d")
+        self._err_values = _DoubleErrorValues()
         self._last_arr = _DoubleResult()
-        self._last_b = memoryview(self._last_arr).cast("B")
         self._out = _DoubleOutputs()
         self._out_mv = memoryview(self._out).cast("B").cast("d")
         self._err = ctypes.create_string_buffer(_ERRLEN)
         super().__init__(params, phi_p, w_p, tau_load)
-        self._model = (ctypes.c_double * len(MODEL_FIELDS))(*pack_model(self))
+        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
 
     # The state: a WheelState on demand, written back when it may have been changed.
     @property
     def state(self) -> WheelState:
         obj = self._state_obj
         if obj is None:
-            a = self._state
-            obj = self._state_obj = WheelState(a[0], a[1], int(a[2]), a[3], a[4], a[5],
-                                               int(a[6]), int(a[7]))
+            obj = self._state_obj = WheelState.from_tuple(self._state)
         self._state_dirty = True
         return obj
 
@@ -266,11 +197,7 @@ class CompiledWheelStepper(WheelStepper):
         self._state_dirty = True
 
     def _pack_state(self) -> None:
-        s = self._state_obj
-        a = self._state
-        a[0], a[1], a[2], a[3] = s.phi, s.w, s.flank, s.v_impact_drive
-        a[4], a[5], a[6], a[7] = (s.v_impact_coast, s.v_impact_last, s.impacts_drive,
-                                  s.impacts_coast)
+        self._state[:] = self._state_obj.as_tuple()
 
     def step(self, h: float, phi_p: float, w_p: float, a_p: float = 0.0,
              tau_load: float = 0.0) -> StepResult:
@@ -284,15 +211,37 @@ class CompiledWheelStepper(WheelStepper):
             _check_finite(phi_p=phi_p, w_p=w_p, a_p=a_p, tau_load=tau_load)
             check_step_size(h, self.params.h_comm_max)
             raise
-        if self._rk_step_v(self._model, self._state, self._inputs, self._result, self._err,
-                           _ERRLEN):
-            raise ValueError(self._err.value.decode("utf-8", "replace"))
+        code = self._rk_step(self._model, self._state, self._inputs, self._result,
+                             self._err_values, self._err, _ERRLEN)
+        if code:
+            raise self._refusal(code, h, phi_p, w_p, a_p, tau_load)
         self._state_obj = None
         self._state_dirty = False
-        tw, tp, Wp, dp, od, oc, nrhs, _nev, pphi, pw = self._result_mv.tolist()
-        self.pinion = (pphi, pw)
-        self.last = result = StepResult(tw, tp, Wp, dp, int(od), int(oc), [], int(nrhs))
+        values = self._result_mv.tolist()
+        self.pinion = (values[_R_PINION[0]], values[_R_PINION[1]])
+        self.last = result = StepResult(
+            **{name: (int(values[i]) if integer else values[i])
+               for name, i, integer in _RESULT_AGGREGATES})
         return result
+
+    def _refusal(self, code: int, h, phi_p, w_p, a_p, tau_load) -> Exception:
+        """The exception the Python stepper raises for the kernel's return ``code``."""
+        v = self._err_values
+        if code == _CODE["input"]:
+            _check_finite(phi_p=phi_p, w_p=w_p, a_p=a_p, tau_load=tau_load)
+            check_step_size(h, self.params.h_comm_max)
+        elif code == _CODE["diverged"]:
+            return diverged_error(v[0], v[1])
+        elif code == _CODE["penetration"]:
+            return penetration_error(v[0], v[1])
+        elif code == _CODE["too_stiff"]:
+            return stiffness_error(v[0], v[1], v[2], v[3])
+        message = self._err.value.decode("utf-8", "replace")
+        if code == _CODE["value_error"]:
+            return ValueError(message)
+        if code == _CODE["overflow_error"]:
+            return OverflowError(message)
+        return RuntimeError(f"rattle kernel: return code {code}: {message}")
 
     def wheel_angle_speed(self) -> tuple[float, float]:
         """``(state.phi, state.w)`` without building the WheelState (cheap, for hot paths)."""
@@ -304,22 +253,23 @@ class CompiledWheelStepper(WheelStepper):
 
     @property
     def last_event_count(self) -> int:
-        """Number of contact events (onsets and releases) in the last step."""
-        return int(self._result[7])
+        """Number of located events (onsets, releases, friction reversals) in the last step."""
+        return int(self._result[_R_EVENT_COUNT])
 
     def output_values(self) -> list[float]:
         """The values of ``interface.MESH_OUTPUTS`` now, in their declared order (Integer
         outputs as int); cheaper than :meth:`outputs` where the names are known."""
         if self._state_dirty:
             self._pack_state()
-        last = self.last
-        phi_p, w_p = self.pinion
-        _pack_last(self._last_b, 0, last.tau_wheel_mean, last.tau_pinion_mean, last.W_peak,
-                   last.delta_peak, phi_p, w_p)
-        if self._rk_outputs_v(self._model, self._state, self._last_arr, self._out):
+        last, arr = self.last, self._last_arr
+        for name, i in _LAST_FLOATS:
+            arr[i] = getattr(last, name)
+        arr[_R_PINION[0]], arr[_R_PINION[1]] = self.pinion
+        code = self._rk_outputs(self._model, self._state, arr, self._out)
+        if code:
             raise ValueError(
-                f"the mesh outputs cannot be evaluated at pinion.phi = {phi_p!r} rad "
-                f"(wheel.phi = {self._state[0]!r} rad)")
+                f"the mesh outputs cannot be evaluated at pinion.phi = {self.pinion[0]!r} rad "
+                f"(wheel.phi = {self._state[0]!r} rad; kernel code {code})")
         values = self._out_mv.tolist()
         for i in _INTEGER_INDICES:
             values[i] = int(values[i])
@@ -334,7 +284,7 @@ def new_stepper(params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
                 tau_load: float = 0.0, prefer_compiled: bool = True) -> WheelStepper:
     """A :class:`CompiledWheelStepper` when ``prefer_compiled`` and the kernel library loads,
     else the pure-Python :class:`WheelStepper`."""
-    if prefer_compiled and OUTPUT_NAMES == _C_OUTPUT_NAMES:
+    if prefer_compiled:
         lib = load_kernel()
         if lib is not None:
             return CompiledWheelStepper(params, phi_p, w_p, tau_load, library=lib)

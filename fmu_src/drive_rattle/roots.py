@@ -12,6 +12,8 @@ from collections.abc import Callable
 
 #: Iteration cap of :func:`brent`; Brent's method needs at most ~log2(range/xtol)^2 steps.
 MAX_ITERATIONS = 200
+#: Default relative tolerance of :func:`brent`: four units of roundoff (2**-52).
+BRENT_RTOL = 4.0 * 2.220446049250313e-16
 
 
 def brent(
@@ -21,7 +23,7 @@ def brent(
     fa: float | None = None,
     fb: float | None = None,
     xtol: float = 1e-15,
-    rtol: float = 4.0 * 2.220446049250313e-16,
+    rtol: float = BRENT_RTOL,
 ) -> float:
     """Root of ``f`` in ``[a, b]`` where ``f(a)`` and ``f(b)`` differ in sign (or one is 0).
 

@@ -220,20 +220,12 @@ class WheelStepper:
         state, result = run.execute()
         if not (math.isfinite(state.phi) and math.isfinite(state.w)
                 and math.isfinite(result.tau_pinion_mean) and math.isfinite(result.W_peak)):
-            raise ValueError(
-                f"the step diverged (wheel angle {state.phi!r} rad, speed {state.w!r} rad/s); "
-                "the inputs or parameters are beyond what the integrator resolves "
-                "(reduce solver.h_max or the communication step)")
+            raise diverged_error(state.phi, state.w)
         depth = max(result.delta_peak, *(self.mesh.penetration(
             f, phi_p + h * (w_p + 0.5 * a_p * h), state.phi) for f in (DRIVE, COAST)))
         limit = MAX_PENETRATION_MODULES * self.params.m_n
         if depth > limit:
-            raise ValueError(
-                f"the flanks would penetrate {depth * 1e3:.4g} mm in this step, beyond the "
-                f"validity of the Hertz contact (allowed: {limit * 1e3:.4g} mm = "
-                f"{MAX_PENETRATION_MODULES} gear.m_n); the inputs drive the teeth into each "
-                "other far harder than any transmission (check wheel.tau_load and the pinion "
-                "kinematics, or reduce the communication step)")
+            raise penetration_error(depth, limit)
         self.state = state
         self.pinion = (phi_p + w_p * h + 0.5 * a_p * h * h, w_p + a_p * h)
         self.last = result
@@ -483,12 +475,7 @@ class _StepRun:
             return span
         parts = math.ceil(fastest * span / CONTACT_RATE_SAFETY)
         if r.contact_substeps + parts > MAX_CONTACT_SUBSTEPS:
-            raise ValueError(
-                f"the contact is too stiff to resolve: its fastest time scale "
-                f"{1.0 / fastest:.3g} s (stiffness {k:.4g} N/m, damping {c:.4g} N.s/m on the "
-                f"wheel's normal mass {mass:.4g} kg) needs more than {MAX_CONTACT_SUBSTEPS} "
-                "substeps in this step; reduce the communication step, the impact speed "
-                "(inputs) or contact.damping, or raise wheel.J")
+            raise stiffness_error(fastest, k, c, mass)
         return span / parts
 
     def _friction_directions(self, t: float) -> None:
@@ -593,6 +580,38 @@ def check_step_size(h: float, h_max: float) -> None:
         raise ValueError(
             f"step size h = {h!r} s exceeds solver.h_comm_max = {h_max!r} s; allowed: "
             f"(0, {h_max!r}] s")
+
+
+# The refusals' messages, in one place: the compiled kernel (kernel.py) reports the same
+# refusals with these functions from the numbers the C code returns.
+def diverged_error(phi: float, w: float) -> ValueError:
+    """The refusal of a step whose wheel angle ``phi`` or speed ``w`` is not finite."""
+    return ValueError(
+        f"the step diverged (wheel angle {phi!r} rad, speed {w!r} rad/s); "
+        "the inputs or parameters are beyond what the integrator resolves "
+        "(reduce solver.h_max or the communication step)")
+
+
+def penetration_error(depth: float, limit: float) -> ValueError:
+    """The refusal of a step whose penetration ``depth`` [m] exceeds ``limit`` [m]."""
+    return ValueError(
+        f"the flanks would penetrate {depth * 1e3:.4g} mm in this step, beyond the "
+        f"validity of the Hertz contact (allowed: {limit * 1e3:.4g} mm = "
+        f"{MAX_PENETRATION_MODULES} gear.m_n); the inputs drive the teeth into each "
+        "other far harder than any transmission (check wheel.tau_load and the pinion "
+        "kinematics, or reduce the communication step)")
+
+
+def stiffness_error(fastest: float, k: float, c: float, mass: float) -> ValueError:
+    """The refusal of a step whose contact (fastest rate ``fastest`` [1/s] from stiffness
+    ``k`` [N/m] and damping ``c`` [N.s/m] on ``mass`` [kg]) needs more than
+    MAX_CONTACT_SUBSTEPS substeps."""
+    return ValueError(
+        f"the contact is too stiff to resolve: its fastest time scale "
+        f"{1.0 / fastest:.3g} s (stiffness {k:.4g} N/m, damping {c:.4g} N.s/m on the "
+        f"wheel's normal mass {mass:.4g} kg) needs more than {MAX_CONTACT_SUBSTEPS} "
+        "substeps in this step; reduce the communication step, the impact speed "
+        "(inputs) or contact.damping, or raise wheel.J")
 
 
 def _check_finite(**values: float) -> None:

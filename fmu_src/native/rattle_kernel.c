@@ -2,34 +2,44 @@
  * rattle_kernel.c - compiled twin of the pure-Python wheel stepper of drive_rattle.
  *
  * This file is a line-by-line port of
- *   drive_rattle/stepper.py     WheelStepper.step, _StepRun (free flight, RK4 contact substeps,
- *                               breakpoint splitting, release location, peak tracking, guards)
- *   drive_rattle/mesh.py        MeshModel._loads / torques / stiffness_sum / penetration ...
+ *   drive_rattle/stepper.py     WheelStepper.step, contact_flank and _StepRun (free flight,
+ *                               RK4 contact substeps split at breakpoints and subdivided from
+ *                               the contact's time scales, release and friction-reversal
+ *                               location, peak tracking, rattle index, guards)
+ *   drive_rattle/mesh.py        MeshModel._loads / torques / static_force / contact_rates /
+ *                               energy_balance_delta_max / penetration / approach_rate ...
  *   drive_rattle/geometry.py    pairs_at_roll, next_breakpoint, normal_radii, flank_roll
- *   drive_rattle/hertz.py       stiffness, contact_radius, apparent_area,
- *                               energy_balance_delta_max
+ *   drive_rattle/hertz.py       ContactLaw.shape (Chebyshev series, Clenshaw), film_delta_max
  *   drive_rattle/lubrication.py film_thickness, asperity_area, dry_fraction, friction_force
  *   drive_rattle/roots.py       brent, first_crossing
  *   drive_rattle/interface.py   mesh_outputs
  * that reproduces the Python results BIT FOR BIT (docs/kernel.md).  The Python code is the
  * reference: every expression below performs the same IEEE operations in the same order as
  * the Python line it ports (Python evaluates a + b + c as (a + b) + c, x ** y is pow(x, y),
- * math.sqrt is sqrt, an int operand is converted to double first).  Do not "simplify" an
- * expression here (x*sqrt(x) for x**1.5, fmax for max(), hoisting a product, ...): a one-ulp
- * difference changes the impact sequence of the chaotic rattle motion.
+ * math.sqrt is sqrt, math.log is log, math.exp is exp, an int operand is converted to double
+ * first).  Do not "simplify" an expression here (x*sqrt(x) for x**1.5, fmax for max(),
+ * hoisting a product, ...): a one-ulp difference changes the impact sequence of the chaotic
+ * rattle motion.
  *
  * Python's max(a, b) returns a unless b > a (so max(nan, x) is nan, max(x, nan) is x and
- * max(-0.0, 0.0) is -0.0); PY_MAX reproduces that, fmax would not.
+ * max(-0.0, 0.0) is -0.0); py_max reproduces that, fmax would not.
  *
  * Build (kernel.compile_kernel does this):
  *   gcc -std=c99 -O2 -fno-fast-math -ffp-contract=off -fPIC -shared -o _rattle_kernel.so \
  *       rattle_kernel.c -lm
  * -ffp-contract=off is required: a fused multiply-add rounds once instead of twice.
  *
- * The geometry and the derived constants are computed once in Python (kernel.pack_model) and
- * passed as a flat array of doubles (layout: enum below, mirrored in kernel.py MODEL_FIELDS).
- * The state is an array of 8 doubles mirroring stepper.WheelState (flank and the counters
- * are integers stored exactly in doubles, int64 inside).
+ * The layouts of the arrays shared with Python (model, state, result, outputs, inputs), the
+ * return codes and the codes of flanks, laws and friction forms come from
+ * rattle_kernel_layout.h, which drive_rattle/kernel_layout.py generates; RK_LAYOUT_HASH
+ * identifies that layout.  The geometry, the contact law's Chebyshev series and the module
+ * constants are computed once in Python (kernel_layout.pack_model) and passed in the model
+ * array: nothing is derived again here.
+ *
+ * Refusals: where the Python step raises, rk_step returns a code, leaves state and result
+ * unchanged and passes the numbers of the message (RK_ERR_DIVERGED, _PENETRATION, _TOO_STIFF)
+ * or the message itself (RK_ERR_VALUE_ERROR, _OVERFLOW_ERROR: what a math function or
+ * int() raises in Python); kernel.py raises the same exception with the same text.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -38,66 +48,39 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "rattle_kernel_layout.h"
+
 #define EXPORT __attribute__((visibility("default")))
 
-/* Bump together with kernel.py ABI_VERSION whenever a layout below changes. */
-#define RK_ABI_VERSION 1
-#define RK_MAGIC 7261747465.0 /* "rattle" */
-
 #define PI 3.141592653589793 /* math.pi */
-#define DRIVE 1
-#define COAST (-1)
-#define N_SLOTS 8 /* parameters.MAX_PAIR_SLOTS, checked against the model array */
+#define N_SLOTS RK_N_SLOTS
 /* Largest |pair number| handled: pair numbers are exact integers in doubles below 2**53. */
 #define PAIR_NUMBER_LIMIT 4503599627370496.0 /* 2**52 */
 /* Consecutive main-loop iterations without progress in time before the step is refused
  * (the Python loop would not terminate). */
 #define STALL_LIMIT 1000000
 
-/* ------------------------------------------------------------------ layouts */
-enum {
-    M_MAGIC, M_ABI, M_SIZE,
-    /* geometry.HelicalPairGeometry */
-    M_RB_PINION, M_FLANK_PHASE, M_BASE_PITCH, M_LINE_SPAN, M_S_START, M_S_END,
-    M_LINE_LENGTH, M_NORMAL_FACTOR, M_HALF_BACKLASH, M_N_BREAKPOINTS,
-    M_BP0, M_BP1, M_BP2, M_BP3,
-    /* mesh.MeshModel */
-    M_E_STAR, M_ARM_WHEEL, M_ARM_PINION,
-    /* parameters.MeshParameters */
-    M_J_WHEEL, M_R_Y, M_LENGTH_WEIGHTING, M_DAMPING, M_FRICTION_ENABLED, M_FRICTION_FORM,
-    M_SHEAR_SPEED, M_TAU_S, M_ETA, M_SIGMA, M_GAMMA, M_DENSITY, M_H_MAX, M_H_COMM_MAX, M_M_N,
-    /* module constants */
-    M_PEN_MODULES, M_PEN_LIMIT, M_BP_TOL, M_GRAZING_SAMPLES, M_BRENT_MAX_ITER, M_BRENT_RTOL,
-    M_RELEASE_XTOL, M_MAX_PAIR_SLOTS, M_LAMBDA_BOUNDARY, M_LAMBDA_FULL_FILM, M_SUM_MODE,
-    M_COUNT
-};
+/* The pair block of the outputs is contiguous: out[O_PAIR_0_W + k] is pair[k].W. */
+typedef char pair_outputs_are_contiguous[O_PAIR_7_W - O_PAIR_0_W == N_SLOTS - 1 ? 1 : -1];
 
-enum { S_PHI, S_W, S_FLANK, S_V_DRIVE, S_V_COAST, S_V_LAST, S_N_DRIVE, S_N_COAST, S_COUNT };
-
-enum {
-    R_TAU_WHEEL, R_TAU_PINION, R_W_PEAK, R_DELTA_PEAK, R_ONSETS_DRIVE, R_ONSETS_COAST,
-    R_RHS_EVALUATIONS, R_EVENTS, R_PINION_PHI, R_PINION_W, R_COUNT
-};
-
-enum {
-    O_TAU_WHEEL, O_TAU_PINION, O_PHI, O_W, O_W_NOW, O_W_PEAK, O_F, O_DELTA, O_DELTA_PEAK,
-    O_V_IMPACT, O_H, O_LAMBDA, O_PSI, O_N_CONTACT, O_IMPACTS_DRIVE, O_IMPACTS_COAST, O_PAIR0,
-    O_COUNT = O_PAIR0 + N_SLOTS
-};
-
+/* ------------------------------------------------------------------ model and state */
 typedef struct {
     double rb_pinion, flank_phase, base_pitch, line_span, s_start, s_end, line_length;
-    double normal_factor, half_backlash;
+    double normal_factor, half_backlash, crown_factor;
     int n_bp;
-    double bp[4];
-    double E_star, arm_wheel, arm_pinion;
-    double J, r_y, damping, tau_s, eta, sigma, gamma, density, h_max, h_comm_max, m_n;
-    int length_weighting, friction_enabled;
+    double bp[RK_MAX_BREAKPOINTS];
+    double cos_alpha_t, sin_alpha_t, sin_beta_b;
+    double E_star, arm_wheel, arm_pinion, normal_mass, damping;
+    int64_t law;
+    double law_E_star, r_y, t_mid, t_scale;
+    int n_cheb;
+    const double *kappa, *alpha, *zeta; /* into the model array */
+    double J, tau_s, eta, sigma, gamma, density, h_max, h_comm_max, rattle_time;
+    int friction_enabled;
     int64_t friction_form, shear_speed;
-    double pen_modules, pen_limit, bp_tol, brent_rtol, release_xtol;
-    int64_t grazing_samples, brent_max_iter;
-    double lambda_boundary, lambda_full_film;
-    int sum_mode; /* 0: left-to-right float sum (Python <= 3.11), 1: Neumaier (>= 3.12) */
+    double pen_limit, bp_tol, brent_rtol, event_xtol;
+    int64_t grazing_samples, brent_max_iter, max_contact_substeps;
+    double lambda_boundary, lambda_full_film, contact_rate_safety;
     double sqrt_gamma_sigma; /* math.sqrt(gamma / sigma), the same value every call */
 } Model;
 
@@ -106,16 +89,19 @@ typedef struct {
     int64_t flank;
     double v_drive, v_coast, v_last;
     int64_t n_drive, n_coast;
+    double rattle_index;
 } State;
 
-/* Error exit: the message goes to err, then longjmp back to the entry point. */
+/* Error exit: code, message and values, then longjmp back to the entry point. */
 typedef struct {
     jmp_buf jb;
+    int code;
+    double values[RK_ERROR_VALUES];
     char* err;
     int errlen;
 } Fail;
 
-static void fail(Fail* f, const char* fmt, ...)
+static void fail_message(Fail* f, int code, const char* fmt, ...)
 {
     if (f->err != NULL && f->errlen > 0) {
         va_list ap;
@@ -123,6 +109,17 @@ static void fail(Fail* f, const char* fmt, ...)
         vsnprintf(f->err, (size_t)f->errlen, fmt, ap);
         va_end(ap);
     }
+    f->code = code;
+    longjmp(f->jb, 1);
+}
+
+static void fail_values(Fail* f, int code, double v0, double v1, double v2, double v3)
+{
+    f->code = code;
+    f->values[0] = v0;
+    f->values[1] = v1;
+    f->values[2] = v2;
+    f->values[3] = v3;
     longjmp(f->jb, 1);
 }
 
@@ -137,57 +134,81 @@ static void set_err(char* err, int errlen, const char* fmt, ...)
 }
 
 /* ------------------------------------------------------------------ Python semantics */
-/* For messages: printf writes a NaN with its sign bit as "-nan", Python's repr as "nan". */
-static inline double unsigned_nan(double x) { return isnan(x) ? fabs(x) : x; }
-
 /* max(a, b): a unless b > a. */
 static inline double py_max(double a, double b) { return b > a ? b : a; }
 
-/* x ** y for the exponents used (0.5, 1/3, 1.5): CPython's float_pow calls pow(x, y) for a
- * positive base; a finite base with an infinite result raises OverflowError; a negative base
- * with a fractional exponent gives a complex number (never reached: the bases are
- * penetrations, loads and lengths > 0). */
+/* x ** y for the exponents used (1/3, 2/3): CPython's float_pow calls pow(x, y) for a
+ * positive finite base and raises OverflowError when a finite base gives an infinite
+ * result; a negative base with a fractional exponent would give a complex number (never
+ * reached: the bases are stiffnesses, loads and lengths > 0). */
 static inline double py_pow(Fail* f, double x, double y)
 {
     if (x < 0.0)
-        fail(f, "negative number %.17g raised to the fractional power %.17g", x, y);
+        fail_message(f, RK_ERR_VALUE_ERROR,
+                     "negative number %.17g raised to the fractional power %.17g", x, y);
     double r = pow(x, y);
     if (isinf(r) && isfinite(x))
-        fail(f, "math range error: %.17g ** %.17g overflows", x, y);
+        fail_message(f, RK_ERR_OVERFLOW_ERROR, "(34, 'Numerical result out of range')");
     return r;
 }
 
-/* math.floor / math.ceil return ints; NaN raises ValueError, an infinity OverflowError.  The
- * pair and breakpoint arithmetic keeps the integer in a double: float(int(floor(x)) + 1)
- * equals floor(x) + 1.0 for every finite x (both are the correctly rounded exact sum). */
+/* math.sqrt / math.log / math.exp with CPython's domain and range errors. */
+static inline double py_sqrt(Fail* f, double x)
+{
+    if (x < 0.0)
+        fail_message(f, RK_ERR_VALUE_ERROR, "math domain error");
+    return sqrt(x);
+}
+
+static inline double py_log(Fail* f, double x)
+{
+    if (x <= 0.0)
+        fail_message(f, RK_ERR_VALUE_ERROR, "math domain error");
+    return log(x);
+}
+
+static inline double py_exp(Fail* f, double x)
+{
+    double r = exp(x);
+    if (isinf(r) && isfinite(x))
+        fail_message(f, RK_ERR_OVERFLOW_ERROR, "math range error");
+    return r;
+}
+
+/* math.floor / math.ceil / int() of a float that is not finite. */
+static void not_integral(Fail* f, double x)
+{
+    if (isnan(x))
+        fail_message(f, RK_ERR_VALUE_ERROR, "cannot convert float NaN to integer");
+    fail_message(f, RK_ERR_OVERFLOW_ERROR, "cannot convert float infinity to integer");
+}
+
+/* math.floor / math.ceil return ints.  The pair and breakpoint arithmetic keeps the integer
+ * in a double: float(int(floor(x)) + 1) equals floor(x) + 1.0 for every finite x (both are
+ * the correctly rounded exact sum). */
 static inline double py_floor(Fail* f, double x)
 {
     if (!isfinite(x))
-        fail(f, "cannot convert float %.17g to integer (math.floor)", x);
+        not_integral(f, x);
     return floor(x);
 }
 
 static inline double py_ceil(Fail* f, double x)
 {
     if (!isfinite(x))
-        fail(f, "cannot convert float %.17g to integer (math.ceil)", x);
+        not_integral(f, x);
     return ceil(x);
 }
 
-/* ------------------------------------------------------------------ model */
+/* ------------------------------------------------------------------ unpacking */
 static int unpack_model(const double* a, Model* m, char* err, int errlen)
 {
-    if (a == NULL || a[M_MAGIC] != RK_MAGIC || a[M_ABI] != (double)RK_ABI_VERSION
+    if (a == NULL || a[M_MAGIC] != RK_MAGIC || a[M_LAYOUT_HASH] != (double)RK_LAYOUT_HASH
         || a[M_SIZE] != (double)M_COUNT) {
         set_err(err, errlen,
-                "rattle kernel: model array layout mismatch (kernel ABI %d with %d fields; "
-                "rebuild _rattle_kernel.so from the sources of this version)",
-                RK_ABI_VERSION, (int)M_COUNT);
-        return 0;
-    }
-    if (a[M_MAX_PAIR_SLOTS] != (double)N_SLOTS) {
-        set_err(err, errlen, "rattle kernel: MAX_PAIR_SLOTS = %g, the kernel has %d",
-                a[M_MAX_PAIR_SLOTS], N_SLOTS);
+                "rattle kernel: model array layout mismatch (kernel layout %llu with %d "
+                "fields; rebuild _rattle_kernel.so from the sources of this version)",
+                (unsigned long long)RK_LAYOUT_HASH, (int)M_COUNT);
         return 0;
     }
     m->rb_pinion = a[M_RB_PINION];
@@ -199,20 +220,34 @@ static int unpack_model(const double* a, Model* m, char* err, int errlen)
     m->line_length = a[M_LINE_LENGTH];
     m->normal_factor = a[M_NORMAL_FACTOR];
     m->half_backlash = a[M_HALF_BACKLASH];
+    m->crown_factor = a[M_CROWN_FACTOR];
     m->n_bp = (int)a[M_N_BREAKPOINTS];
-    if (m->n_bp < 0 || m->n_bp > 4) {
-        set_err(err, errlen, "rattle kernel: %d breakpoints (at most 4)", m->n_bp);
+    m->n_cheb = (int)a[M_CHEBYSHEV_TERMS];
+    m->law = (int64_t)a[M_LAW];
+    if (m->n_bp < 0 || m->n_bp > M_BREAKPOINTS_LENGTH || m->n_cheb < 0
+        || m->n_cheb > M_KAPPA_LENGTH || (m->law == RK_LAW_EXACT && m->n_cheb < 1)) {
+        set_err(err, errlen, "rattle kernel: %d breakpoints, %d Chebyshev terms, law %lld",
+                m->n_bp, m->n_cheb, (long long)m->law);
         return 0;
     }
-    for (int i = 0; i < 4; i++)
-        m->bp[i] = a[M_BP0 + i];
+    for (int i = 0; i < RK_MAX_BREAKPOINTS; i++)
+        m->bp[i] = a[M_BREAKPOINTS + i];
+    m->cos_alpha_t = a[M_COS_ALPHA_T];
+    m->sin_alpha_t = a[M_SIN_ALPHA_T];
+    m->sin_beta_b = a[M_SIN_BETA_B];
     m->E_star = a[M_E_STAR];
     m->arm_wheel = a[M_ARM_WHEEL];
     m->arm_pinion = a[M_ARM_PINION];
-    m->J = a[M_J_WHEEL];
-    m->r_y = a[M_R_Y];
-    m->length_weighting = a[M_LENGTH_WEIGHTING] != 0.0;
+    m->normal_mass = a[M_NORMAL_MASS];
     m->damping = a[M_DAMPING];
+    m->law_E_star = a[M_LAW_E_STAR];
+    m->r_y = a[M_R_Y];
+    m->t_mid = a[M_T_MID];
+    m->t_scale = a[M_T_SCALE];
+    m->kappa = a + M_KAPPA;
+    m->alpha = a + M_ALPHA;
+    m->zeta = a + M_ZETA;
+    m->J = a[M_J_WHEEL];
     m->friction_enabled = a[M_FRICTION_ENABLED] != 0.0;
     m->friction_form = (int64_t)a[M_FRICTION_FORM];
     m->shear_speed = (int64_t)a[M_SHEAR_SPEED];
@@ -223,17 +258,17 @@ static int unpack_model(const double* a, Model* m, char* err, int errlen)
     m->density = a[M_DENSITY];
     m->h_max = a[M_H_MAX];
     m->h_comm_max = a[M_H_COMM_MAX];
-    m->m_n = a[M_M_N];
-    m->pen_modules = a[M_PEN_MODULES];
-    m->pen_limit = a[M_PEN_LIMIT];
-    m->bp_tol = a[M_BP_TOL];
+    m->rattle_time = a[M_RATTLE_TIME];
+    m->pen_limit = a[M_PENETRATION_LIMIT];
+    m->bp_tol = a[M_BREAKPOINT_TOLERANCE];
     m->grazing_samples = (int64_t)a[M_GRAZING_SAMPLES];
-    m->brent_max_iter = (int64_t)a[M_BRENT_MAX_ITER];
+    m->brent_max_iter = (int64_t)a[M_BRENT_MAX_ITERATIONS];
     m->brent_rtol = a[M_BRENT_RTOL];
-    m->release_xtol = a[M_RELEASE_XTOL];
+    m->event_xtol = a[M_EVENT_XTOL];
     m->lambda_boundary = a[M_LAMBDA_BOUNDARY];
     m->lambda_full_film = a[M_LAMBDA_FULL_FILM];
-    m->sum_mode = (int)a[M_SUM_MODE];
+    m->contact_rate_safety = a[M_CONTACT_RATE_SAFETY];
+    m->max_contact_substeps = (int64_t)a[M_MAX_CONTACT_SUBSTEPS];
     m->sqrt_gamma_sigma = sqrt(m->gamma / m->sigma);
     return 1;
 }
@@ -243,11 +278,12 @@ static void unpack_state(const double* a, State* s)
     s->phi = a[S_PHI];
     s->w = a[S_W];
     s->flank = (int64_t)a[S_FLANK];
-    s->v_drive = a[S_V_DRIVE];
-    s->v_coast = a[S_V_COAST];
-    s->v_last = a[S_V_LAST];
-    s->n_drive = (int64_t)a[S_N_DRIVE];
-    s->n_coast = (int64_t)a[S_N_COAST];
+    s->v_drive = a[S_V_IMPACT_DRIVE];
+    s->v_coast = a[S_V_IMPACT_COAST];
+    s->v_last = a[S_V_IMPACT_LAST];
+    s->n_drive = (int64_t)a[S_IMPACTS_DRIVE];
+    s->n_coast = (int64_t)a[S_IMPACTS_COAST];
+    s->rattle_index = a[S_RATTLE_INDEX];
 }
 
 static void pack_state(const State* s, double* a)
@@ -255,19 +291,25 @@ static void pack_state(const State* s, double* a)
     a[S_PHI] = s->phi;
     a[S_W] = s->w;
     a[S_FLANK] = (double)s->flank;
-    a[S_V_DRIVE] = s->v_drive;
-    a[S_V_COAST] = s->v_coast;
-    a[S_V_LAST] = s->v_last;
-    a[S_N_DRIVE] = (double)s->n_drive;
-    a[S_N_COAST] = (double)s->n_coast;
+    a[S_V_IMPACT_DRIVE] = s->v_drive;
+    a[S_V_IMPACT_COAST] = s->v_coast;
+    a[S_V_IMPACT_LAST] = s->v_last;
+    a[S_IMPACTS_DRIVE] = (double)s->n_drive;
+    a[S_IMPACTS_COAST] = (double)s->n_coast;
+    a[S_RATTLE_INDEX] = s->rattle_index;
 }
 
 /* ------------------------------------------------------------------ roots.py */
-/* first_crossing: smallest t in (0, t_max] where c0 + c1 t + c2 t^2 crosses zero upwards
+/* first_crossing: smallest t in [0, t_max] where c0 + c1 t + c2 t^2 crosses zero upwards
  * (rising) or downwards; returns 1 and *out, or 0 for None. */
 static int first_crossing(double c0, double c1, double c2, double t_max, int rising,
                           double* out)
 {
+    double sign = rising ? 1.0 : -1.0;
+    if (c0 == 0.0 && (sign * c1 > 0.0 || (c1 == 0.0 && sign * c2 > 0.0))) {
+        *out = 0.0;
+        return 1;
+    }
     double roots[2];
     int n = 0;
     if (c2 == 0.0) {
@@ -317,8 +359,9 @@ static double brent(Fail* f, RootFn fn, void* ctx, double a, double b, double fa
     if (fb == 0.0)
         return b;
     if ((fa > 0.0) == (fb > 0.0))
-        fail(f, "brent: f(%.17g) = %.17g and f(%.17g) = %.17g do not bracket a root", a, fa, b,
-             fb);
+        fail_message(f, RK_ERR_VALUE_ERROR,
+                     "brent: f(%.17g) = %.17g and f(%.17g) = %.17g do not bracket a root", a,
+                     fa, b, fb);
     double c = a, fc = fa;
     double d = b - a, e = b - a;
     for (int64_t it = 0; it < max_iter; it++) {
@@ -380,54 +423,95 @@ static double brent(Fail* f, RootFn fn, void* ctx, double a, double b, double fa
     return b;
 }
 
+/* ------------------------------------------------------------------ hertz.py */
+/* chebyshev_value: Clenshaw's recurrence for sum_j c_j T_j(t). */
+static inline double chebyshev_value(const double* c, int n, double t)
+{
+    double b1 = 0.0;
+    double b2 = 0.0;
+    int j = n - 1;
+    while (j > 0) {
+        double next = 2.0 * t * b1 - b2 + c[j];
+        b2 = b1;
+        b1 = next;
+        j -= 1;
+    }
+    return t * b1 - b2 + c[0];
+}
+
+/* ContactLaw.shape(r_x): K, ka, kz (R is not used by the stepper). */
+static void law_shape(const Model* M, Fail* f, double r_x, double* K, double* ka, double* kz)
+{
+    double r_y = M->r_y;
+    double E = M->law_E_star;
+    if (M->law == RK_LAW_EXACT) {
+        double R, rho;
+        if (r_y >= r_x) {
+            R = r_y;
+            rho = r_y / r_x;
+        }
+        else {
+            R = r_x;
+            rho = r_x / r_y;
+        }
+        double t = (py_log(f, rho) - M->t_mid) * M->t_scale;
+        *K = E * py_sqrt(f, R) * chebyshev_value(M->kappa, M->n_cheb, t);
+        double c = py_pow(f, R / E, 1.0 / 3.0);
+        *ka = c * chebyshev_value(M->alpha, M->n_cheb, t);
+        *kz = c * c * chebyshev_value(M->zeta, M->n_cheb, t);
+        return;
+    }
+    *K = (4.0 / 3.0) * E * py_sqrt(f, py_sqrt(f, r_x * r_y));
+    double g = py_pow(f, 3.0 * py_sqrt(f, r_x * r_y) / (4.0 * E), 1.0 / 3.0);
+    double stretch;
+    if (r_y >= r_x)
+        stretch = py_pow(f, r_y / r_x, 1.0 / 3.0);
+    else
+        stretch = py_pow(f, r_x / r_y, 1.0 / 3.0);
+    *ka = g * stretch;
+    *kz = PI * g * g;
+}
+
+/* hertz.film_delta_max */
+static inline double film_delta_max(Fail* f, double v, double K, double r_x, double ka,
+                                    double density)
+{
+    double C = 2.0 * density * PI * r_x * r_x * ka * py_pow(f, K, 1.0 / 3.0);
+    return fabs(v) * py_sqrt(f, 5.0 * C / (4.0 * K));
+}
+
+/* ------------------------------------------------------------------ lubrication.py */
+static inline double dry_fraction(const Model* M, double lam)
+{
+    if (lam <= M->lambda_boundary)
+        return 1.0;
+    if (lam >= M->lambda_full_film)
+        return 0.0;
+    return (M->lambda_full_film - lam) / (M->lambda_full_film - M->lambda_boundary);
+}
+
+static inline double friction_force(const Model* M, Fail* f, double psi, double A_e, double A,
+                                    double U, double h)
+{
+    double viscous = psi < 1.0 ? M->eta * fabs(U) / h : 0.0;
+    switch (M->friction_form) {
+    case RK_FORM_LOAD_SHARING:
+        return psi * A_e * M->tau_s + (1.0 - psi) * A * viscous;
+    case RK_FORM_APPARENT_AREA:
+        return A * (psi * M->tau_s + (1.0 - psi) * viscous);
+    case RK_FORM_AS_PRINTED:
+        return A_e * (psi * M->tau_s + (1.0 - psi) * viscous);
+    default:
+        fail_message(f, RK_ERR_VALUE_ERROR, "friction form %lld unknown; allowed: 0, 1, 2",
+                     (long long)M->friction_form);
+    }
+    return 0.0;
+}
+
 /* ------------------------------------------------------------------ geometry.py */
 static inline double flank_roll(const Model* M, int64_t flank, double phi_p)
 {
     return M->flank_phase + (double)flank * M->rb_pinion * phi_p;
-}
-
-/* Pair numbers n_lo..n_hi of pairs_at_roll(u). */
-static void pair_range(const Model* M, Fail* f, double u, double* n_lo, double* n_hi)
-{
-    double pb = M->base_pitch;
-    double half = 0.5 * M->line_span;
-    double lo = py_floor(f, (u - M->s_end - half) / pb) + 1.0;
-    double hi = py_ceil(f, (u - M->s_start + half) / pb) - 1.0;
-    if (!(fabs(lo) < PAIR_NUMBER_LIMIT && fabs(hi) < PAIR_NUMBER_LIMIT))
-        fail(f, "roll coordinate %.17g m beyond the kernel's range (pair number %.17g; "
-                "|pinion angle| too large)", u, lo);
-    *n_lo = lo;
-    *n_hi = hi;
-}
-
-/* Pair n of pairs_at_roll(u): returns 1 with (slot, s, fraction) when in the zone. */
-static inline int pair_at(const Model* M, double u, double n, int64_t* slot, double* s_out,
-                          double* frac)
-{
-    double pb = M->base_pitch;
-    double half = 0.5 * M->line_span;
-    double s0 = M->s_start, s1 = M->s_end;
-    double s = u - n * pb;
-    if (half > 0.0) {
-        double lo = s - half > s0 ? s - half : s0;
-        double hi = s + half < s1 ? s + half : s1;
-        if (hi > lo) {
-            int64_t k = (int64_t)n % N_SLOTS;
-            *slot = k < 0 ? k + N_SLOTS : k;
-            *s_out = 0.5 * (lo + hi);
-            *frac = (hi - lo) / (2.0 * half);
-            return 1;
-        }
-        return 0;
-    }
-    if (s0 < s && s < s1) {
-        int64_t k = (int64_t)n % N_SLOTS;
-        *slot = k < 0 ? k + N_SLOTS : k;
-        *s_out = s;
-        *frac = 1.0;
-        return 1;
-    }
-    return 0;
 }
 
 /* next_breakpoint: returns 1 and *out, or 0 for None. */
@@ -464,112 +548,96 @@ static int next_breakpoint(const Model* M, Fail* f, double u_a, double u_b, doub
     return found;
 }
 
-/* ------------------------------------------------------------------ mesh.py, hertz.py */
-static inline double penetration(const Model* M, int64_t flank, double phi_p, double phi_w)
-{
-    return (double)flank * (M->arm_pinion * phi_p - M->arm_wheel * phi_w) - M->half_backlash;
-}
-
-static inline double approach_rate(const Model* M, int64_t flank, double w_p, double w_w)
-{
-    return (double)flank * (M->arm_pinion * w_p - M->arm_wheel * w_w);
-}
-
-/* MeshModel._pair_stiffness: (r_x, K_full, K). */
-static inline void pair_stiffness(const Model* M, double s, double fraction, double* r_x,
-                                  double* K_full, double* K)
-{
-    double c = M->normal_factor;
-    double rp = s / c;
-    double rw = (M->line_length - s) / c;
-    double rx = rp * rw / (rp + rw);
-    double kf = (4.0 / 3.0) * M->E_star * sqrt(sqrt(rx * M->r_y));
-    *r_x = rx;
-    *K_full = kf;
-    *K = M->length_weighting ? kf * fraction : kf;
-}
-
-/* hertz.energy_balance_delta_max */
-static inline double energy_balance_delta_max(const Model* M, Fail* f, double v, double K,
-                                              double r_x)
-{
-    double C = 2.0 * M->density * PI * r_x * r_x
-               * py_pow(f, 3.0 * K * M->r_y / (4.0 * M->E_star), 1.0 / 3.0);
-    return fabs(v) * sqrt(5.0 * C / (4.0 * K));
-}
-
-/* lubrication.dry_fraction */
-static inline double dry_fraction(const Model* M, double lam, double A_e, double A)
-{
-    if (lam <= M->lambda_boundary)
-        return 1.0;
-    if (lam >= M->lambda_full_film || A <= 0.0)
-        return 0.0;
-    double psi = A_e / A;
-    return psi < 1.0 ? psi : 1.0;
-}
-
-/* lubrication.friction_force */
-static inline double friction_force(const Model* M, Fail* f, double psi, double A_e, double A,
-                                    double U, double h)
-{
-    double viscous = psi < 1.0 ? M->eta * fabs(U) / h : 0.0;
-    switch (M->friction_form) {
-    case 0:
-        return psi * A_e * M->tau_s + (1.0 - psi) * A * viscous;
-    case 1:
-        return A * (psi * M->tau_s + (1.0 - psi) * viscous);
-    case 2:
-        return A_e * (psi * M->tau_s + (1.0 - psi) * viscous);
-    default:
-        fail(f, "friction form %lld unknown; allowed: 0, 1, 2", (long long)M->friction_form);
-    }
-    return 0.0;
-}
-
-/* The tooth pairs in the zone of action at roll coordinate u with their pure functions of
- * (u, parameters): what geometry.pairs_at_roll and MeshModel._pair_stiffness give, plus
- * sqrt(r_x r_y) of hertz.contact_radius and, per impact speed, the eq. 7 delta_max.  The
- * integrator evaluates the right-hand side twice at t + h/2 of each RK4 step and usually at
- * the end of one substep and the start of the next, so a step keeps a few of these sets:
- * each value is computed by the same expression as without the cache, only fewer times. */
+/* The tooth pairs in the zone of action at roll coordinate u (geometry.pairs_at_roll) with
+ * the pure functions of them the stepper needs: the contact law's shape at the pair's radius
+ * (computed on first use) and, per impact speed, the eq. 7 delta_max.  The integrator
+ * evaluates the pairs twice at t + h/2 of each RK4 step and at the start of a substep for the
+ * right-hand side, the substep length and the friction directions, so a step keeps a few of
+ * these sets: each value is computed by the same expression as without the cache, only fewer
+ * times. */
 #define PAIR_MAX 16
 typedef struct {
     double u;
     int n;
     int64_t slot[PAIR_MAX];
-    double s[PAIR_MAX], frac[PAIR_MAX], r_x[PAIR_MAX], K_full[PAIR_MAX], K[PAIR_MAX];
-    double sqrt_rxry[PAIR_MAX];
-    double d_max_v;          /* impact speed of the d_max entries */
-    int d_max_ok[PAIR_MAX];  /* d_max[i] computed for d_max_v */
+    double s[PAIR_MAX], offset[PAIR_MAX], dg[PAIR_MAX];
+    int shape_ok[PAIR_MAX];
+    double r_x[PAIR_MAX], K[PAIR_MAX], ka[PAIR_MAX], kz[PAIR_MAX];
+    double d_max_v;         /* impact speed of the d_max entries */
+    int d_max_ok[PAIR_MAX]; /* d_max[i] computed for d_max_v */
     double d_max[PAIR_MAX];
 } PairSet;
 
+static inline void pairset_add(Fail* f, PairSet* ps, double n, double s, double g, double dg)
+{
+    if (ps->n == PAIR_MAX)
+        fail_message(f, RK_ERR_VALUE_ERROR, "more than %d tooth pairs in the zone of action",
+                     PAIR_MAX);
+    int i = ps->n++;
+    int64_t k = (int64_t)n % N_SLOTS; /* n % MAX_PAIR_SLOTS (Python: never negative) */
+    ps->slot[i] = k < 0 ? k + N_SLOTS : k;
+    ps->s[i] = s;
+    ps->offset[i] = g;
+    ps->dg[i] = dg;
+    ps->shape_ok[i] = 0;
+    ps->d_max_ok[i] = 0;
+}
+
+/* geometry.pairs_at_roll */
 static void pairset_build(const Model* M, Fail* f, double u, PairSet* ps)
 {
-    double n_lo, n_hi;
-    pair_range(M, f, u, &n_lo, &n_hi);
+    double pb = M->base_pitch;
+    double half = 0.5 * M->line_span;
+    double s0 = M->s_start, s1 = M->s_end;
+    double k = M->crown_factor;
+    double n_lo = py_floor(f, (u - s1 - half) / pb) + 1.0;
+    double n_hi = py_ceil(f, (u - s0 + half) / pb) - 1.0;
+    if (!(fabs(n_lo) < PAIR_NUMBER_LIMIT && fabs(n_hi) < PAIR_NUMBER_LIMIT))
+        fail_message(f, RK_ERR_VALUE_ERROR,
+                     "roll coordinate %.17g m beyond the kernel's range (pair number %.17g; "
+                     "|pinion angle| too large)", u, n_lo);
     ps->u = u;
     ps->n = 0;
     ps->d_max_v = 0.0;
     for (double n = n_lo; n <= n_hi; n += 1.0) {
-        int64_t slot;
-        double s, frac;
-        if (!pair_at(M, u, n, &slot, &s, &frac))
-            continue;
-        if (ps->n == PAIR_MAX)
-            fail(f, "more than %d tooth pairs in the zone of action", PAIR_MAX);
-        int i = ps->n++;
-        ps->slot[i] = slot;
-        ps->s[i] = s;
-        ps->frac[i] = frac;
-        pair_stiffness(M, s, frac, &ps->r_x[i], &ps->K_full[i], &ps->K[i]);
-        ps->sqrt_rxry[i] = sqrt(ps->r_x[i] * M->r_y);
-        ps->d_max_ok[i] = 0;
+        double s = u - n * pb; /* roll coordinate of the pair's face centre */
+        if (half > 0.0) {
+            if (s + half > s0 && s - half < s1) {
+                if (s < s0) {
+                    double d = s0 - s;
+                    pairset_add(f, ps, n, s0, k * d * d, -2.0 * k * d);
+                }
+                else if (s > s1) {
+                    double d = s - s1;
+                    pairset_add(f, ps, n, s1, k * d * d, 2.0 * k * d);
+                }
+                else {
+                    pairset_add(f, ps, n, s, 0.0, 0.0);
+                }
+            }
+        }
+        else if (s0 < s && s < s1) {
+            pairset_add(f, ps, n, s, 0.0, 0.0);
+        }
     }
 }
 
-/* hertz.energy_balance_delta_max(v_impact, K_full, r_x, ...) of pair i. */
+/* normal_radii(s)[2] and law.shape(r_x) of pair i. */
+static inline void pairset_shape(const Model* M, Fail* f, PairSet* ps, int i)
+{
+    if (ps->shape_ok[i])
+        return;
+    double s = ps->s[i];
+    double c = M->normal_factor;
+    double rp = s / c;
+    double rw = (M->line_length - s) / c;
+    double r_x = rp * rw / (rp + rw);
+    ps->r_x[i] = r_x;
+    law_shape(M, f, r_x, &ps->K[i], &ps->ka[i], &ps->kz[i]);
+    ps->shape_ok[i] = 1;
+}
+
+/* hertz.film_delta_max(v, K, r_x, ka, density) of pair i (shape computed). */
 static inline double pairset_d_max(const Model* M, Fail* f, PairSet* ps, int i, double v)
 {
     if (!(v == ps->d_max_v)) {
@@ -578,21 +646,22 @@ static inline double pairset_d_max(const Model* M, Fail* f, PairSet* ps, int i, 
         ps->d_max_v = v;
     }
     if (!ps->d_max_ok[i] || v != v) {
-        ps->d_max[i] = energy_balance_delta_max(M, f, v, ps->K_full[i], ps->r_x[i]);
+        ps->d_max[i] = film_delta_max(f, v, ps->K[i], ps->r_x[i], ps->ka[i], M->density);
         ps->d_max_ok[i] = 1;
     }
     return ps->d_max[i];
 }
 
-#define PAIRSET_CACHE 4
+#define PAIRSET_CACHE 6
 typedef struct {
     int n_used, next;
     PairSet set[PAIRSET_CACHE];
 } PairCache;
 
 /* The pair set at roll coordinate u: from the cache (same u, bit for bit: == on doubles, and
- * +0.0/-0.0 give the same pairs) or built into it. */
-static PairSet* pairs_cached(const Model* M, Fail* f, PairCache* c, double u)
+ * +0.0/-0.0 give the same pairs) or built into it.  The pointer is valid until the next call
+ * (a later call may reuse its entry). */
+static PairSet* pairs_at(const Model* M, Fail* f, PairCache* c, double u)
 {
     for (int i = 0; i < c->n_used; i++)
         if (c->set[i].u == u)
@@ -606,6 +675,28 @@ static PairSet* pairs_cached(const Model* M, Fail* f, PairCache* c, double u)
     return ps;
 }
 
+/* ------------------------------------------------------------------ mesh.py */
+static inline double penetration(const Model* M, int64_t flank, double phi_p, double phi_w)
+{
+    return (double)flank * (M->arm_pinion * phi_p - M->arm_wheel * phi_w) - M->half_backlash;
+}
+
+static inline double approach_rate(const Model* M, int64_t flank, double w_p, double w_w)
+{
+    return (double)flank * (M->arm_pinion * w_p - M->arm_wheel * w_w);
+}
+
+static inline double pair_rate(const Model* M, int64_t flank, double w_p, double dg)
+{
+    return dg * ((double)flank * M->rb_pinion * w_p);
+}
+
+/* lubrication.sliding_speed(w_p, s, w_w, line_length - s) */
+static inline double sliding_speed(const Model* M, double s, double w_p, double w_w)
+{
+    return w_p * s - w_w * (M->line_length - s);
+}
+
 typedef struct {
     double delta, tau_w, tau_p, W, F;
     /* detail (outputs) only */
@@ -614,11 +705,11 @@ typedef struct {
     double forces[N_SLOTS];
 } Loads;
 
-/* MeshModel._loads; detail = 0 is the integrator's path (mesh.torques), 1 the outputs'.
- * cache: the step's pair sets, or NULL. */
+/* MeshModel._loads; signs != NULL is the integrator's path (mesh.torques with the substep's
+ * friction directions), detail = 1 the outputs' (mesh.loads, signs from the sliding speed). */
 static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank, double phi_p,
-                       double w_p, double phi_w, double w_w, double v_impact, int detail,
-                       Loads* out)
+                       double w_p, double phi_w, double w_w, double v_impact,
+                       const double* signs, int detail, Loads* out)
 {
     double delta = penetration(M, flank, phi_p, phi_w);
     out->delta = delta;
@@ -632,52 +723,57 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
     if (delta <= 0.0)
         return;
     double delta_dot = approach_rate(M, flank, w_p, w_w);
-    double shape = delta * py_pow(f, delta, 0.5);
-    if (M->damping > 0.0) {
-        shape *= 1.0 + M->damping * delta_dot;
-        if (shape < 0.0)
-            shape = 0.0;
-    }
+    double damping = M->damping;
     double E_star = M->E_star;
     double tau_w = 0.0, tau_p = 0.0, W_sum = 0.0, F_net = 0.0;
-    double u_roll = flank_roll(M, flank, phi_p);
-    PairSet local;
-    PairSet* ps;
-    if (cache != NULL) {
-        ps = pairs_cached(M, f, cache, u_roll);
-    }
-    else {
-        pairset_build(M, f, u_roll, &local);
-        ps = &local;
-    }
+    PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
     for (int i = 0; i < ps->n; i++) {
+        int64_t slot = ps->slot[i];
         double s = ps->s[i];
+        double pen = delta - ps->offset[i];
+        if (pen <= 0.0) {
+            if (detail)
+                out->forces[slot] = 0.0;
+            continue;
+        }
+        pairset_shape(M, f, ps, i);
         double K = ps->K[i];
-        double W = K * shape;
+        double W = K * (pen * py_sqrt(f, pen));
+        if (damping > 0.0) {
+            W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (W < 0.0) /* the flanks never pull on each other */
+                W = 0.0;
+        }
         tau_w += (double)flank * W * M->arm_wheel;
         tau_p -= (double)flank * W * M->arm_pinion;
         W_sum += W;
         double F = 0.0;
         double rho_p = s, rho_w = M->line_length - s;
-        double v_s = w_p * rho_p - w_w * rho_w;          /* lubrication.sliding_speed */
-        double u = 0.5 * (w_p * rho_p + w_w * rho_w);    /* lubrication.entrainment_speed */
+        double v_s = w_p * rho_p - w_w * rho_w;       /* lubrication.sliding_speed */
+        double u = 0.5 * (w_p * rho_p + w_w * rho_w); /* lubrication.entrainment_speed */
         double h = 0.0, lam = 0.0, psi = 0.0;
         if ((M->friction_enabled || detail) && W > 0.0) {
             double A_e = 3.2 * W / E_star * M->sqrt_gamma_sigma; /* asperity_area */
-            /* hertz.contact_radius: (3 W sqrt(r_x r_y) / (4 E*)) ** (1/3) */
-            double c = py_pow(f, 3.0 * W * ps->sqrt_rxry[i] / (4.0 * E_star), 1.0 / 3.0);
-            double A = PI * c * c;                                /* apparent_area */
+            double A = ps->kz[i] * py_pow(f, W, 2.0 / 3.0);
             double d_max = pairset_d_max(M, f, ps, i, v_impact);
-            h = -delta + d_max; /* film_thickness(-delta, d_max) */
+            h = -pen + d_max; /* film_thickness(-pen, d_max) */
             if (!(h > 0.0))
                 h = 0.0;
             lam = h / M->sigma;
-            psi = dry_fraction(M, lam, A_e, A);
+            psi = dry_fraction(M, lam);
             if (M->friction_enabled) {
                 double U = M->shear_speed == 0 ? u : v_s;
                 F = friction_force(M, f, psi, A_e, A, U, h);
-                if (v_s != 0.0) {
-                    double sgn = v_s > 0.0 ? 1.0 : -1.0;
+                double sgn;
+                if (signs != NULL)
+                    sgn = signs[slot];
+                else if (v_s > 0.0)
+                    sgn = 1.0;
+                else if (v_s < 0.0)
+                    sgn = -1.0;
+                else
+                    sgn = 0.0;
+                if (sgn != 0.0) {
                     tau_w += sgn * F * rho_w;
                     tau_p -= sgn * F * rho_p;
                     F_net += sgn * F;
@@ -696,7 +792,7 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
                 }
                 out->n_loaded++;
             }
-            out->forces[ps->slot[i]] = W;
+            out->forces[slot] = W;
         }
     }
     out->tau_w = tau_w;
@@ -705,41 +801,57 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
     out->F = F_net;
 }
 
-/* MeshModel.stiffness_sum: sum() of the pairs' K, the way the running Python sums floats. */
-static double stiffness_sum(const Model* M, Fail* f, int64_t flank, double phi_p)
+/* MeshModel.static_force */
+static double static_force(const Model* M, Fail* f, PairCache* cache, int64_t flank,
+                           double phi_p, double delta)
 {
-    PairSet ps;
-    pairset_build(M, f, flank_roll(M, flank, phi_p), &ps);
-    double total = 0.0, comp = 0.0;
-    for (int i = 0; i < ps.n; i++) {
-        double K = ps.K[i];
-        if (M->sum_mode == 0) {
-            total += K;
-        }
-        else { /* CPython >= 3.12: Neumaier's compensated sum */
-            double t = total + K;
-            if (fabs(total) >= fabs(K))
-                comp += (total - t) + K;
-            else
-                comp += (K - t) + total;
-            total = t;
+    PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
+    double total = 0.0;
+    for (int i = 0; i < ps->n; i++) {
+        double d = delta - ps->offset[i];
+        if (d > 0.0) {
+            pairset_shape(M, f, ps, i);
+            total += ps->K[i] * (d * py_sqrt(f, d));
         }
     }
-    if (M->sum_mode != 0 && comp != 0.0 && isfinite(comp))
-        total += comp;
     return total;
 }
 
-/* MeshModel.energy_balance_delta_max (largest over the pairs of the flank). */
-static double flank_energy_balance_delta_max(const Model* M, Fail* f, int64_t flank,
-                                             double phi_p, double v_impact)
+/* MeshModel.contact_rates: (k, c). */
+static void contact_rates(const Model* M, Fail* f, PairCache* cache, int64_t flank,
+                          double phi_p, double w_p, double delta, double delta_dot, double* k,
+                          double* c)
 {
-    PairSet ps;
-    pairset_build(M, f, flank_roll(M, flank, phi_p), &ps);
+    double d = M->damping;
+    double k_sum = 0.0, c_sum = 0.0;
+    PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
+    for (int i = 0; i < ps->n; i++) {
+        double pen = delta - ps->offset[i];
+        if (pen > 0.0) {
+            pairset_shape(M, f, ps, i);
+            double K = ps->K[i];
+            double root = py_sqrt(f, pen);
+            double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (factor > 0.0)
+                k_sum += 1.5 * K * root * factor;
+            c_sum += K * d * (pen * root);
+        }
+    }
+    *k = k_sum;
+    *c = c_sum;
+}
+
+/* MeshModel.energy_balance_delta_max (largest over the pairs of the flank). */
+static double energy_balance_delta_max(const Model* M, Fail* f, PairCache* cache,
+                                       int64_t flank, double phi_p, double v_impact)
+{
+    PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
     double out = 0.0;
-    for (int i = 0; i < ps.n; i++) {
-        double d = energy_balance_delta_max(M, f, v_impact, ps.K_full[i], ps.r_x[i]);
-        out = py_max(out, d);
+    for (int i = 0; i < ps->n; i++) {
+        pairset_shape(M, f, ps, i);
+        double d = film_delta_max(f, v_impact, ps->K[i], ps->r_x[i], ps->ka[i], M->density);
+        if (d > out)
+            out = d;
     }
     return out;
 }
@@ -753,7 +865,13 @@ typedef struct {
     int64_t n_sub;
     double phi_p0, w_p0, a_p, tau_load, J;
     double W_peak, delta_peak, int_tau_pinion;
-    int64_t onsets_drive, onsets_coast, rhs_evaluations, events;
+    int64_t onsets_drive, onsets_coast, rhs_evaluations, contact_substeps, events;
+    /* friction direction of each pair slot on the current substep, and the directions a
+     * located reversal prescribes for the substep after it (the dict `reversed`) */
+    double signs[N_SLOTS];
+    int has_reversed[N_SLOTS];
+    double reversed[N_SLOTS];
+    double rattle_time, rattle_gain;
     PairCache pairs;
 } Run;
 
@@ -769,25 +887,42 @@ static inline double grid(const Run* r, int64_t j)
     return j >= r->n_sub ? r->H : r->H * (double)j / (double)r->n_sub;
 }
 
-static int64_t flank_in_contact(const Model* M, double phi_p, double phi_w, int64_t current)
+/* WheelStepper.contact_flank */
+static int64_t contact_flank(const Model* M, double phi_p, double w_p, double a_p,
+                             double tau_load, const State* st)
 {
-    if (current != 0 && penetration(M, current, phi_p, phi_w) > 0.0)
-        return current;
-    if (penetration(M, DRIVE, phi_p, phi_w) > 0.0)
-        return DRIVE;
-    if (penetration(M, COAST, phi_p, phi_w) > 0.0)
-        return COAST;
+    double accel_w = -tau_load / M->J;
+    int64_t order[3] = {st->flank, RK_DRIVE, RK_COAST};
+    for (int i = 0; i < 3; i++) {
+        int64_t flank = order[i];
+        if (flank == 0)
+            continue;
+        double pen = penetration(M, flank, phi_p, st->phi);
+        if (pen > 0.0)
+            return flank;
+        if (pen == 0.0) {
+            double rate = approach_rate(M, flank, w_p, st->w);
+            if (rate > 0.0)
+                return flank;
+            if (rate == 0.0 && approach_rate(M, flank, a_p, accel_w) > 0.0)
+                return flank;
+        }
+    }
     return 0;
 }
 
 static void onset(Run* r, double t, int64_t flank)
 {
     State* st = &r->st;
-    double speed = approach_rate(r->M, flank, run_w_p(r, t), st->w);
+    double v = approach_rate(r->M, flank, run_w_p(r, t), st->w);
     r->events++;
-    double v = py_max(speed, 0.0);
+    if (v < 0.0)
+        v = 0.0;
     st->v_last = v;
-    if (flank == DRIVE) {
+    /* kinetic energy of the impact on the tooth normal, into the rattle index */
+    double energy = 0.5 * r->M->normal_mass * v * v;
+    r->rattle_gain += energy / r->rattle_time * py_exp(r->f, -(r->H - t) / r->rattle_time);
+    if (flank == RK_DRIVE) {
         st->v_drive = v;
         st->n_drive++;
         r->onsets_drive++;
@@ -820,11 +955,11 @@ static double free_flight(Run* r, double t)
     }
     else if (!has_c || (has_d && hit_d <= hit_c)) {
         dt = hit_d;
-        flank = DRIVE;
+        flank = RK_DRIVE;
     }
     else {
         dt = hit_c;
-        flank = COAST;
+        flank = RK_COAST;
     }
     double t_new = flank == 0 ? r->H : t + dt;
     st->phi += dt * (st->w + 0.5 * a_w * dt);
@@ -841,10 +976,10 @@ static inline void rhs(Run* r, double t, double phi_w, double w_w, double* out)
 {
     const State* st = &r->st;
     int64_t flank = st->flank;
-    double v_imp = flank == DRIVE ? st->v_drive : st->v_coast;
+    double v_imp = flank == RK_DRIVE ? st->v_drive : st->v_coast;
     Loads L;
-    mesh_loads(r->M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), phi_w, w_w, v_imp, 0,
-               &L);
+    mesh_loads(r->M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), phi_w, w_w, v_imp,
+               r->signs, 0, &L);
     r->rhs_evaluations++;
     out[0] = (L.tau_w - r->tau_load) / r->J;
     out[1] = L.tau_p;
@@ -870,17 +1005,132 @@ static void rk4(Run* r, double t, double h, double phi, double w, const double* 
     *q = h / 6.0 * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
 }
 
+/* _resolved_substep: span divided into equal parts no longer than CONTACT_RATE_SAFETY over
+ * the contact's fastest rate. */
+static double resolved_substep(Run* r, double t, double span)
+{
+    const Model* M = r->M;
+    State* st = &r->st;
+    int64_t flank = st->flank;
+    double delta = penetration(M, flank, run_phi_p(r, t), st->phi);
+    double rate = approach_rate(M, flank, run_w_p(r, t), st->w);
+    double reach = rate > 0.0 ? delta + rate * span : delta;
+    double k, c;
+    contact_rates(M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), reach, rate, &k,
+                  &c);
+    double mass = M->normal_mass;
+    double fastest = py_sqrt(r->f, k / mass) + c / mass;
+    r->contact_substeps += 1;
+    if (fastest * span <= M->contact_rate_safety)
+        return span;
+    double parts = py_ceil(r->f, fastest * span / M->contact_rate_safety);
+    /* contact_substeps + parts > MAX_CONTACT_SUBSTEPS in Python's exact integers: both sides
+     * are integers and the sum is exact below 2**53, above which it exceeds the cap anyway */
+    if ((double)r->contact_substeps + parts > (double)M->max_contact_substeps)
+        fail_values(r->f, RK_ERR_TOO_STIFF, fastest, k, c, mass);
+    return span / parts;
+}
+
+/* _friction_directions */
+static void friction_directions(Run* r, double t)
+{
+    const Model* M = r->M;
+    State* st = &r->st;
+    for (int k = 0; k < N_SLOTS; k++)
+        r->signs[k] = 0.0;
+    double w_p = run_w_p(r, t);
+    PairSet* ps = pairs_at(M, r->f, &r->pairs, flank_roll(M, st->flank, run_phi_p(r, t)));
+    for (int i = 0; i < ps->n; i++) {
+        int64_t slot = ps->slot[i];
+        if (r->has_reversed[slot]) {
+            r->signs[slot] = r->reversed[slot];
+            continue;
+        }
+        double v_s = sliding_speed(M, ps->s[i], w_p, st->w);
+        r->signs[slot] = v_s > 0.0 ? 1.0 : (v_s < 0.0 ? -1.0 : 0.0);
+    }
+    for (int k = 0; k < N_SLOTS; k++)
+        r->has_reversed[k] = 0;
+}
+
 typedef struct {
     Run* r;
     double t;
     const double* k1;
     int64_t flank;
-} ReleaseCtx;
+    int64_t slot;
+} EventCtx;
+
+/* speed() of _reversal_times: sliding speed of the pair in `slot` at t + dt for wheel speed
+ * w (0 when the pair has left the zone). */
+static double slot_sliding_speed(EventCtx* c, double dt, double w)
+{
+    Run* r = c->r;
+    PairSet* ps = pairs_at(r->M, r->f, &r->pairs,
+                           flank_roll(r->M, c->flank, run_phi_p(r, c->t + dt)));
+    for (int i = 0; i < ps->n; i++)
+        if (ps->slot[i] == c->slot)
+            return sliding_speed(r->M, ps->s[i], run_w_p(r, c->t + dt), w);
+    return 0.0;
+}
+
+/* slide() of _reversal_times: the sliding speed after the RK4 step of length dt from t. */
+static double slide_after(void* vctx, double dt)
+{
+    EventCtx* c = (EventCtx*)vctx;
+    Run* r = c->r;
+    double phi_b, w_b, q;
+    rk4(r, c->t, dt, r->st.phi, r->st.w, c->k1, &phi_b, &w_b, &q);
+    return slot_sliding_speed(c, dt, w_b);
+}
+
+typedef struct {
+    int64_t slot;
+    double dt;
+} Reversal;
+
+/* _reversal_times: the located reversals (slot, offset) in pair order; returns their count. */
+static int reversal_times(Run* r, double t, double h, double w_b, const double* k1,
+                          const int* flipped, Reversal* out)
+{
+    const Model* M = r->M;
+    State* st = &r->st;
+    int64_t flank = st->flank;
+    if (!M->friction_enabled)
+        return 0;
+    /* the pairs at t + h, copied: locating a reversal evaluates other pair sets */
+    PairSet* ps = pairs_at(M, r->f, &r->pairs, flank_roll(M, flank, run_phi_p(r, t + h)));
+    int n = ps->n;
+    int64_t slots[PAIR_MAX];
+    double s_end[PAIR_MAX];
+    for (int i = 0; i < n; i++) {
+        slots[i] = ps->slot[i];
+        s_end[i] = ps->s[i];
+    }
+    int count = 0;
+    for (int i = 0; i < n; i++) {
+        int64_t slot = slots[i];
+        double sign = r->signs[slot];
+        if (flipped[slot] || sign == 0.0
+            || sign * sliding_speed(M, s_end[i], run_w_p(r, t + h), w_b) >= 0.0)
+            continue;
+        EventCtx c = {r, t, k1, flank, slot};
+        double f_a = slot_sliding_speed(&c, 0.0, st->w);
+        double f_b = slot_sliding_speed(&c, h, w_b);
+        if (f_a == 0.0 || (f_a > 0.0) == (f_b > 0.0))
+            continue; /* no sign change on the substep's own RK4 path */
+        out[count].slot = slot;
+        out[count].dt = brent(r->f, slide_after, &c, 0.0, h, f_a, f_b, M->event_xtol,
+                              M->brent_rtol, M->brent_max_iter);
+        count++;
+    }
+    return count;
+}
 
 /* delta_after of _release_time: penetration after the RK4 step of length dt from t. */
 static double delta_after(void* vctx, double dt)
 {
-    ReleaseCtx* c = (ReleaseCtx*)vctx;
+    EventCtx* c = (EventCtx*)vctx;
     Run* r = c->r;
     double phi_b, w_b, q;
     rk4(r, c->t, dt, r->st.phi, r->st.w, c->k1, &phi_b, &w_b, &q);
@@ -891,9 +1141,9 @@ static double delta_after(void* vctx, double dt)
 static int release_time(Run* r, double t, double h, double delta_a, double delta_b,
                         const double* k1, double* out)
 {
-    ReleaseCtx c = {r, t, k1, r->st.flank};
+    EventCtx c = {r, t, k1, r->st.flank, 0};
     double lo = 0.0, f_lo = delta_a;
-    if (f_lo <= 0.0) {
+    if (f_lo <= 0.0) { /* substep starts at the onset: find where it penetrated */
         int found = 0;
         int64_t n = r->M->grazing_samples;
         for (int64_t i = 1; i < n; i++) {
@@ -909,22 +1159,21 @@ static int release_time(Run* r, double t, double h, double delta_a, double delta
         if (!found)
             return 0;
     }
-    *out = brent(r->f, delta_after, &c, lo, h, f_lo, delta_b, r->M->release_xtol,
+    *out = brent(r->f, delta_after, &c, lo, h, f_lo, delta_b, r->M->event_xtol,
                  r->M->brent_rtol, r->M->brent_max_iter);
     return 1;
 }
 
-static void track_peak(Run* r, double t, double h, int64_t flank, double d_a, double phi_a,
-                       double w_a, double d_b, double phi_b, double w_b)
+static void track_peak(Run* r, double t, double h, int64_t flank, double d_a, double w_a,
+                       double d_b, double w_b)
 {
-    (void)phi_a;
-    (void)phi_b;
     const Model* M = r->M;
     r->delta_peak = py_max(py_max(r->delta_peak, d_a), d_b);
     double dd_a = approach_rate(M, flank, run_w_p(r, t), w_a) * h;
     double dd_b = approach_rate(M, flank, run_w_p(r, t + h), w_b) * h;
     if (!(dd_a > 0.0 && 0.0 > dd_b))
         return;
+    /* Hermite cubic on s in [0, 1]: derivative is a quadratic; its root where it falls. */
     double A = 6.0 * (d_a - d_b) + 3.0 * (dd_a + dd_b);
     double B = -6.0 * (d_a - d_b) - 4.0 * dd_a - 2.0 * dd_b;
     double s;
@@ -935,8 +1184,8 @@ static void track_peak(Run* r, double t, double h, int64_t flank, double d_a, do
                 + (-2.0 * s3 + 3.0 * s2) * d_b + (s3 - s2) * dd_b);
     if (d > r->delta_peak) {
         r->delta_peak = d;
-        double K = stiffness_sum(M, r->f, flank, run_phi_p(r, t + s * h));
-        r->W_peak = py_max(r->W_peak, K * py_pow(r->f, d, 1.5));
+        r->W_peak = py_max(r->W_peak,
+                           static_force(M, r->f, &r->pairs, flank, run_phi_p(r, t + s * h), d));
     }
 }
 
@@ -946,14 +1195,15 @@ static double contact_substep(Run* r, double t)
     State* st = &r->st;
     int64_t flank = st->flank;
     double x = t * (double)r->n_sub / r->H;
-    if (!(x > -9.2e18 && x < 9.2e18))
-        fail(r->f, "cannot convert float %.17g to integer (substep index)", x);
-    int64_t j = (int64_t)x; /* int(): truncation */
+    if (!isfinite(x))
+        not_integral(r->f, x);
+    int64_t j = (int64_t)x; /* int(): truncation (t < H, so x < n_sub) */
     if (r->n_sub - 1 < j)
         j = r->n_sub - 1;
     double t_end = grid(r, j + 1);
-    if (t_end <= t)
+    if (t_end <= t) /* t sits on a grid point within rounding */
         t_end = grid(r, j + 2);
+    /* split at the next pair entry/exit so the right-hand side is smooth on the substep */
     double u_a = flank_roll(M, flank, run_phi_p(r, t));
     double bp;
     if (next_breakpoint(M, r->f, u_a, flank_roll(M, flank, run_phi_p(r, t_end)), &bp)) {
@@ -963,31 +1213,71 @@ static double contact_substep(Run* r, double t)
                            &dt))
             t_end = t + dt;
     }
-    double h = t_end - t;
-    double k1[3];
-    rhs(r, t, st->phi, st->w, k1);
-    r->W_peak = py_max(r->W_peak, k1[2]);
-    double phi_b, w_b, q;
-    rk4(r, t, h, st->phi, st->w, k1, &phi_b, &w_b, &q);
+    double h = resolved_substep(r, t, t_end - t);
+    t_end = t + h;
+    friction_directions(r, t);
     double delta_a = penetration(M, flank, run_phi_p(r, t), st->phi);
-    double delta_b = penetration(M, flank, run_phi_p(r, t_end), phi_b);
-    int released = 0;
-    if (delta_b <= 0.0) {
-        double dt;
-        if (release_time(r, t, h, delta_a, delta_b, k1, &dt)) {
-            released = 1;
-            if (dt < h) {
-                h = dt;
-                t_end = t + h;
-                rk4(r, t, h, st->phi, st->w, k1, &phi_b, &w_b, &q);
+    int flipped[N_SLOTS] = {0};
+    double k1[3], phi_b, w_b, q, delta_b, dt_event;
+    int released, n_rev;
+    int64_t reversal;
+    Reversal rev[PAIR_MAX];
+    for (;;) {
+        rhs(r, t, st->phi, st->w, k1);
+        rk4(r, t, h, st->phi, st->w, k1, &phi_b, &w_b, &q);
+        delta_b = penetration(M, flank, run_phi_p(r, t_end), phi_b);
+        released = 0;
+        reversal = -1;
+        dt_event = h;
+        if (delta_b <= 0.0) {
+            double dt;
+            if (release_time(r, t, h, delta_a, delta_b, k1, &dt)) {
+                released = 1;
+                dt_event = dt;
             }
-            delta_b = 0.0;
+        }
+        n_rev = reversal_times(r, t, h, w_b, k1, flipped, rev);
+        /* a reversal at the substep start to rounding: the pair's friction takes its new
+         * direction for the whole substep; redo it */
+        int instant = 0;
+        for (int i = 0; i < n_rev; i++)
+            if (t + rev[i].dt <= t)
+                instant = 1;
+        if (!instant)
+            break;
+        for (int i = 0; i < n_rev; i++) {
+            if (t + rev[i].dt <= t) {
+                r->signs[rev[i].slot] = -r->signs[rev[i].slot];
+                flipped[rev[i].slot] = 1;
+            }
         }
     }
-    track_peak(r, t, h, flank, delta_a, st->phi, st->w, delta_b, phi_b, w_b);
+    r->W_peak = py_max(r->W_peak, k1[2]);
+    for (int i = 0; i < n_rev; i++) {
+        if (rev[i].dt < dt_event) {
+            dt_event = rev[i].dt;
+            reversal = rev[i].slot;
+            released = 0;
+        }
+    }
+    if (dt_event < h) {
+        h = dt_event;
+        t_end = t + h;
+        rk4(r, t, h, st->phi, st->w, k1, &phi_b, &w_b, &q);
+    }
+    if (released)
+        delta_b = 0.0;
+    else
+        delta_b = penetration(M, flank, run_phi_p(r, t_end), phi_b);
+    track_peak(r, t, h, flank, delta_a, st->w, delta_b, w_b);
     st->phi = phi_b;
     st->w = w_b;
     r->int_tau_pinion += q;
+    if (reversal >= 0) {
+        r->has_reversed[reversal] = 1;
+        r->reversed[reversal] = -r->signs[reversal];
+        r->events++; /* reversal */
+    }
     if (released || delta_b <= 0.0) {
         r->events++; /* release */
         st->flank = 0;
@@ -996,45 +1286,33 @@ static double contact_substep(Run* r, double t)
 }
 
 /* ------------------------------------------------------------------ entry points */
-EXPORT int rk_abi_version(void) { return RK_ABI_VERSION * 1000 + M_COUNT; }
+/* The layout this library was built for (kernel_layout.LAYOUT_HASH). */
+EXPORT unsigned long long rk_layout_hash(void) { return RK_LAYOUT_HASH; }
 
 /*
- * WheelStepper.step: advances `state` (S_COUNT doubles) by h under the pinion kinematics and
- * the held load torque.  Returns 0 and writes state and result (R_COUNT doubles) on success;
- * on failure returns non-zero, writes the reason to err and leaves state and result as they
- * were (where the Python stepper raises ValueError).
+ * WheelStepper.step: advances `state` (S_COUNT doubles) by inputs[I_H] under the pinion
+ * kinematics and the held load torque of `inputs` (I_COUNT doubles).  Returns RK_ERR_OK and
+ * writes state and result (R_COUNT doubles) on success; on a refusal returns its code, writes
+ * the message's numbers to err_values (RK_ERROR_VALUES doubles) or the message to err, and
+ * leaves state and result as they were.
  */
-static int step_impl(const double* model, double* state, double h, double phi_p, double w_p,
-                     double a_p, double tau_load, double* result, char* err, int errlen)
+EXPORT int rk_step(const double* model, double* state, const double* inputs, double* result,
+                   double* err_values, char* err, int errlen)
 {
     Model M;
     if (!unpack_model(model, &M, err, errlen))
-        return 1;
-    /* _check_finite, then check_step_size */
-    const char* names[4] = {"phi_p", "w_p", "a_p", "tau_load"};
-    double values[4] = {phi_p, w_p, a_p, tau_load};
-    for (int i = 0; i < 4; i++) {
-        if (!isfinite(values[i])) {
-            set_err(err, errlen, "input %s = %.17g is not a finite number", names[i],
-                    unsigned_nan(values[i]));
-            return 2;
-        }
-    }
-    if (!(h > 0.0 && isfinite(h))) {
-        set_err(err, errlen, "step size h = %.17g s is invalid; allowed: finite and > 0",
-                unsigned_nan(h));
-        return 3;
-    }
-    if (h > M.h_comm_max) {
-        set_err(err, errlen,
-                "step size h = %.17g s exceeds solver.h_comm_max = %.17g s; allowed: "
-                "(0, %.17g] s", h, M.h_comm_max, M.h_comm_max);
-        return 3;
-    }
+        return RK_ERR_LAYOUT;
+    double h = inputs[I_H], phi_p = inputs[I_PHI_P], w_p = inputs[I_W_P];
+    double a_p = inputs[I_A_P], tau_load = inputs[I_TAU_LOAD];
+    /* _check_finite, then check_step_size: Python words the message */
+    if (!(isfinite(phi_p) && isfinite(w_p) && isfinite(a_p) && isfinite(tau_load))
+        || !(h > 0.0 && isfinite(h)) || h > M.h_comm_max)
+        return RK_ERR_INPUT;
 
     Fail f;
     f.err = err;
     f.errlen = errlen;
+    f.code = RK_ERR_OK;
     Run run;
     run.M = &M;
     run.f = &f;
@@ -1047,20 +1325,33 @@ static int step_impl(const double* model, double* state, double h, double phi_p,
     run.tau_load = tau_load;
     run.J = M.J;
     run.W_peak = run.delta_peak = run.int_tau_pinion = 0.0;
-    run.onsets_drive = run.onsets_coast = run.rhs_evaluations = run.events = 0;
+    run.onsets_drive = run.onsets_coast = run.rhs_evaluations = run.contact_substeps = 0;
+    run.events = 0;
+    for (int k = 0; k < N_SLOTS; k++) {
+        run.signs[k] = 0.0;
+        run.has_reversed[k] = 0;
+        run.reversed[k] = 0.0;
+    }
+    run.rattle_time = M.rattle_time;
+    run.rattle_gain = 0.0;
     run.pairs.n_used = run.pairs.next = 0;
-    if (setjmp(f.jb) != 0)
-        return 4;
+    if (setjmp(f.jb) != 0) {
+        if (err_values != NULL)
+            for (int i = 0; i < RK_ERROR_VALUES; i++)
+                err_values[i] = f.values[i];
+        return f.code;
+    }
     {
         double x = py_ceil(&f, h / M.h_max * (1.0 - 1e-12));
         if (!(x < 9.2e18))
-            fail(&f, "step size h = %.17g s needs %.17g substeps", h, x);
+            fail_message(&f, RK_ERR_VALUE_ERROR, "step size h = %.17g s needs %.17g substeps",
+                         h, x);
         run.n_sub = x > 1.0 ? (int64_t)x : 1;
     }
 
     /* _StepRun.execute */
     State* st = &run.st;
-    int64_t flank = flank_in_contact(&M, phi_p, st->phi, st->flank);
+    int64_t flank = contact_flank(&M, phi_p, w_p, a_p, tau_load, st);
     if (flank != st->flank) {
         if (st->flank != 0)
             run.events++; /* release */
@@ -1076,14 +1367,17 @@ static int step_impl(const double* model, double* state, double h, double phi_p,
             stall = 0;
         }
         else if (++stall > STALL_LIMIT) {
-            fail(&f, "the step makes no progress at t = %.17g s (the integrator is stuck; "
-                     "reduce solver.h_max or the communication step)", t);
+            fail_message(&f, RK_ERR_VALUE_ERROR,
+                         "the step makes no progress at t = %.17g s (the integrator is stuck; "
+                         "reduce solver.h_max or the communication step)", t);
         }
         t = t_new;
     }
+    /* mean mesh torque from the momentum balance I_w dw = (tau_mesh - tau_load) dt */
     double dw = st->w - w_start;
     double tau_wheel_mean = (run.J * dw + run.tau_load * run.H) / run.H;
     double tau_pinion_mean = run.int_tau_pinion / run.H;
+    st->rattle_index = st->rattle_index * py_exp(&f, -run.H / run.rattle_time) + run.rattle_gain;
     if (st->flank != 0) {
         run.delta_peak = py_max(run.delta_peak,
                                 penetration(&M, st->flank, run_phi_p(&run, run.H), st->phi));
@@ -1094,69 +1388,66 @@ static int step_impl(const double* model, double* state, double h, double phi_p,
 
     /* WheelStepper.step: divergence and penetration guards */
     if (!(isfinite(st->phi) && isfinite(st->w) && isfinite(tau_pinion_mean)
-          && isfinite(run.W_peak))) {
-        set_err(err, errlen,
-                "the step diverged (wheel angle %.17g rad, speed %.17g rad/s); the inputs or "
-                "parameters are beyond what the integrator resolves (reduce solver.h_max or "
-                "the communication step)", unsigned_nan(st->phi), unsigned_nan(st->w));
-        return 5;
-    }
+          && isfinite(run.W_peak)))
+        fail_values(&f, RK_ERR_DIVERGED, st->phi, st->w, 0.0, 0.0);
     double phi_end = phi_p + h * (w_p + 0.5 * a_p * h);
-    double depth = py_max(py_max(run.delta_peak, penetration(&M, DRIVE, phi_end, st->phi)),
-                          penetration(&M, COAST, phi_end, st->phi));
+    double depth = py_max(py_max(run.delta_peak, penetration(&M, RK_DRIVE, phi_end, st->phi)),
+                          penetration(&M, RK_COAST, phi_end, st->phi));
     double limit = M.pen_limit;
-    if (depth > limit) {
-        set_err(err, errlen,
-                "the flanks would penetrate %.4g mm in this step, beyond the validity of the "
-                "Hertz contact (allowed: %.4g mm = %g gear.m_n); the inputs drive the teeth "
-                "into each other far harder than any transmission (check wheel.tau_load and "
-                "the pinion kinematics, or reduce the communication step)",
-                depth * 1e3, limit * 1e3, M.pen_modules);
-        return 6;
-    }
+    if (depth > limit)
+        fail_values(&f, RK_ERR_PENETRATION, depth, limit, 0.0, 0.0);
 
     /* commit */
     pack_state(st, state);
-    result[R_TAU_WHEEL] = tau_wheel_mean;
-    result[R_TAU_PINION] = tau_pinion_mean;
+    result[R_TAU_WHEEL_MEAN] = tau_wheel_mean;
+    result[R_TAU_PINION_MEAN] = tau_pinion_mean;
     result[R_W_PEAK] = run.W_peak;
     result[R_DELTA_PEAK] = run.delta_peak;
     result[R_ONSETS_DRIVE] = (double)run.onsets_drive;
     result[R_ONSETS_COAST] = (double)run.onsets_coast;
     result[R_RHS_EVALUATIONS] = (double)run.rhs_evaluations;
-    result[R_EVENTS] = (double)run.events;
+    result[R_CONTACT_SUBSTEPS] = (double)run.contact_substeps;
+    result[R_EVENT_COUNT] = (double)run.events;
     result[R_PINION_PHI] = phi_p + w_p * h + 0.5 * a_p * h * h;
     result[R_PINION_W] = w_p + a_p * h;
-    return 0;
+    return RK_ERR_OK;
 }
 
 /*
  * interface.mesh_outputs: the values of MESH_OUTPUTS (O_COUNT doubles, declared order) for
- * the state, the last step's aggregates `last` (the first four result entries of rk_step)
- * and the pinion (phi_p, w_p) at the end of the last step.  Returns 0, or non-zero where the
- * Python function would raise.
+ * the state and `last` (R_COUNT doubles: the last step's aggregates and, in R_PINION_PHI and
+ * R_PINION_W, the pinion at the end of the last step).  Returns RK_ERR_OK, or the code of
+ * the error Python would raise (out is then unspecified).
  */
-static int outputs_impl(const double* model, const double* state, const double* last,
-                        double phi_p, double w_p, double* out)
+EXPORT int rk_outputs(const double* model, const double* state, const double* last,
+                      double* out)
 {
     Model M;
     if (!unpack_model(model, &M, NULL, 0))
-        return 1;
+        return RK_ERR_LAYOUT;
+    for (int k = 0; k < O_COUNT; k++)
+        out[k] = NAN; /* an output this port does not write shows as a difference */
     Fail f;
     f.err = NULL;
     f.errlen = 0;
+    f.code = RK_ERR_OK;
     State st;
     unpack_state(state, &st);
+    double phi_p = last[R_PINION_PHI], w_p = last[R_PINION_W];
+    PairCache cache;
+    cache.n_used = cache.next = 0;
     if (setjmp(f.jb) != 0)
-        return 2;
+        return f.code;
     /* WheelStepper.loads_now */
     int64_t flank = st.flank;
     if (flank == 0)
-        flank = penetration(&M, DRIVE, phi_p, st.phi) >= penetration(&M, COAST, phi_p, st.phi)
-                    ? DRIVE : COAST;
-    double v_imp = flank == DRIVE ? st.v_drive : st.v_coast;
+        flank = penetration(&M, RK_DRIVE, phi_p, st.phi)
+                        >= penetration(&M, RK_COAST, phi_p, st.phi)
+                    ? RK_DRIVE
+                    : RK_COAST;
+    double v_imp = flank == RK_DRIVE ? st.v_drive : st.v_coast;
     Loads L;
-    mesh_loads(&M, &f, NULL, flank, phi_p, w_p, st.phi, st.w, v_imp, 1, &L);
+    mesh_loads(&M, &f, &cache, flank, phi_p, w_p, st.phi, st.w, v_imp, NULL, 1, &L);
     double h, lam, psi;
     if (L.n_loaded > 0) {
         h = L.top_h;
@@ -1165,60 +1456,38 @@ static int outputs_impl(const double* model, const double* state, const double* 
     }
     else {
         double v = flank > 0 ? st.v_drive : st.v_coast;
-        double d_max = flank_energy_balance_delta_max(&M, &f, flank, phi_p, v);
-        h = -L.delta + d_max;
+        double d_max = energy_balance_delta_max(&M, &f, &cache, flank, phi_p, v);
+        h = -L.delta + d_max; /* film_thickness(-delta, d_max) */
         if (!(h > 0.0))
             h = 0.0;
         lam = h / M.sigma;
-        psi = dry_fraction(&M, lam, 0.0, 0.0);
+        psi = dry_fraction(&M, lam);
     }
-    out[O_TAU_WHEEL] = last[R_TAU_WHEEL];
-    out[O_TAU_PINION] = last[R_TAU_PINION];
-    out[O_PHI] = st.phi;
-    out[O_W] = st.w;
-    out[O_W_NOW] = L.W;
-    out[O_W_PEAK] = last[R_W_PEAK];
-    out[O_F] = L.F;
-    out[O_DELTA] = L.n_loaded > 0 ? L.delta : 0.0;
-    out[O_DELTA_PEAK] = last[R_DELTA_PEAK];
-    out[O_V_IMPACT] = st.v_last;
-    out[O_H] = h;
-    out[O_LAMBDA] = lam;
-    out[O_PSI] = psi;
-    out[O_N_CONTACT] = (double)L.n_loaded;
-    out[O_IMPACTS_DRIVE] = (double)st.n_drive;
-    out[O_IMPACTS_COAST] = (double)st.n_coast;
+    double W = L.W;
+    double transverse = W * M.normal_factor;
+    out[O_WHEEL_TAU_MESH] = last[R_TAU_WHEEL_MEAN];
+    out[O_PINION_TAU_MESH] = last[R_TAU_PINION_MEAN];
+    out[O_WHEEL_PHI] = st.phi;
+    out[O_WHEEL_W] = st.w;
+    out[O_MESH_W] = L.W;
+    out[O_MESH_W_PEAK] = last[R_W_PEAK];
+    out[O_MESH_F] = L.F;
+    out[O_MESH_DELTA] = L.n_loaded > 0 ? L.delta : 0.0;
+    out[O_MESH_DELTA_PEAK] = last[R_DELTA_PEAK];
+    out[O_MESH_V_IMPACT] = st.v_last;
+    out[O_MESH_H] = h;
+    out[O_MESH_LAMBDA] = lam;
+    out[O_MESH_PSI] = psi;
+    out[O_MESH_N_CONTACT] = (double)L.n_loaded;
+    out[O_MESH_IMPACTS_DRIVE] = (double)st.n_drive;
+    out[O_MESH_IMPACTS_COAST] = (double)st.n_coast;
+    out[O_MESH_TRANSMISSION_ERROR] = penetration(&M, RK_DRIVE, phi_p, st.phi) + M.half_backlash;
+    out[O_MESH_FORCE_TANGENTIAL] = (double)flank * transverse * M.cos_alpha_t;
+    out[O_MESH_FORCE_RADIAL] = transverse * M.sin_alpha_t;
+    out[O_MESH_FORCE_AXIAL] = (double)flank * W * M.sin_beta_b;
+    out[O_MESH_IMPACT_ENERGY] = 0.5 * M.normal_mass * st.v_last * st.v_last;
+    out[O_MESH_RATTLE_INDEX] = st.rattle_index;
     for (int k = 0; k < N_SLOTS; k++)
-        out[O_PAIR0 + k] = L.forces[k];
-    return 0;
-}
-
-EXPORT int rk_step(const double* model, double* state, double h, double phi_p, double w_p,
-                   double a_p, double tau_load, double* result, char* err, int errlen)
-{
-    return step_impl(model, state, h, phi_p, w_p, a_p, tau_load, result, err, errlen);
-}
-
-EXPORT int rk_outputs(const double* model, const double* state, const double* last,
-                      double phi_p, double w_p, double* out)
-{
-    return outputs_impl(model, state, last, phi_p, w_p, out);
-}
-
-/*
- * The same two entry points with the scalars in arrays, for a cheaper ctypes call (pointer and
- * int arguments only, no argtypes conversion): inputs = (h, phi_p, w_p, a_p, tau_load);
- * rk_outputs_v reads the pinion from last[R_PINION_PHI], last[R_PINION_W] (the result layout).
- */
-EXPORT int rk_step_v(const double* model, double* state, const double* inputs, double* result,
-                     char* err, int errlen)
-{
-    return step_impl(model, state, inputs[0], inputs[1], inputs[2], inputs[3], inputs[4], result,
-                     err, errlen);
-}
-
-EXPORT int rk_outputs_v(const double* model, const double* state, const double* last,
-                        double* out)
-{
-    return outputs_impl(model, state, last, last[R_PINION_PHI], last[R_PINION_W], out);
+        out[O_PAIR_0_W + k] = L.forces[k];
+    return RK_ERR_OK;
 }
