@@ -247,9 +247,14 @@ def _body() -> str:
     return "\n".join(lines) + "\n"
 
 
+def layout_hash(body: str) -> int:
+    """48-bit hash of a layout's header body (exact as a double in the model array)."""
+    return int(hashlib.sha256(body.encode()).hexdigest()[:12], 16)
+
+
 _BODY = _body()
-#: 48-bit hash of the generated layout (exact as a double in the model array).
-LAYOUT_HASH = int(hashlib.sha256(_BODY.encode()).hexdigest()[:12], 16)
+#: Hash of the generated layout: names, order, sizes and codes.
+LAYOUT_HASH = layout_hash(_BODY)
 
 
 def render_header() -> str:
