@@ -204,7 +204,7 @@ def test_a_stale_header_stops_the_build(monkeypatch, tmp_path):
 
 # ------------------------------------------------------------------ scenarios
 def test_paper_scenario_bit_for_bit(lib):
-    init, inputs = paper_inputs(1500)
+    init, inputs = paper_inputs(3000)
     run = lockstep(MeshParameters(), init, inputs, lib)
     assert run.py.state.impacts_drive > 10  # it rattled
     assert run.events["reversal"] > 5  # pairs' friction reversed at the pitch point
@@ -212,7 +212,7 @@ def test_paper_scenario_bit_for_bit(lib):
 
 
 def test_strong_fluctuation_with_coast_impacts_bit_for_bit(lib):
-    init, inputs = fluctuation_inputs(900)
+    init, inputs = fluctuation_inputs(1500)
     # (a rattle time constant other than the default 1 s, where dividing by it is exact)
     run = lockstep(MeshParameters(rattle_time=0.3), init, inputs, lib)
     assert run.py.state.impacts_coast > 0 and run.py.state.impacts_drive > 0
@@ -489,7 +489,7 @@ series = st.lists(
 
 # No shrinking: a bit-for-bit difference shows on the first example that differs, and
 # shrinking long chaotic runs takes minutes without making the example clearer.
-@settings(max_examples=40, deadline=None, phases=(Phase.explicit, Phase.reuse, Phase.generate),
+@settings(max_examples=60, deadline=None, phases=(Phase.explicit, Phase.reuse, Phase.generate),
           suppress_health_check=[HealthCheck.too_slow])
 @given(changes=parameters, steps=series, w0=st.floats(0.0, 150.0))
 def test_random_parameters_and_inputs_bit_for_bit(lib, changes, steps, w0):
