@@ -46,8 +46,8 @@ ERROR_VALUES = 4
 @dataclass(frozen=True)
 class ModelField:
     """One entry (``count`` > 1: a block of entries) of the model array, with its value taken
-    from the stepper (``value(stepper)``: a float, or a sequence of at most ``count`` floats,
-    the rest padded with 0)."""
+    from the stepper: ``value(stepper)`` is a float, or for a block a sequence of at most
+    ``count`` floats (padded with 0)."""
 
     name: str
     value: Callable
@@ -59,10 +59,10 @@ def _law(s):
     return s.mesh.law
 
 
-def _padded(values, count, what):
+def _padded(values, count, name):
     values = [float(v) for v in values]
     if len(values) > count:
-        raise ValueError(f"{len(values)} {what}; the kernel holds at most {count}")
+        raise ValueError(f"{len(values)} values of {name!r}; the kernel holds at most {count}")
     return values + [0.0] * (count - len(values))
 
 
@@ -97,8 +97,8 @@ MODEL_FIELDS: tuple[ModelField, ...] = (
     ModelField("crown_factor", lambda s: s.geometry.crown_factor, "crown drop per roll^2 [1/m]"),
     ModelField("n_breakpoints", lambda s: float(len(_breakpoints(s))),
                "number of roll breakpoints"),
-    ModelField("breakpoints", lambda s: _padded(_breakpoints(s), MAX_BREAKPOINTS, "breakpoints"),
-               "roll breakpoints mod base pitch [m]", MAX_BREAKPOINTS),
+    ModelField("breakpoints", _breakpoints, "roll breakpoints mod base pitch [m]",
+               MAX_BREAKPOINTS),
     ModelField("cos_alpha_t", lambda s: s.geometry.cos_alpha_t, "cos(alpha_t)"),
     ModelField("sin_alpha_t", lambda s: s.geometry.sin_alpha_t, "sin(alpha_t)"),
     ModelField("sin_beta_b", lambda s: s.geometry.sin_beta_b, "sin(beta_b)"),
@@ -116,12 +116,9 @@ MODEL_FIELDS: tuple[ModelField, ...] = (
     ModelField("t_scale", lambda s: _law(s).t_scale, "1 / half-width of the ln(R/r) range"),
     ModelField("chebyshev_terms", lambda s: float(_chebyshev_terms(s)),
                "number of Chebyshev coefficients per series (0: equivalent sphere)"),
-    ModelField("kappa", lambda s: _padded(_law(s).kappa, _T, "Chebyshev terms"),
-               "Chebyshev series of kappa(ln rho)", _T),
-    ModelField("alpha", lambda s: _padded(_law(s).alpha, _T, "Chebyshev terms"),
-               "Chebyshev series of alpha(ln rho)", _T),
-    ModelField("zeta", lambda s: _padded(_law(s).zeta, _T, "Chebyshev terms"),
-               "Chebyshev series of zeta(ln rho)", _T),
+    ModelField("kappa", lambda s: _law(s).kappa, "Chebyshev series of kappa(ln rho)", _T),
+    ModelField("alpha", lambda s: _law(s).alpha, "Chebyshev series of alpha(ln rho)", _T),
+    ModelField("zeta", lambda s: _law(s).zeta, "Chebyshev series of zeta(ln rho)", _T),
     # parameters.MeshParameters
     ModelField("J_wheel", lambda s: s.params.J_wheel, "wheel.J [kg.m2]"),
     ModelField("friction_enabled", lambda s: float(s.params.friction_enabled),

@@ -487,6 +487,10 @@ series = st.lists(
     min_size=30, max_size=30)
 
 
+#: Contact substeps allowed in one step of the property-based test.
+HYPOTHESIS_SUBSTEP_CAP = 2000
+
+
 # No shrinking: a bit-for-bit difference shows on the first example that differs, and
 # shrinking long chaotic runs takes minutes without making the example clearer.
 @settings(max_examples=60, deadline=None, phases=(Phase.explicit, Phase.reuse, Phase.generate),
@@ -498,9 +502,6 @@ def test_random_parameters_and_inputs_bit_for_bit(lib, changes, steps, w0):
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(stepper, "MAX_CONTACT_SUBSTEPS", HYPOTHESIS_SUBSTEP_CAP)
         _random_run(lib, changes, steps, w0)
-
-
-HYPOTHESIS_SUBSTEP_CAP = 2000
 
 
 def _random_run(lib, changes, steps, w0):
