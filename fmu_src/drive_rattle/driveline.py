@@ -73,9 +73,9 @@ class DrivelineParameters(ParameterSet):
         "optional); relative paths resolve against the FMU resources; empty = engine orders")
     # --- output shaft and vehicle --------------------------------------------------------
     k_shaft: float = declare(
-        "shaft.k", 2.0, "N.m/rad",
-        "torsional stiffness of the output shaft (default: a soft coupling, so that the wheel "
-        "sees nearly the constant drag like the paper's M_res)",
+        "shaft.k", 0.2, "N.m/rad",
+        "torsional stiffness of the output shaft (default: a very soft coupling, so that the "
+        "wheel sees the nearly constant drag of the paper's M_res; see docs/model.md section 6)",
         minimum=1e-3, maximum=1e9)
     c_shaft: float = declare(
         "shaft.c", 0.005, "N.m.s/rad",
@@ -85,9 +85,10 @@ class DrivelineParameters(ParameterSet):
         "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
         minimum=1e-6, maximum=1e6)
     drag: float = declare(
-        "vehicle.drag", 0.15, "N.m",
-        "constant drag torque on the vehicle side (creep load; default calibrated, see "
-        "docs/model.md section 6)",
+        "vehicle.drag", 0.0833, "N.m",
+        "constant drag torque on the vehicle side (creep load; default 0.5 M*, half the load "
+        "the default engine orders can separate the default wheel from, M* = wheel.J "
+        "z_p/z_w 250 rad/s^2 = 0.1667 N.m; see docs/model.md section 6)",
         minimum=-1e5, maximum=1e5)
     drag_viscous: float = declare(
         "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
@@ -126,6 +127,15 @@ class EngineOrderKinematics:
         self.t_start = t_start
         self.terms = [(A, k * p.w_mean, ph) for k, A, ph in p.order_terms()]
 
+    def mean_offset(self, t: float) -> tuple[float, float]:
+        """``(dphi [rad], dw [rad/s])`` from the motion at time t to its mean line
+        phi_0 + w_mean (t - t_start) + sum_k A_k / W_k^2 cos p_k (the fluctuation's mean)."""
+        phi, w, _ = self(t)
+        mean = self.phi_0 + self.w_mean * (t - self.t_start)
+        for A, W, ph in self.terms:
+            mean += A / (W * W) * math.cos(ph)
+        return mean - phi, self.w_mean - w
+
     def __call__(self, t: float) -> tuple[float, float, float]:
         """``(phi [rad], w [rad/s], a [rad/s^2])`` at time t [s]."""
         tau = t - self.t_start
@@ -152,6 +162,10 @@ class SpeedTableKinematics:
         for i in range(1, len(times)):
             dt = times[i] - times[i - 1]
             self.angles.append(self.angles[-1] + 0.5 * dt * (speeds[i] + speeds[i - 1]))
+
+    def mean_offset(self, t: float) -> tuple[float, float]:
+        """A measured table has no known mean line: no offset."""
+        return 0.0, 0.0
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         ts, ws = self.times, self.speeds
@@ -218,11 +232,18 @@ class OutputShaft:
     Within a step the wheel moves at its step-start speed; RK4 on substeps <= h_max.
     """
 
-    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float):
+    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float,
+                 mean_offset: tuple[float, float] = (0.0, 0.0)):
         self.p = p
-        # Start in steady state: vehicle at the wheel speed, shaft wound up by the drag.
-        steady = p.drag + p.drag_viscous * w_w
-        self.state = ShaftState(phi_w - steady / p.k_shaft, w_w)
+        # Start in steady state: the vehicle at the wheel's mean speed, the shaft wound up by
+        # the drag behind the wheel's mean line (its angle and speed plus ``mean_offset``).
+        # Started from the instantaneous wheel angle instead, the shaft carries the engine
+        # orders' mean angle offset (12 mrad on the default pinion) as a torque step that
+        # excites the nearly undamped vehicle mode (0.1 Hz): the wheel's load then swings
+        # by +-0.012 N.m for as long as the run lasts.
+        phi_mean, w_mean = phi_w + mean_offset[0], w_w + mean_offset[1]
+        steady = p.drag + p.drag_viscous * w_mean
+        self.state = ShaftState(phi_mean - steady / p.k_shaft, w_mean)
         self.tau_load = self.torque(phi_w, w_w, self.state)
 
     def torque(self, phi_w: float, w_w: float, s: ShaftState) -> float:
@@ -280,7 +301,11 @@ class Driveline:
                  resources: Path | None = None):
         self.params = p
         self.kinematics = input_kinematics(p, t_start, resources)
-        self.shaft = OutputShaft(p, phi_w, w_w)
+        # The wheel's mean line: the pinion's, scaled by the speed ratio the wheel starts at.
+        _, w_p, _ = self.kinematics(t_start)
+        scale = w_w / w_p if w_p != 0.0 else 0.0
+        d_phi, d_w = self.kinematics.mean_offset(t_start)
+        self.shaft = OutputShaft(p, phi_w, w_w, (scale * d_phi, scale * d_w))
         self.time = t_start
         self.last_step = 0.0  # the last communication step [s]; 0 before the first
 
