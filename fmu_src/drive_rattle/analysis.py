@@ -295,9 +295,10 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
             normal_mass, lines=lines, catalogue=catalogue, segment_seconds=segment_seconds))
         starts.append(float(t[a]))
         slices.append(span)
-    return WindowedStatistics(transient=float(first * h), window=float(width * h),
+    end = first + count * width
+    return WindowedStatistics(transient=float(t[first] - t[0]), window=float(width * h),
                               starts=starts, slices=slices, windows=results,
-                              unused_tail=float((available - count * width) * h))
+                              unused_tail=float(t[-1] - t[end]))
 
 
 #: Rows of the paper comparison: (quantity as in PAPER_FIGURES, statistic, display scale).
