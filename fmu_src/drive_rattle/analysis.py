@@ -82,7 +82,9 @@ class RattleStatistics:
     #: 1 when a line was detected at half the strongest line's frequency (within the
     #: resolution), 0 when not or when there is no line: over windows, the fraction of windows.
     half_line_found: float = math.nan
-    dominant_line_name: str = ""  # the catalogue's name ("" unexplained or none)
+    #: The strongest line's name in the catalogue, "unexplained", or "none found" ("" without
+    #: a line search).
+    dominant_line_name: str = ""
 
 
 def onsets_from_counters(time, impacts_drive, impacts_coast, v_impact):
@@ -176,10 +178,11 @@ def _line_figures(stats: RattleStatistics, detection: LineDetection) -> None:
                                     if detection.lines else math.nan)
     dominant = detection.strongest(*DOMINANT_BAND)
     stats.half_line_found = 0.0
+    stats.dominant_line_name = "none found"
     if dominant is not None:
         stats.dominant_line_frequency = dominant.frequency
         stats.dominant_line_level = dominant.ratio_db
-        stats.dominant_line_name = dominant.name
+        stats.dominant_line_name = dominant.name or UNEXPLAINED
         stats.half_line_found = float(detection.near(dominant.frequency / 2) is not None)
 
 
@@ -205,7 +208,7 @@ class Scatter:
     def text(self, scale: float = 1.0, digits: int = 4) -> str:
         """``"mean ± std (min–max)"`` of the values times ``scale``."""
         if self.n == 0:
-            return "none"
+            return "none in any window"
         m, lo, hi = self.mean * scale, self.min * scale, self.max * scale
         if self.n == 1:
             return f"{m:.{digits}g} (one window)"
@@ -232,6 +235,15 @@ class WindowedStatistics:
     def scatter(self, name: str) -> Scatter:
         """Mean, scatter and range over the windows of the numeric statistic ``name``."""
         return Scatter.of([float(getattr(w, name)) for w in self.windows])
+
+    def text(self, name: str, scale: float = 1.0) -> str:
+        """``Scatter.text`` of ``name``, saying in how many windows it had a value when not
+        in all (a spectral line is not found in every window)."""
+        sc = self.scatter(name)
+        text = sc.text(scale)
+        if 0 < sc.n < len(self.windows):
+            text += f"; in {sc.n} of {len(self.windows)} windows"
+        return text
 
     def summary(self) -> dict[str, Scatter]:
         """Every numeric statistic with its scatter over the windows."""
@@ -331,17 +343,17 @@ FURTHER_ROWS = (
 
 def paper_comparison(ws: WindowedStatistics) -> list[tuple[str, str, str]]:
     """Rows ``(quantity, this run: "mean ± scatter (min–max over windows)", paper)``."""
-    rows = [(q, ws.scatter(name).text(scale), PAPER_FIGURES[q]) for q, name, scale in PAPER_ROWS]
+    rows = [(q, ws.text(name, scale), PAPER_FIGURES[q]) for q, name, scale in PAPER_ROWS]
     name, n = ws.most_common("dominant_line_name")
     rows.insert(6, ("strongest line's name (most windows)",
-                    f"{name or 'unexplained or none'} ({n} of {len(ws.windows)} windows)",
+                    f"{name or '—'} ({n} of {len(ws.windows)} windows)",
                     "—"))
     return rows
 
 
 def further_statistics(ws: WindowedStatistics) -> list[tuple[str, str]]:
     """Rows ``(quantity, this run: "mean ± scatter (min–max over windows)")``."""
-    return [(q, ws.scatter(name).text(scale)) for q, name, scale in FURTHER_ROWS]
+    return [(q, ws.text(name, scale)) for q, name, scale in FURTHER_ROWS]
 
 
 def markdown_table(rows, headers=("quantity", "this run", "paper")) -> str:

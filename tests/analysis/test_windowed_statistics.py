@@ -153,7 +153,7 @@ def test_spectral_figures_per_window():
     assert ws.scatter("half_line_found").mean == 0.5
     assert [w.lines_detected for w in ws.windows] == [2, 1, 2, 1]
     assert all(w.lines_unexplained == w.lines_detected for w in ws.windows)
-    assert ws.most_common("dominant_line_name") == ("", 4)
+    assert ws.most_common("dominant_line_name") == ("unexplained", 4)
     rows = paper_comparison(ws)
     assert ("windows with a line at half the strongest's frequency [1]",
             "0.5 ± 0.58 (0–1)", "yes (190 Hz)") in rows
@@ -178,7 +178,7 @@ def test_white_noise_force_has_no_dominant_line():
 def test_scatter_text():
     assert Scatter.of([1.0, 2.0, 3.0]).text(1e3) == "2000 ± 1e+03 (1000–3000)"
     assert Scatter.of([math.nan, 4.0]).n == 1
-    assert Scatter.of([]).text() == "none"
+    assert Scatter.of([]).text() == "none in any window"
     assert Scatter.of([2.0, 2.0]).relative_scatter == 0.0
 
 
@@ -194,3 +194,16 @@ def test_sweep_metrics_in_windows():
     assert m["band_100_500_Hz_dB"] == -300.0 and m["band_100_500_Hz_dB_std"] == 0.0
     whole = rattle_metrics(t, s, M_N)
     assert whole["windows"] == 1 and math.isnan(whole["mean_wheel_speed_std"])
+
+
+def test_a_line_in_some_windows_says_in_how_many():
+    fs, window = 10_000.0, 1.0
+    t = np.arange(round(4 * window * fs) + 1) / fs
+    W = 10.0 + np.random.default_rng(8).standard_normal(t.size)
+    W += np.where(t < 2 * window, 0.4 * np.sin(2 * np.pi * 620.0 * t), 0.0)
+    ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, window,
+                             lines=LineSearch())
+    assert ws.scatter("dominant_line_frequency").n == 2
+    assert ws.text("dominant_line_frequency").endswith("; in 2 of 4 windows")
+    assert [w.dominant_line_name for w in ws.windows] == ["unexplained"] * 2 + ["none found"] * 2
+    assert ws.text("mean_wheel_speed") == "1 ± 0 (1–1)"
