@@ -76,27 +76,40 @@ def _check_vr(name: str, value: int) -> None:
 
 
 def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr_message: int,
-                 cc: str = "gcc", guid: str | None = None) -> Path:
+                 cc: str = "gcc", guid: str | None = None, model_identifier: str | None = None,
+                 vr_last_successful_time: int | None = None) -> Path:
     """Compile the shim into ``out_path`` (a shared library) and return ``out_path``.
 
     ``inner_lib_name`` is the file name (no directory) of pythonfmu's library, which the shim
     loads from its own directory.  With ``guid``, fmi2Instantiate refuses any other GUID (as
-    FMI 2.0 asks; pythonfmu does not check).  Raises RuntimeError with the compiler's output
-    on failure.
+    FMI 2.0 asks; pythonfmu does not check), and FMU states carry it.  With
+    ``model_identifier``, the resource folder must hold that slave module.  With
+    ``vr_last_successful_time`` (a hidden Real of the slave), fmi2GetRealStatus answers
+    fmi2LastSuccessfulTime from the slave, else from the shim's own count of accepted steps.
+    Raises RuntimeError with the compiler's output on failure.
     """
-    if guid is not None and not re.fullmatch(r"[A-Za-z0-9{}-]+", guid):
+    if guid is not None and not re.fullmatch(r"[A-Za-z0-9{}-]{1,63}", guid):
         raise ValueError(f"guid must consist of letters, digits, braces and '-', got {guid!r}")
     if not re.fullmatch(r"[A-Za-z0-9_.+-]+", inner_lib_name):
         raise ValueError(f"inner_lib_name must be a plain file name, got {inner_lib_name!r}")
+    if model_identifier is not None and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,200}",
+                                                         model_identifier):
+        raise ValueError(f"model_identifier must be a C identifier, got {model_identifier!r}")
     _check_vr("vr_status_address", vr_status_address)
     _check_vr("vr_message", vr_message)
+    if vr_last_successful_time is not None:
+        _check_vr("vr_last_successful_time", vr_last_successful_time)
     out_path = Path(out_path)
     cmd = [
-        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC",
+        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
+        *([f"-DRATTLE_VR_LAST_TIME={vr_last_successful_time}u"]
+          if vr_last_successful_time is not None else []),
         *([f'-DRATTLE_GUID="{guid}"'] if guid is not None else []),
+        *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
+          if model_identifier is not None else []),
         "-o", str(out_path), str(SHIM_SOURCE), "-ldl",
     ]
     try:
@@ -118,7 +131,8 @@ def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:
     return cosim.get("modelIdentifier"), root.get("guid")
 
 
-def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> None:
+def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int,
+                 vr_last_successful_time: int | None = None) -> None:
     """Put the status shim into the FMU at ``fmu_path`` (rewritten in place).
 
     ``binaries/linux64/<modelIdentifier>.so`` (pythonfmu's library) becomes
@@ -141,7 +155,9 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> Non
 
         with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
             shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
-                                vr_status_address, vr_message, guid=guid)
+                                vr_status_address, vr_message, guid=guid,
+                                model_identifier=model_identifier,
+                                vr_last_successful_time=vr_last_successful_time)
             fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
             os.close(fd)
             try:

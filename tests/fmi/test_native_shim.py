@@ -334,7 +334,7 @@ def test_missing_inner_library_is_reported(fmus, tmp_path):
     assert r["instantiated"] is False
     [(status, category, message)] = r["log"]
     assert (status, category) == (FATAL, "logStatusFatal")
-    assert message.startswith("rattle FMI shim: cannot load ")
+    assert message.startswith("rattle FMI shim: fmi2Instantiate: cannot load ")
     assert "ShimProbe_pythonfmu.so" in message
 
 
