@@ -385,6 +385,9 @@ class RattleSlave(Fmi2Slave):
             if not (math.isfinite(step_size) and step_size > 0.0):
                 raise ModelError(
                     f"communication step size {step_size!r} s is invalid; allowed: finite, > 0")
+            if not math.isfinite(current_time):  # (its ulp, inf, would pass the check below)
+                raise ModelError(f"communication point {current_time!r} s is not finite; "
+                                 f"allowed: the end of the last step, {self._time!r} s")
             tol = COMMUNICATION_POINT_TOLERANCE * step_size + 16.0 * math.ulp(
                 max(abs(self._time), abs(current_time)))
             if not (abs(current_time - self._time) <= tol):

@@ -375,13 +375,16 @@ static int start_python(void)
     return python_error[0] == '\0';
 }
 
+/* The version of the loaded libpython ("3.11.7"), for messages. */
 static const char* python_version(void)
 {
+    static char text[32];
     void* sym = python_symbol("Py_GetVersion");
     PyGetVersionFn* version;
     if (sym == NULL) return "?";
     memcpy(&version, &sym, sizeof sym);
-    return version();
+    snprintf(text, sizeof text, "%.*s", (int)strcspn(version(), " "), version());
+    return text;
 }
 
 /* The first executable "python3" on PATH (where the embedded interpreter takes its prefix
@@ -1101,7 +1104,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         char python3[PATH_BUFFER];
         python3_on_path(python3, sizeof python3);
         instantiate_log(functions, name, fmi2Fatal,
-                        "the embedded Python interpreter (libpython %.40s) cannot start: %s. It "
+                        "the embedded Python interpreter (libpython %s) cannot start: %s. It "
                         "takes its standard library from the prefix of the python3 first on "
                         "PATH (%s): put the python3 of the loaded libpython first on PATH "
                         "(docs/native_host.md)", python_version(), python_error,
@@ -1148,16 +1151,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         if (s->collected[0] != '\0')
             host_message(s, s->collected_status >= fmi2Error ? s->collected_status : fmi2Fatal,
                          "logStatusFatal", s->collected);
-        shim_log(s, fmi2Fatal, "rattle FMI shim: fmi2Instantiate: pythonfmu could not create "
-                               "the slave%s%s%s", s->collected[0] ? " (reason above)" : "",
-                 python_started_here ? "; this native host's embedded Python (libpython " : "",
-                 python_started_here ? python_version() : "");
-        if (python_started_here)
-            shim_log(s, fmi2Fatal, "rattle FMI shim: the embedded interpreter imports the "
-                                   "slave with the standard library and packages of the "
-                                   "python3 first on PATH (%s): it must belong to the loaded "
+        if (python_started_here) /* a native host */
+            shim_log(s, fmi2Fatal, "rattle FMI shim: fmi2Instantiate: pythonfmu could not "
+                                   "create the slave%s. The embedded interpreter (libpython %s) "
+                                   "imports it with the standard library and packages of the "
+                                   "python3 first on PATH (%s), which must belong to the loaded "
                                    "libpython (docs/native_host.md)",
+                     s->collected[0] ? " (reason above)" : "", python_version(),
                      python3[0] ? python3 : "none found");
+        else
+            shim_log(s, fmi2Fatal, "rattle FMI shim: fmi2Instantiate: pythonfmu could not "
+                                   "create the slave%s", s->collected[0] ? " (reason above)" : "");
         free_shim(s);
         return NULL;
     }
