@@ -1,9 +1,11 @@
-"""Native status shim around pythonfmu's binary: build it and put it into an FMU.
+"""Native shim around pythonfmu's binary: build it and put it into an FMU.
 
 pythonfmu 0.7.0's C++ wrapper turns any Python exception into ``fmi2Fatal`` (after which
 freeing the instance corrupts the host process), ignores what the slave methods return (except
 ``do_step``: False gives ``fmi2Discard``), hands log messages to the host only with debug
-logging on and as a printf *format* string, and decodes only ``%20`` in the resource URI.
+logging on and as a printf *format* string, and checks nothing a master passes: docs/fmi.md
+("The native shim") lists what crashed, leaked or corrupted the host, and how the shim stops
+each.  Its sources are not shipped, so it cannot be rebuilt; the shim stands in front of it.
 
 ``native/rattle_fmi_shim.c`` is compiled into ``binaries/linux64/<modelIdentifier>.so``; it
 loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
@@ -11,8 +13,23 @@ and forwards every FMI 2.0 call to it, adding:
 
 * the **status protocol** below, so a slave can make any FMI call return Warning, Discard,
   Error or Fatal, with its message logged to the host whether debug logging is on or not;
-* full percent-decoding of ``file://`` resource URIs (``file:///p``, ``file://localhost/p``),
-  handed to pythonfmu as a plain path;
+* **argument checks** before anything reaches pythonfmu: instance name (non-blank UTF-8),
+  ``fmuType`` (co-simulation only), GUID, debug-logging categories, UTF-8 of String values,
+  value references of the hidden variables; refused calls return fmi2Error (NULL) with the
+  reason logged;
+* the **resource location** decoded (``file://`` URIs fully percent-decoded, plain absolute
+  paths) and checked (this FMU's ``slavemodule.txt`` and module); pythonfmu gets the canonical
+  path, or ``/proc/self/fd/<n>`` of the opened folder where the path would be misread by it
+  (a literal ``%20``, not UTF-8);
+* **FMU states** owned by the shim: tagged with the GUID, reused when the host passes one
+  back, freed with the instance; serialized with an envelope (GUID, version, length, FNV-1a
+  checksum) and never copied past pythonfmu's serialization;
+* status queries and unsupported functions answered with messages;
+  ``fmi2LastSuccessfulTime`` from the slave's own time (``vr_last_successful_time``);
+* in a native host, the **embedded interpreter started by the shim** (as ``Py_Initialize``
+  would, but with the error returned) and pythonfmu's instantiation messages forced on and
+  held, so that an interpreter that cannot start or a slave that cannot be imported is
+  reported through the host's logger, never silently;
 * pythonfmu's own log messages passed to the host as ``"%s", message`` (no format injection);
 * after pythonfmu itself returned ``fmi2Fatal`` (a Python exception), no further call reaches
   it: later calls return Fatal, and ``fmi2FreeInstance`` frees only the shim's part and leaks
