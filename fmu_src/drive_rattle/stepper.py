@@ -149,6 +149,30 @@ class WheelStepper:
         self.pinion = (phi_p, w_p)
         self.last = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
 
+    @classmethod
+    def from_snapshot(cls, params: MeshParameters, state: WheelState,
+                      pinion: tuple[float, float], last: StepResult, **options) -> WheelStepper:
+        """A stepper in a saved state (a restored FMU state): ``state``, ``pinion`` and the
+        last step's aggregates ``last`` are taken as they are.  Unlike the constructor, it
+        solves no start equilibrium and checks no start condition (the state was valid when
+        it was saved, and its pinion has moved on since the start).  ``options`` go to the
+        subclass' setup (e.g. the kernel ``library``)."""
+        stepper = cls.__new__(cls)
+        stepper._setup_from_snapshot(params, state, pinion, last, **options)
+        return stepper
+
+    def _setup_from_snapshot(self, params: MeshParameters, state: WheelState,
+                             pinion: tuple[float, float], last: StepResult) -> None:
+        """What ``from_snapshot`` sets: the constructor's mesh set-up, then copies of the
+        saved state (the caller keeps its objects)."""
+        self.params = params
+        self.mesh = MeshModel(params)
+        self.geometry = self.mesh.geometry
+        self.state = WheelState(*state.as_tuple())
+        self.pinion = (float(pinion[0]), float(pinion[1]))
+        self.last = StepResult(last.tau_wheel_mean, last.tau_pinion_mean, last.W_peak,
+                               last.delta_peak, last.onsets_drive, last.onsets_coast)
+
     # ------------------------------------------------------------------ initial state
     def equilibrium_state(self, phi_p: float, w_p: float, tau_load: float) -> WheelState:
         """Wheel at the rigid speed ratio, resting on the flank that carries ``tau_load``
