@@ -98,7 +98,11 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
 
     from drive_rattle_fmi.documentation import HOW_TO_RUN, html_page
     from drive_rattle_fmi.native import install_shim
-    from drive_rattle_fmi.slave import MESSAGE_VARIABLE, STATUS_ADDRESS_VARIABLE
+    from drive_rattle_fmi.slave import (
+        LAST_SUCCESSFUL_TIME_VARIABLE,
+        MESSAGE_VARIABLE,
+        STATUS_ADDRESS_VARIABLE,
+    )
 
     name = script.stem
     cls = _slave_class(name, script)
@@ -118,7 +122,8 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
                              canSerializeFMUstate=True)
     slave = cls(instance_name="build")
     vrs = {v.name: v.value_reference for v in slave.vars.values()}
-    install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE])
+    install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE],
+                 vrs[LAST_SUCCESSFUL_TIME_VARIABLE])
     return fmu
 
 

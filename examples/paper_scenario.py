@@ -1,8 +1,10 @@
 """The paper's creep-rattle scenario (MODEL_NOTES section 3): co-simulate the GearMeshRattle and
-Driveline FMUs on their default parameters, write the paper's Figures 3-5 as PNG files and a
-Markdown table comparing the run with the paper's reported figures.
+Driveline FMUs, drop the start transient, and compare the statistics of equal windows after it
+(mean ± window-to-window scatter, min–max) with the paper's reported figures; write the paper's
+Figures 3-5 as PNG files and the comparison as Markdown.
 
-    python examples/paper_scenario.py [--stop-time 2.0] [--out out/paper_scenario]
+    python examples/paper_scenario.py [--stop-time 11] [--transient 1] [--window 2]
+        [--set GearMeshRattle.contact.damping=50] [--out out/paper_scenario]
 
 The FMUs are built into dist/ first (build_fmu.py) unless --fmu-dir points to built ones.
 """
@@ -10,39 +12,57 @@ The FMUs are built into dist/ first (build_fmu.py) unless --fmu-dir points to bu
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from drive_rattle import MeshModel, MeshParameters
+from drive_rattle import MAX_PAIR_SLOTS, MeshModel, MeshParameters
 from drive_rattle.analysis import (
+    catalogue_for,
+    further_statistics,
     markdown_table,
     onsets_from_counters,
     paper_comparison,
-    rattle_statistics,
-    welch_spectrum,
+    windowed_statistics,
 )
 from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.spectral_lines import KINDS, UNEXPLAINED, LineSearch, detect_lines, welch_spectrum
 from drive_rattle_cosim.fmus import build_fmus
 from drive_rattle_cosim.harness import CoSimulation
 
 ROOT = Path(__file__).resolve().parents[1]
 MESH_OUTPUTS = ["wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak", "mesh.delta_peak",
                 "mesh.v_impact", "mesh.n_contact", "mesh.impacts_drive", "mesh.impacts_coast",
-                *(f"pair[{k}].W" for k in range(8))]
+                *(f"pair[{k}].W" for k in range(MAX_PAIR_SLOTS))]
+#: Welch segment [s]: 4 Hz resolution, enough to tell engine orders 13.8 Hz apart at 830 rpm.
+SEGMENT_SECONDS = 0.25
+KIND_COLOURS = {"mesh": "tab:red", "sideband": "tab:purple", "engine order": "tab:orange",
+                UNEXPLAINED: "black"}
 
 
-def run(stop_time: float = 2.0, step: float = 1e-4, out_dir: str | Path = "out/paper_scenario",
-        fmu_dir: str | Path | None = None, show_plot: bool = False, progress: bool = False) -> dict:
-    """Run the scenario; returns the statistics, the comparison rows and the written files."""
+def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
+        step: float = 1e-4, out_dir: str | Path = "out/paper_scenario",
+        fmu_dir: str | Path | None = None, parameters: dict | None = None,
+        significance: float = 0.01, show_plot: bool = False, progress: bool = False) -> dict:
+    """Run the scenario; returns the windowed statistics, the comparison rows, the lines of
+    the spectrum after the transient, the written files and the wall time of the run [s]."""
+    parameters = dict(parameters or {})
+    mesh_params = MeshParameters.from_public(_unit_parameters(parameters, "GearMeshRattle"))
+    drive_params = DrivelineParameters.from_public(_unit_parameters(parameters, "Driveline"))
+    if not (0 <= transient < stop_time and window > 0 and transient + window <= stop_time):
+        raise ValueError(f"stop_time = {stop_time!r} s, transient = {transient!r} s, window = "
+                         f"{window!r} s; allowed: 0 <= transient, window > 0 and transient + "
+                         "window <= stop_time")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if fmu_dir is None:
         fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
+    fmu_dir = Path(fmu_dir)
     wall = time.perf_counter()
-    with CoSimulation(fmu_dir / "GearMeshRattle.fmu", fmu_dir / "Driveline.fmu",
+    with CoSimulation(fmu_dir / "GearMeshRattle.fmu", fmu_dir / "Driveline.fmu", parameters,
                       step=step) as sim:
         res = sim.run(stop_time, [f"GearMeshRattle.{n}" for n in MESH_OUTPUTS],
                       progress=progress)
@@ -50,93 +70,226 @@ def run(stop_time: float = 2.0, step: float = 1e-4, out_dir: str | Path = "out/p
     res.to_csv(out / "cosim.csv")
     t = np.asarray(res.time)
     s = {name.split(".", 1)[1]: np.asarray(col) for name, col in res.columns.items()}
-    _onset_t, onset_v, onset_f = onsets_from_counters(
-        t, s["mesh.impacts_drive"], s["mesh.impacts_coast"], s["mesh.v_impact"])
-    mesh_params, drive_params = MeshParameters(), DrivelineParameters()
-    stats = rattle_statistics(t, s, onset_v, onset_f, MeshModel(mesh_params).normal_mass)
-    spec = welch_spectrum(t, s["mesh.W"], segment_seconds=min(0.25, stop_time / 4))
-    rows = paper_comparison(stats, spec)
-    table = markdown_table(rows)
-    extra = markdown_table([
-        ("impacts per second, drive flank [1/s]", stats.impacts_per_second_drive),
-        ("impacts per second, coast flank [1/s]", stats.impacts_per_second_coast),
-        ("peak impact velocity [mm/s]", stats.peak_impact_speed * 1e3),
-        ("RMS normal force [N]", stats.rms_normal_force),
-        ("peak normal force [N]", stats.peak_normal_force),
-        ("fraction of time in contact [1]", stats.contact_fraction),
-        ("wall time per simulated second [s]", wall / stop_time),
-    ], headers=("further statistics", "this run"))
+    onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
+                                  s["mesh.v_impact"])
+    search = LineSearch(significance=significance)
+    catalogue = catalogue_for(mesh_params, drive_params)
+    ws = windowed_statistics(t, s, *onsets, MeshModel(mesh_params).normal_mass, transient,
+                             window, lines=search, catalogue=catalogue,
+                             segment_seconds=SEGMENT_SECONDS)
+    # The spectrum of everything the windows cover: more averages, so weaker lines show.
+    analysed = slice(ws.slices[0].start + 1, ws.slices[-1].stop)
+    full = detect_lines(welch_spectrum(t[analysed], s["mesh.W"][analysed], SEGMENT_SECONDS),
+                        search, catalogue)
+    per_window = [detect_lines(welch_spectrum(t[sl][1:], s["mesh.W"][sl][1:], SEGMENT_SECONDS),
+                               search, catalogue) for sl in ws.slices]
+    rows = paper_comparison(ws)
+    table = markdown_table(rows, headers=("quantity", "this run: mean ± scatter (min–max "
+                                          "over windows)", "paper"))
+    further = markdown_table(further_statistics(ws), headers=("further statistics",
+                                                              "this run"))
+    lines = markdown_table(
+        [(f"{ln.frequency:.1f}", ln.name or "unexplained", ln.kind, f"{ln.ratio_db:.1f}",
+          f"{sum(d.near(ln.frequency) is not None for d in per_window)} of {len(per_window)}")
+         for ln in full.lines],
+        headers=("line [Hz]", "name", "kind", "above floor [dB]", "found in windows"))
+    spec = full.spectrum
+    setting = ", ".join(f"`{k}={v}`" for k, v in parameters.items()) or "defaults"
     report = out / "comparison.md"
     report.write_text(
         f"# Paper scenario: {stop_time:g} s co-simulated (GearMeshRattle + Driveline FMUs, "
-        f"fmpy harness) at a {step:g} s communication step\n\n"
-        "Rattle is chaotic: compare statistics, not trajectories. Impact velocities are the\n"
-        "normal approach speeds at contact onsets (`mesh.v_impact`); the paper's figures come\n"
-        "from its own, unpublished gear data (see docs/model.md).\n\n"
-        + table + "\n" + extra)
+        f"fmpy harness, {step:g} s communication step; parameters: {setting})\n\n"
+        f"Statistics of {len(ws.windows)} windows of {ws.window:g} s after a start transient "
+        f"of {ws.transient:g} s (left out): mean ± window-to-window standard deviation "
+        "(min–max over the windows). Rattle is chaotic: compare statistics, not trajectories. "
+        "Impact velocities are the normal approach speeds at contact onsets "
+        "(`mesh.v_impact`); the paper's figures come from its own, unpublished gear data "
+        "(docs/model.md). Spectral lines: Welch spectra of the total normal force "
+        f"({SEGMENT_SECONDS:g} s Hann segments, {spec.resolution:g} Hz resolution), a line "
+        f"where the PSD exceeds its noise floor at {significance:.0%} family-wise "
+        "significance (docs/analysis.md).\n\n"
+        + table + "\n" + further
+        + f"\nWall time of the co-simulation: {wall:.1f} s ({wall / stop_time:.2f} s per "
+        "simulated second).\n\n"
+        f"## Lines of the spectrum after the transient ({spec.segments} segments, "
+        f"{spec.dof:.0f} degrees of freedom, {len(full.lines)} lines found in "
+        f"{full.search.f_min:g}–{full.search.f_max:g} Hz)\n\n"
+        f"Names: mesh = z_p n/60 = {catalogue.mesh_frequency:.1f} Hz, Ek = engine order k "
+        f"(k × {catalogue.shaft_frequency:.2f} Hz); a name means the line lies within one "
+        "bin of that frequency. \"found in windows\": windows whose own spectrum has a line "
+        "there.\n\n" + lines)
     files = [report, out / "cosim.csv",
-             *_figures(t, s, spec, drive_params, mesh_params, out, show_plot)]
-    return {"statistics": stats, "rows": rows, "files": files, "table": table}
+             *_figures(t, s, ws, full, catalogue, out, show_plot)]
+    return {"statistics": ws, "rows": rows, "lines": full, "files": files, "table": table,
+            "wall_seconds": wall}
 
 
-def _figures(t, s, spec, drive_params, mesh_params, out: Path, show_plot: bool) -> list[Path]:
+def _unit_parameters(parameters: dict, unit: str) -> dict:
+    return {k.split(".", 1)[1]: v for k, v in parameters.items() if k.startswith(unit + ".")}
+
+
+def _figures(t, s, ws, full, catalogue, out: Path, show_plot: bool) -> list[Path]:
     import matplotlib
 
     if not show_plot:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    files = []
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.plot(t, s["wheel.w"], lw=0.6)
-    ax.axhline(np.mean(s["wheel.w"]), color="k", ls="--", lw=0.8, label="mean")
-    ax.set(xlabel="time [s]", ylabel="wheel speed [rad/s]", title="Wheel speed (paper Fig. 3)")
-    ax.legend()
-    files.append(_save(fig, out / "fig3_wheel_speed.png"))
-
-    slot = max(range(8), key=lambda k: np.max(s[f"pair[{k}].W"]))
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.plot(t, s[f"pair[{slot}].W"], lw=0.6)
-    ax.set(xlabel="time [s]", ylabel="normal force [N]",
-           title=f"Normal force of tooth-pair slot {slot} (paper Fig. 4)")
-    files.append(_save(fig, out / "fig4_pair_force.png"))
-
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.semilogy(spec.frequency, spec.psd, lw=0.8)
-    f_engine = drive_params.w_mean / (2 * np.pi)
-    top = float(np.max(spec.psd))
-    for order, _amp, _phase in drive_params.order_terms():
-        ax.axvline(order * f_engine, color="tab:orange", ls=":", lw=0.8)
-        ax.text(order * f_engine, top, f"{order:g}E", color="tab:orange", fontsize=7,
-                ha="center", va="bottom")
-    f_mesh = mesh_params.z_pinion * f_engine
-    ax.axvline(f_mesh, color="tab:red", ls="--", lw=0.8, label=f"mesh {f_mesh:.0f} Hz")
-    ax.set(xlim=(0, 2000), xlabel="frequency [Hz]", ylabel="PSD of total normal force [N²/Hz]",
-           title="Impact force spectrum (paper Fig. 5, Welch)")
-    ax.legend()
-    files.append(_save(fig, out / "fig5_force_spectrum.png"))
+    files = [_fig3(plt, t, s, ws, out), _fig4(plt, t, s, ws, catalogue, out),
+             _fig5(plt, full, catalogue, out)]
     if show_plot:
         plt.show()
     plt.close("all")
     return files
 
 
+def _fig3(plt, t, s, ws, out: Path) -> Path:
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.plot(t, s["wheel.w"], lw=0.5, color="tab:blue", label="wheel speed")
+    ax.axvspan(t[0], t[0] + ws.transient, color="0.85", zorder=0,
+               label=f"start transient ({ws.transient:g} s, left out)")
+    for start in ws.starts[1:]:
+        ax.axvline(start, color="0.6", lw=0.6, ls=":")
+    mean = ws.scatter("mean_wheel_speed")
+    ax.hlines(mean.mean, ws.starts[0], ws.starts[-1] + ws.window, color="k", ls="--", lw=0.9,
+              label=f"mean after the transient: {mean.text(digits=4)} rad/s")
+    ax.set(xlabel="time [s]", ylabel="wheel speed [rad/s]",
+           title=f"Wheel speed (paper Fig. 3); dotted: the {len(ws.windows)} windows "
+                 f"of {ws.window:g} s")
+    ax.legend(loc="lower right", fontsize=8)
+    return _save(fig, out / "fig3_wheel_speed.png")
+
+
+def _fig4(plt, t, s, ws, catalogue, out: Path) -> Path:
+    """One tooth pair's normal force over three passages through the zone of action, around
+    its largest force after the transient."""
+    analysed = slice(ws.slices[0].start, ws.slices[-1].stop)
+    ta = t[analysed]
+    slot = max(range(MAX_PAIR_SLOTS), key=lambda k: np.max(s[f"pair[{k}].W"][analysed]))
+    force = s[f"pair[{slot}].W"][analysed]
+    period = MAX_PAIR_SLOTS / catalogue.mesh_frequency  # the slot's next pair enters then
+    centre = ta[int(np.argmax(force))]
+    lo = max(ta[0], centre - 1.5 * period)
+    hi = min(ta[-1], lo + 3 * period)
+    span = (ta >= lo) & (ta <= hi)
+    drive = np.ptp(s["mesh.impacts_drive"][analysed][span])
+    coast = np.ptp(s["mesh.impacts_coast"][analysed][span])
+    if drive + coast == 0:
+        flank = "no contact onset in this span (the flanks stay in contact)"
+    elif coast == 0:
+        flank = f"drive flank: all {drive} contact onsets in this span"
+    elif drive == 0:
+        flank = f"coast flank: all {coast} contact onsets in this span"
+    else:
+        flank = f"both flanks: {drive} onsets on the drive, {coast} on the coast flank"
+    fig, ax = plt.subplots(figsize=(9, 4.2))
+    ax.plot(ta[span] * 1e3, s["mesh.W"][analysed][span], lw=0.6, color="0.7",
+            label="total normal force of all pairs (mesh.W)")
+    ax.plot(ta[span] * 1e3, force[span], lw=1.0, color="tab:blue",
+            label=f"normal force of the pair in slot {slot} (pair[{slot}].W)")
+    ax.set(xlabel="time [ms]", ylabel="normal force [N]")
+    ax.set_title(f"Normal force of one tooth pair (slot {slot}) as it passes through the zone "
+                 f"of action (paper Fig. 4)\n{flank}; a new pair takes this slot every "
+                 f"{period * 1e3:.1f} ms", fontsize=10)
+    ax.legend(loc="upper right", fontsize=8)
+    return _save(fig, out / "fig4_pair_force.png")
+
+
+def _fig5(plt, full, catalogue, out: Path) -> Path:
+    """The spectrum after the transient with its noise floor, the detection threshold, and
+    every detected line marked and named; names staggered in a strip above the plot."""
+    spec = full.spectrum
+    f_max = min(full.search.f_max, spec.frequency[-1])
+    fig, (strip, ax) = plt.subplots(2, 1, figsize=(12, 6.5), sharex=True, layout="constrained",
+                                    gridspec_kw={"height_ratios": [1, 3.2]})
+    shown = spec.frequency <= f_max
+    ax.semilogy(spec.frequency[shown], spec.psd[shown], lw=0.7, color="tab:blue",
+                label="PSD of the total normal force")
+    ax.semilogy(spec.frequency[shown], full.floor[shown], lw=0.8, color="0.45",
+                label="noise floor (running median)")
+    ax.semilogy(spec.frequency[shown], (full.floor * full.threshold)[shown], lw=0.8,
+                color="0.45", ls="--",
+                label=f"line threshold ({full.search.significance:.0%} family-wise)")
+    for ln in full.lines:
+        ax.plot(ln.frequency, ln.psd * 1.6, "v", ms=4, color=KIND_COLOURS[ln.kind])
+        strip.axvline(ln.frequency, color=KIND_COLOURS[ln.kind], lw=0.4, alpha=0.5)
+    for kind in (*KINDS, UNEXPLAINED):  # legend entries for the marker colours
+        ax.plot([], [], "v", color=KIND_COLOURS[kind], label=f"detected line: {kind}")
+    _staggered_names(fig, strip, full.lines, f_max)
+    ax.set(xlim=(0, f_max), xlabel="frequency [Hz]", ylabel="PSD [N²/Hz]")
+    ax.legend(loc="lower center", fontsize=7, ncol=2)
+    strip.set_title(
+        f"Normal-force spectrum after the transient (paper Fig. 5): Welch, {spec.segments} "
+        f"Hann segments, {spec.resolution:g} Hz bins; mesh {catalogue.mesh_frequency:.1f} Hz, "
+        f"engine order 1 = {catalogue.shaft_frequency:.2f} Hz", fontsize=10)
+    return _save(fig, out / "fig5_force_spectrum.png")
+
+
+def _staggered_names(fig, strip, lines, f_max: float, tiers: int = 4) -> None:
+    """Names of the lines as vertical text in ``strip``, each in the lowest tier where it
+    keeps a text height from its neighbours (the tier counter wraps if all are taken)."""
+    strip.set(ylim=(0, tiers), yticks=[])
+    for side in ("left", "right", "top"):
+        strip.spines[side].set_visible(False)
+    fig.canvas.draw()
+    width_px = strip.get_window_extent().width
+    text_px = 9.0  # height of 6.5 pt text at 120 dpi, plus a gap
+    min_df = text_px / width_px * f_max
+    last = [-math.inf] * tiers
+    for n, ln in enumerate(sorted(lines, key=lambda x: x.frequency)):
+        free = [k for k in range(tiers) if ln.frequency - last[k] >= min_df]
+        tier = free[0] if free else n % tiers
+        last[tier] = ln.frequency
+        name = ln.name or f"{ln.frequency:.0f} Hz ?"
+        strip.text(ln.frequency, tier + 0.05, name, rotation=90, fontsize=6.5,
+                   ha="center", va="bottom", color=KIND_COLOURS[ln.kind], clip_on=True)
+
+
 def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     fig.savefig(path, dpi=120)
     return path
 
 
+def _parse_set(items: list[str]) -> dict:
+    params = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or "." not in key:
+            raise SystemExit(f"--set {item!r}: expected UNIT.NAME=VALUE")
+        low = value.lower()
+        if low in ("true", "false"):
+            params[key] = low == "true"
+        else:
+            try:
+                params[key] = float(value)
+            except ValueError:
+                params[key] = value
+    return params
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--stop-time", type=float, default=2.0, help="simulated time [s]")
+    ap.add_argument("--stop-time", type=float, default=11.0, help="simulated time [s]")
+    ap.add_argument("--transient", type=float, default=1.0,
+                    help="start transient left out of the statistics [s]")
+    ap.add_argument("--window", type=float, default=2.0,
+                    help="window of the statistics [s]; the scatter is over the windows")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
+    ap.add_argument("--set", action="append", default=[], metavar="UNIT.NAME=VALUE",
+                    help="parameter value (SI), e.g. GearMeshRattle.contact.damping=50")
+    ap.add_argument("--significance", type=float, default=0.01,
+                    help="family-wise false-alarm probability of the line search")
     ap.add_argument("--out", default="out/paper_scenario", help="output folder")
     ap.add_argument("--fmu-dir", default=None, help="folder with built FMUs (default: build)")
     ap.add_argument("--show", action="store_true", help="show the figures")
     args = ap.parse_args(argv)
-    result = run(args.stop_time, args.step, args.out, args.fmu_dir, args.show, progress=True)
+    result = run(args.stop_time, args.transient, args.window, args.step, args.out,
+                 args.fmu_dir, _parse_set(args.set), args.significance, args.show,
+                 progress=True)
     print(result["table"])
+    print(f"co-simulation wall time {result['wall_seconds']:.1f} s")
     for f in result["files"]:
         print("wrote", f)
     return 0

@@ -1,19 +1,22 @@
-"""Rattle maps: the rattle index (impact kinetic energy per second) of the co-simulated
-paper scenario over two parameter planes, as PNG heat maps --
+"""Rattle maps: the rattle index (impact kinetic energy per second) of the co-simulated paper
+scenario over two parameter planes, as PNG heat maps --
 
 * backlash x drag torque,
 * order-2 amplitude x engine speed --
 
 each a grid sweep on dask (LocalCluster) with results written case by case, so that an
-interrupted run resumes where it stopped.
+interrupted run resumes where it stopped.  Every case runs a start transient (left out) and
+then several equal windows; a map shows the mean over the windows, hatched where the
+window-to-window scatter exceeds a stated fraction of the value, next to a map of that scatter.
 
-    python examples/rattle_maps.py [--points 5] [--stop-time 0.3] [--workers 2]
-                                   [--out out/rattle_maps]
+    python examples/rattle_maps.py [--points 5] [--transient 1] [--window 1] [--windows 3]
+                                   [--workers 2] [--out out/rattle_maps]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from pathlib import Path
@@ -35,68 +38,160 @@ MAPS = (
      "Driveline.engine.amplitude[1]", (100.0, 600.0), 1.0, "order-2 amplitude [rad/s²]",
      "Driveline.engine.w_mean", (700 * RPM, 1500 * RPM), 1 / RPM, "engine speed [rpm]"),
 )
+#: Hatch a cell whose window-to-window standard deviation exceeds this fraction of its mean.
+SCATTER_LIMIT = 0.2
 
 
-def run(points: int = 5, stop_time: float = 0.3, workers: int = 2,
-        out_dir: str | Path = "out/rattle_maps", fmu_dir: str | Path | None = None,
-        progress: bool = True) -> dict:
-    """Sweep both planes and draw the maps; returns the written files and the sweep counts."""
+def run(points: int = 5, transient: float = 1.0, window: float = 1.0, windows: int = 3,
+        workers: int = 2, out_dir: str | Path = "out/rattle_maps",
+        fmu_dir: str | Path | None = None, progress: bool = True,
+        scatter_limit: float = SCATTER_LIMIT) -> dict:
+    """Sweep both planes (``points`` values per parameter; each case ``transient`` +
+    ``windows`` x ``window`` seconds) and draw the maps; returns the written files and the
+    sweep counts."""
+    if not (points >= 1 and windows >= 1 and window > 0 and transient >= 0):
+        raise ValueError(f"points = {points!r}, windows = {windows!r}, window = {window!r} s, "
+                         f"transient = {transient!r} s; allowed: points >= 1, windows >= 1, "
+                         "window > 0, transient >= 0")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if fmu_dir is None:
         fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
+    stop_time = transient + windows * window
+    settings = {"transient [s]": transient, "window [s]": window, "windows": windows}
     files, counts = [], {}
     for stem, xname, xr, xf, xlabel, yname, yr, yf, ylabel in MAPS:
         results = out / f"{stem}.csv"
+        _same_settings(out / f"{stem}.settings.json", settings, results)
         cases = grid_design({xname: xr, yname: yr}, points)
         counts[stem] = run_sweep(cases, results, fmu_dir, stop_time, workers=workers,
-                                 progress=progress)
-        files += [results, _heat_map(read_results(results), xname, xf, xlabel, yname, yf,
-                                     ylabel, out / f"{stem}.png", stop_time)]
-    return {"files": files, "counts": counts}
+                                 progress=progress, transient=transient, window=window)
+        title = (f"{windows} windows of {window:g} s per case after a {transient:g} s "
+                 "transient")
+        files += [results, _heat_map(read_results(results), (xname, xf, xlabel),
+                                     (yname, yf, ylabel), out / f"{stem}.png", title,
+                                     scatter_limit)]
+    return {"files": files, "counts": counts, "stop_time": stop_time}
 
 
-def _heat_map(rows, xname, xf, xlabel, yname, yf, ylabel, path: Path, stop_time) -> Path:
+def _same_settings(path: Path, settings: dict, results: Path) -> None:
+    """A sweep resumes only with the settings it started with (the case ids are those of the
+    parameters alone)."""
+    if results.exists() and path.exists():
+        before = json.loads(path.read_text(encoding="utf-8"))
+        if before != settings:
+            raise ValueError(f"{results} was run with {before}, not {settings}; use another "
+                             "--out or delete it")
+    path.write_text(json.dumps(settings), encoding="utf-8")
+
+
+def _grid(rows, name):
+    return sorted({r[name] for r in rows})
+
+
+def _edges(values: np.ndarray) -> np.ndarray:
+    """Cell edges around grid values (midpoints; the end cells symmetric)."""
+    if len(values) == 1:
+        return np.array([values[0] - 0.5, values[0] + 0.5]) * (abs(values[0]) or 1.0)
+    mid = (values[1:] + values[:-1]) / 2
+    return np.concatenate([[2 * values[0] - mid[0]], mid, [2 * values[-1] - mid[-1]]])
+
+
+def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import LogNorm, Normalize
+    from matplotlib.patches import Patch, Rectangle
 
-    xs = sorted({r[xname] for r in rows})
-    ys = sorted({r[yname] for r in rows})
-    z = np.full((len(ys), len(xs)), np.nan)
+    (xname, xf, xlabel), (yname, yf, ylabel) = x, y
+    xs, ys = _grid(rows, xname), _grid(rows, yname)
+    mean = np.full((len(ys), len(xs)), np.nan)
+    spread = np.full_like(mean, np.nan)
     for r in rows:
-        z[ys.index(r[yname]), xs.index(r[xname])] = r["rattle_index_W"]
-    positive = z[np.isfinite(z) & (z > 0)]
+        i, j = ys.index(r[yname]), xs.index(r[xname])
+        mean[i, j] = r["rattle_index_W"]
+        std = r.get("rattle_index_W_std", math.nan)
+        spread[i, j] = std / mean[i, j] if mean[i, j] > 0 else math.nan
+    xv, yv = np.asarray(xs) * xf, np.asarray(ys) * yf
+    xe, ye = _edges(xv), _edges(yv)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 5), layout="constrained")
+    positive = mean[np.isfinite(mean) & (mean > 0)]
     if positive.size and positive.max() > positive.min():  # log colours over the impacts
-        norm, z = LogNorm(positive.min(), positive.max()), np.maximum(z, positive.min())
+        norm, shown = LogNorm(positive.min(), positive.max()), np.maximum(mean, positive.min())
     else:  # no impact, or all equal: a log scale has no range
-        norm = Normalize()
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    mesh = ax.pcolormesh(np.asarray(xs) * xf, np.asarray(ys) * yf, z, shading="nearest",
-                         norm=norm, cmap="magma")
-    fig.colorbar(mesh, ax=ax, label="rattle index: impact energy per second [W]")
+        norm, shown = Normalize(), mean
+    m1 = ax.pcolormesh(xe, ye, shown * 1e3, norm=_scaled(norm, 1e3), cmap="magma")
+    fig.colorbar(m1, ax=ax, label="rattle index: impact energy per second [mW]")
+    m2 = ax2.pcolormesh(xe, ye, spread * 100, cmap="viridis", vmin=0,
+                        vmax=max(100.0, float(np.nanmax(spread, initial=0)) * 100))
+    fig.colorbar(m2, ax=ax2, label="window-to-window std / mean [%]")
+    handles = []
+    for i in range(len(ys)):
+        for j in range(len(xs)):
+            cell = (xe[j], ye[i]), xe[j + 1] - xe[j], ye[i + 1] - ye[i]
+            if spread[i, j] > scatter_limit:
+                ax.add_patch(Rectangle(*cell, fill=False, hatch="//", ec="cyan", lw=0))
+            if np.isfinite(mean[i, j]):
+                text = "no\nimpact" if mean[i, j] == 0 else f"{mean[i, j] * 1e3:.3g}"
+                _label(ax, xv[j], yv[i], text, m1.to_rgba(shown[i, j] * 1e3))
+            if np.isfinite(spread[i, j]):
+                _label(ax2, xv[j], yv[i], f"{spread[i, j] * 100:.0f} %",
+                       m2.to_rgba(spread[i, j] * 100))
+    if np.any(spread > scatter_limit):
+        handles.append(Patch(fill=False, hatch="///", ec="cyan",
+                             label=f"scatter > {scatter_limit:.0%} of the value"))
     failed = [(r[xname] * xf, r[yname] * yf) for r in rows if r["error"]]
     if failed:
-        ax.plot(*zip(*failed, strict=True), "x", color="cyan", label="failed case")
-        ax.legend()
-    ax.set(xlabel=xlabel, ylabel=ylabel, title=f"Rattle index ({stop_time:g} s per case)")
-    fig.tight_layout()
+        handles += ax.plot(*zip(*failed, strict=True), "x", color="cyan", ms=10,
+                           label="failed case")
+    if handles:
+        ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.9)
+    for a in (ax, ax2):
+        a.set_xticks(xv, [f"{v:.4g}" for v in xv])
+        a.set_yticks(yv, [f"{v:.4g}" for v in yv])
+        a.set(xlabel=xlabel, ylabel=ylabel)
+    ax.set_title("Rattle index (mean over the windows)", fontsize=10)
+    ax2.set_title("Its scatter over the windows", fontsize=10)
+    fig.suptitle(title, fontsize=10)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
 
+def _label(ax, x, y, text: str, background) -> None:
+    """Cell text in black or white, whichever reads on the cell's colour, on a faint box so
+    that hatching does not cross it."""
+    r, g, b, _ = background
+    dark = 0.299 * r + 0.587 * g + 0.114 * b < 0.5  # luma (ITU-R BT.601)
+    ax.text(x, y, text, ha="center", va="center", fontsize=7.5,
+            color="white" if dark else "black",
+            bbox={"boxstyle": "round,pad=0.15", "lw": 0, "fc": background})
+
+
+def _scaled(norm, factor: float):
+    """``norm`` for values multiplied by ``factor``."""
+    from matplotlib.colors import LogNorm, Normalize
+
+    if isinstance(norm, LogNorm):
+        return LogNorm(norm.vmin * factor, norm.vmax * factor)
+    return Normalize()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=5, help="grid points per parameter")
-    ap.add_argument("--stop-time", type=float, default=0.3, help="simulated time per case [s]")
+    ap.add_argument("--transient", type=float, default=1.0,
+                    help="start transient per case, left out [s]")
+    ap.add_argument("--window", type=float, default=1.0, help="window of the statistics [s]")
+    ap.add_argument("--windows", type=int, default=3, help="windows per case")
     ap.add_argument("--workers", type=int, default=2, help="dask worker processes")
     ap.add_argument("--out", default="out/rattle_maps")
     ap.add_argument("--fmu-dir", default=None, help="folder with built FMUs (default: build)")
     args = ap.parse_args(argv)
-    result = run(args.points, args.stop_time, args.workers, args.out, args.fmu_dir)
+    result = run(args.points, args.transient, args.window, args.windows, args.workers,
+                 args.out, args.fmu_dir)
     for stem, c in result["counts"].items():
         print(f"{stem}: {c['done']} cases run ({c['failed']} failed), {c['skipped']} resumed")
     for f in result["files"]:

@@ -5,9 +5,24 @@ the reflected vehicle inertia.  Thin: physics in drive_rattle, FMI glue in drive
 from pathlib import Path
 
 from drive_rattle.driveline import Driveline as DrivelineModel
-from drive_rattle.driveline import DrivelineParameters, ShaftState
+from drive_rattle.driveline import (
+    DrivelineParameters,
+    ShaftState,
+    read_speed_table,
+    resolve_speed_table,
+)
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS
-from drive_rattle_fmi.slave import RattleSlave
+from drive_rattle_fmi.slave import RattleSlave, check_snapshot_fields
+
+#: The model snapshot of an FMU state (check_snapshot_fields layout): the shaft's vehicle-side
+#: angle and speed and its torque, the time, the last step, and the speed table read at
+#: initialization ([times, speeds], or None for engine orders; checked when rebuilt).
+SNAPSHOT_LAYOUT = {
+    "shaft": ("f", "f", "f"),
+    "time": ("=f",),
+    "last_step": ("=f+",),
+    "table": ("any",),
+}
 
 
 class Driveline(RattleSlave):
@@ -23,9 +38,20 @@ class Driveline(RattleSlave):
     OUTPUTS = DRIVELINE_OUTPUTS
 
     def _build(self, params, inputs):
-        resources = Path(self.resources) if self.resources else None
         return DrivelineModel(params, self._start_time, inputs["wheel.phi"], inputs["wheel.w"],
-                              resources)
+                              table=self._speed_table(params))
+
+    def _speed_table(self, params):
+        """The speed table the parameters name, read once per file name (initialization mode
+        builds the model on every output read); None for engine orders."""
+        if not params.speed_table:
+            return None
+        cached = getattr(self, "_table_cache", None)
+        if cached is None or cached[0] != params.speed_table:
+            resources = Path(self.resources) if self.resources else None
+            table = read_speed_table(resolve_speed_table(params.speed_table, resources))
+            self._table_cache = cached = (params.speed_table, table)
+        return cached[1]
 
     def _step(self, t, h, inputs):
         self._model.step(t, h, inputs["wheel.phi"], inputs["wheel.w"])
@@ -37,11 +63,15 @@ class Driveline(RattleSlave):
 
     def _model_state(self, model):
         return {"shaft": [model.shaft.state.phi, model.shaft.state.w, model.shaft.tau_load],
-                "time": model.time, "last_step": model.last_step}
+                "time": model.time, "last_step": model.last_step,
+                "table": None if model.table is None else [model.table[0], model.table[1]]}
 
-    def _restore_model_state(self, model, state):
-        phi, w, tau = state["shaft"]
-        model.shaft.state = ShaftState(phi, w)
-        model.shaft.tau_load = tau
-        model.time = state["time"]
-        model.last_step = state["last_step"]
+    def _model_from_snapshot(self, params, start_time, snapshot):
+        s = check_snapshot_fields(snapshot, SNAPSHOT_LAYOUT)
+        table = s["table"]
+        if table is not None and not (isinstance(table, list) and len(table) == 2):
+            raise ValueError(f"model snapshot 'table' = {str(table)[:60]!r}: expected "
+                             "[times, speeds] or null")
+        phi, w, tau = s["shaft"]
+        return DrivelineModel.from_snapshot(params, start_time, ShaftState(phi, w), tau,
+                                            s["time"], s["last_step"], table)

@@ -8,7 +8,15 @@ from drive_rattle.interface import MESH_INPUTS, MESH_OUTPUTS, mesh_outputs
 from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
 from drive_rattle.parameters import MeshParameters
 from drive_rattle.stepper import StepResult, WheelState, WheelStepper
-from drive_rattle_fmi.slave import WARNING, RattleSlave
+from drive_rattle_fmi.slave import WARNING, RattleSlave, check_snapshot_fields
+
+#: The model snapshot of an FMU state (check_snapshot_fields layout): WheelState.as_tuple(),
+#: the pinion's angle and speed, the last step's aggregates.
+SNAPSHOT_LAYOUT = {
+    "wheel": ("f", "f", "flank", "f", "f", "f", "n", "n", "f+"),
+    "pinion": ("f", "f"),
+    "last": ("f", "f", "f+", "f+", "n", "n"),
+}
 
 
 class GearMeshRattle(RattleSlave):
@@ -23,17 +31,25 @@ class GearMeshRattle(RattleSlave):
     INPUTS = MESH_INPUTS
     OUTPUTS = MESH_OUTPUTS
 
-    def _build(self, params, inputs):
-        args = (params, inputs["pinion.phi"], inputs["pinion.w"], inputs["wheel.tau_load"])
-        if params.compiled:
-            # This FMU's own kernel (the drive_rattle package in sys.modules may come from
-            # another FMU of the process, whose folder the host may have deleted).
-            lib = load_kernel(Path(self.resources or ".") / "drive_rattle" / LIBRARY_NAME)
-            lib = lib or load_kernel()
-            if lib is not None:
-                return CompiledWheelStepper(*args, library=lib)
+    def _kernel(self, params):
+        """The compiled kernel library if the parameters ask for it and it loads, else None
+        (reported as a warning)."""
+        if not params.compiled:
+            return None
+        # This FMU's own kernel (the drive_rattle package in sys.modules may come from
+        # another FMU of the process, whose folder the host may have deleted).
+        lib = load_kernel(Path(self.resources or ".") / "drive_rattle" / LIBRARY_NAME)
+        lib = lib or load_kernel()
+        if lib is None:
             self._report(WARNING, "the compiled kernel is not available here: running the "
                                   "pure-Python core (same results, slower)")
+        return lib
+
+    def _build(self, params, inputs):
+        args = (params, inputs["pinion.phi"], inputs["pinion.w"], inputs["wheel.tau_load"])
+        lib = self._kernel(params)
+        if lib is not None:
+            return CompiledWheelStepper(*args, library=lib)
         return WheelStepper(*args)
 
     def _step(self, t, h, inputs):
@@ -61,8 +77,11 @@ class GearMeshRattle(RattleSlave):
                      last.onsets_drive, last.onsets_coast],
         }
 
-    def _restore_model_state(self, model, state):
-        model.state = WheelState.from_tuple(state["wheel"])
-        model.pinion = tuple(state["pinion"])
-        tw, tp, wp, dp, nd, nc = state["last"]
-        model.last = StepResult(tw, tp, wp, dp, int(nd), int(nc))
+    def _model_from_snapshot(self, params, start_time, snapshot):
+        s = check_snapshot_fields(snapshot, SNAPSHOT_LAYOUT)
+        args = (params, WheelState.from_tuple(s["wheel"]), tuple(s["pinion"]),
+                StepResult(*s["last"]))
+        lib = self._kernel(params)
+        if lib is not None:
+            return CompiledWheelStepper.from_snapshot(*args, library=lib)
+        return WheelStepper.from_snapshot(*args)

@@ -17,21 +17,29 @@ def load(name):
 
 def test_paper_scenario_example(tmp_path, fmus):
     mod = load("paper_scenario")
-    result = mod.run(stop_time=0.2, out_dir=tmp_path, fmu_dir=fmus["GearMeshRattle"].parent)
+    result = mod.run(stop_time=0.5, transient=0.1, window=0.2, out_dir=tmp_path,
+                     fmu_dir=fmus["GearMeshRattle"].parent)
     names = {f.name for f in result["files"]}
     assert names == {"comparison.md", "cosim.csv", "fig3_wheel_speed.png", "fig4_pair_force.png",
                      "fig5_force_spectrum.png"}
     for f in result["files"]:
         assert f.stat().st_size > (5000 if f.suffix == ".png" else 300)
-    rows = dict((q, run) for q, run, _ in result["rows"])
-    assert rows["mean wheel speed [rad/s]"] == pytest.approx(86.92 * 20 / 39, rel=0.01)
-    assert "| mean wheel speed [rad/s] |" in (tmp_path / "comparison.md").read_text()
+    ws = result["statistics"]
+    assert len(ws.windows) == 2 and ws.transient == pytest.approx(0.1)
+    speed = ws.scatter("mean_wheel_speed")
+    assert speed.mean == pytest.approx(86.92 * 20 / 39, rel=0.01) and speed.n == 2
+    report = (tmp_path / "comparison.md").read_text()
+    row = next(r for r in report.splitlines() if r.startswith("| mean wheel speed [rad/s] |"))
+    assert " ± " in row and "| 44.5 |" in row  # this run with its scatter, the paper's figure
+    with pytest.raises(ValueError, match="transient"):
+        mod.run(stop_time=0.5, transient=0.4, window=0.2, out_dir=tmp_path,
+                fmu_dir=fmus["GearMeshRattle"].parent)
 
 
 def test_rattle_maps_example(tmp_path, fmus):
     mod = load("rattle_maps")
-    result = mod.run(points=2, stop_time=0.01, workers=2, out_dir=tmp_path,
-                     fmu_dir=fmus["GearMeshRattle"].parent, progress=False)
+    result = mod.run(points=2, transient=0.01, window=0.01, windows=2, workers=2,
+                     out_dir=tmp_path, fmu_dir=fmus["GearMeshRattle"].parent, progress=False)
     names = sorted(f.name for f in result["files"])
     assert names == ["amplitude_speed.csv", "amplitude_speed.png", "backlash_drag.csv",
                      "backlash_drag.png"]
@@ -42,3 +50,10 @@ def test_rattle_maps_example(tmp_path, fmus):
     assert all(c["done"] == 4 and c["failed"] == 0 for c in result["counts"].values()), (
         result["counts"])
     assert (tmp_path / "backlash_drag.png").stat().st_size > 5000
+    rows = __import__("drive_rattle_cosim.sweep", fromlist=["read_results"]).read_results(
+        tmp_path / "backlash_drag.csv")
+    assert all(r["windows"] == 2 and "rattle_index_W_std" in r for r in rows)
+    # Resuming with other windows would mix settings: refused.
+    with pytest.raises(ValueError, match="was run with"):
+        mod.run(points=2, transient=0.01, window=0.01, windows=3, workers=1, out_dir=tmp_path,
+                fmu_dir=fmus["GearMeshRattle"].parent, progress=False)

@@ -7,6 +7,8 @@ from __future__ import annotations
 import bisect
 import csv
 import math
+import os
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +18,15 @@ from .stepper import check_step_size
 RPM = 2.0 * math.pi / 60.0
 #: Number of engine-order slots of the input-shaft kinematics.
 N_ORDERS = 4
+#: Largest speed-table file accepted [bytes]: 4 MiB, some 100 000 rows of "time,speed" -- far
+#: more than a measured run-up needs; the table is kept in memory and in every FMU state.
+MAX_SPEED_TABLE_BYTES = 4 * 1024 * 1024
+#: Longest speed-table path accepted [bytes of its file-system encoding] (Linux PATH_MAX).
+MAX_PATH_BYTES = 4096
+#: Largest substep of the output shaft's RK4, relative to the time scale of its fastest mode
+#: (1 / spectral radius of the linear spring-damper): below it RK4 is accurate to ~1e-9 per
+#: substep; above it the shaft is integrated exactly (OutputShaft.step).
+RK4_MAX_STEP_SCALE = 0.1
 
 
 def _order(k: int, default: float):
@@ -73,9 +84,9 @@ class DrivelineParameters(ParameterSet):
         "optional); relative paths resolve against the FMU resources; empty = engine orders")
     # --- output shaft and vehicle --------------------------------------------------------
     k_shaft: float = declare(
-        "shaft.k", 2.0, "N.m/rad",
-        "torsional stiffness of the output shaft (default: a soft coupling, so that the wheel "
-        "sees nearly the constant drag like the paper's M_res)",
+        "shaft.k", 0.2, "N.m/rad",
+        "torsional stiffness of the output shaft (default: a very soft coupling, so that the "
+        "wheel sees the nearly constant drag of the paper's M_res; see docs/model.md section 6)",
         minimum=1e-3, maximum=1e9)
     c_shaft: float = declare(
         "shaft.c", 0.005, "N.m.s/rad",
@@ -85,9 +96,10 @@ class DrivelineParameters(ParameterSet):
         "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
         minimum=1e-6, maximum=1e6)
     drag: float = declare(
-        "vehicle.drag", 0.15, "N.m",
-        "constant drag torque on the vehicle side (creep load; default calibrated, see "
-        "docs/model.md section 6)",
+        "vehicle.drag", 0.0833, "N.m",
+        "constant drag torque on the vehicle side (creep load; default 0.5 M*, half the load "
+        "the default engine orders can separate the default wheel from, M* = wheel.J "
+        "z_p/z_w 250 rad/s^2 = 0.1667 N.m; see docs/model.md section 6)",
         minimum=-1e5, maximum=1e5)
     drag_viscous: float = declare(
         "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
@@ -126,6 +138,15 @@ class EngineOrderKinematics:
         self.t_start = t_start
         self.terms = [(A, k * p.w_mean, ph) for k, A, ph in p.order_terms()]
 
+    def mean_offset(self, t: float) -> tuple[float, float]:
+        """``(dphi [rad], dw [rad/s])`` from the motion at time t to its mean line
+        phi_0 + w_mean (t - t_start) + sum_k A_k / W_k^2 cos p_k (the fluctuation's mean)."""
+        phi, w, _ = self(t)
+        mean = self.phi_0 + self.w_mean * (t - self.t_start)
+        for A, W, ph in self.terms:
+            mean += A / (W * W) * math.cos(ph)
+        return mean - phi, self.w_mean - w
+
     def __call__(self, t: float) -> tuple[float, float, float]:
         """``(phi [rad], w [rad/s], a [rad/s^2])`` at time t [s]."""
         tau = t - self.t_start
@@ -145,6 +166,19 @@ class SpeedTableKinematics:
 
     def __init__(self, path: Path, phi_0: float = 0.0):
         times, speeds = read_speed_table(path)
+        self._setup(times, speeds, phi_0)
+
+    @classmethod
+    def from_table(cls, times, speeds, phi_0: float = 0.0,
+                   source: str = "the speed table") -> SpeedTableKinematics:
+        """The kinematics of a table already read (checked as :func:`read_speed_table`
+        checks a file; ValueError naming ``source`` otherwise)."""
+        times, speeds = check_speed_table(times, speeds, source)
+        kin = cls.__new__(cls)
+        kin._setup(times, speeds, phi_0)
+        return kin
+
+    def _setup(self, times: list[float], speeds: list[float], phi_0: float) -> None:
         self.times, self.speeds = times, speeds
         self.phi_0 = phi_0
         # Angle at each sample: trapezoidal integral (exact for piecewise-linear speed).
@@ -152,6 +186,10 @@ class SpeedTableKinematics:
         for i in range(1, len(times)):
             dt = times[i] - times[i - 1]
             self.angles.append(self.angles[-1] + 0.5 * dt * (speeds[i] + speeds[i - 1]))
+
+    def mean_offset(self, t: float) -> tuple[float, float]:
+        """A measured table has no known mean line: no offset."""
+        return 0.0, 0.0
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         ts, ws = self.times, self.speeds
@@ -165,17 +203,83 @@ class SpeedTableKinematics:
         return self.angles[i] + ws[i] * dt + 0.5 * a * dt * dt, ws[i] + a * dt, a
 
 
+def _shorten(text: str, limit: int = 80) -> str:
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
+def read_bounded_file(path: Path, limit: int, parameter: str) -> bytes:
+    """The bytes of the regular file ``path``, at most ``limit`` of them, read once.
+
+    Refused with a ValueError naming ``parameter``: a path longer than MAX_PATH_BYTES, a file
+    that cannot be opened, anything but a regular file (a FIFO would block the reader
+    forever, /dev/zero would fill the memory) and a file larger than ``limit``.  The file is
+    opened non-blocking and checked on the open descriptor, so it cannot be swapped for a
+    FIFO between the check and the read."""
+    shown = _shorten(str(path))
+    allowed = (f"allowed: a readable regular file of at most {limit} bytes, path at most "
+               f"{MAX_PATH_BYTES} bytes")
+    if "\0" in str(path):
+        raise ValueError(f"parameter '{parameter}' = {shown!r} contains a NUL character; "
+                         f"{allowed}")
+    if len(os.fsencode(path)) > MAX_PATH_BYTES:
+        raise ValueError(f"parameter '{parameter}' = {shown!r} is too long a path; {allowed}")
+    try:
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):
+            raise ValueError(f"parameter '{parameter}' = {shown!r} is not a regular file "
+                             f"({_file_kind(info.st_mode)}); {allowed}")
+        flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+        fd = os.open(path, flags | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0))
+    except OSError as err:
+        raise ValueError(f"parameter '{parameter}' = {shown!r} cannot be read: "
+                         f"{err.strerror}; {allowed}") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise ValueError(f"parameter '{parameter}' = {shown!r} is not a regular file "
+                             f"({_file_kind(info.st_mode)}); {allowed}")
+        if info.st_size > limit:
+            raise ValueError(f"parameter '{parameter}' = {shown!r} has {info.st_size} bytes; "
+                             f"{allowed}")
+        chunks, total = [], 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+    except OSError as err:
+        raise ValueError(f"parameter '{parameter}' = {shown!r} cannot be read: "
+                         f"{err.strerror}; {allowed}") from None
+    finally:
+        os.close(fd)
+    if total > limit:  # it grew while being read
+        raise ValueError(f"parameter '{parameter}' = {shown!r} has more than {limit} bytes; "
+                         f"{allowed}")
+    return b"".join(chunks)
+
+
+def _file_kind(mode: int) -> str:
+    for test, kind in ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                       (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
 def read_speed_table(path: Path) -> tuple[list[float], list[float]]:
     """Read ``time [s], speed [rad/s]`` rows from a CSV file (a non-numeric first row is a
-    header).  Raises ValueError naming the file and the row for malformed content."""
+    header).  Raises ValueError naming the file and the row for malformed content, and naming
+    the parameter for a file that cannot serve (see :func:`read_bounded_file`)."""
     path = Path(path)
+    raw = read_bounded_file(path, MAX_SPEED_TABLE_BYTES, "engine.speed_table")
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ValueError(
-            f"parameter 'engine.speed_table' = {str(path)!r} cannot be read: {err.strerror}; "
-            "allowed: a readable CSV file of time [s], speed [rad/s], or empty for the engine "
-            "orders") from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(f"speed table {_shorten(str(path))!r} is not UTF-8 text "
+                         f"(byte {err.start}); allowed: a CSV file of time [s], speed [rad/s]"
+                         ) from None
     times: list[float] = []
     speeds: list[float] = []
     for n, row in enumerate(csv.reader(text.splitlines()), start=1):
@@ -196,9 +300,26 @@ def read_speed_table(path: Path) -> tuple[list[float], list[float]]:
                 f"speed table {str(path)!r} row {n}: time {t!r} s does not increase")
         times.append(t)
         speeds.append(w)
+    return check_speed_table(times, speeds, f"speed table {str(path)!r}")
+
+
+def check_speed_table(times, speeds, source: str) -> tuple[list[float], list[float]]:
+    """``(times, speeds)`` as lists of floats if they form a valid speed table: at least two
+    rows, finite numbers, strictly increasing times; ValueError naming ``source`` otherwise."""
+    if not (isinstance(times, (list, tuple)) and isinstance(speeds, (list, tuple))
+            and len(times) == len(speeds)):
+        raise ValueError(f"{source}: times and speeds must be two lists of equal length")
     if len(times) < 2:
-        raise ValueError(f"speed table {str(path)!r} needs at least two rows")
-    return times, speeds
+        raise ValueError(f"{source} needs at least two rows")
+    out_t, out_w = [], []
+    for n, (t, w) in enumerate(zip(times, speeds, strict=True), start=1):
+        if not all(isinstance(x, float) and math.isfinite(x) for x in (t, w)):
+            raise ValueError(f"{source} row {n} = {(t, w)!r}: expected two finite floats")
+        if out_t and t <= out_t[-1]:
+            raise ValueError(f"{source} row {n}: time {t!r} s does not increase")
+        out_t.append(t)
+        out_w.append(w)
+    return out_t, out_w
 
 
 @dataclass
@@ -215,25 +336,65 @@ class OutputShaft:
         tau_load = k (phi_w - phi_v) + c (w_w - w_v)      (torque resisting the wheel)
         J_v dw_v/dt = tau_load - drag - drag_viscous w_v
 
-    Within a step the wheel moves at its step-start speed; RK4 on substeps <= h_max.
+    Within a step the wheel moves at its step-start speed; RK4 on substeps <= h_max.  Where
+    that substep is not small against the shaft's own time scales (stiff or heavily damped
+    shafts on a light vehicle, e.g. shaft.c = 1e6 N.m.s/rad with vehicle.J = 1e-6 kg.m2, whose
+    damping time J/c is 1e-12 s) the same linear equation is solved exactly instead, so that
+    every legal parameter set integrates stably.
     """
 
-    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float):
+    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float,
+                 mean_offset: tuple[float, float] = (0.0, 0.0)):
         self.p = p
-        # Start in steady state: vehicle at the wheel speed, shaft wound up by the drag.
-        steady = p.drag + p.drag_viscous * w_w
-        self.state = ShaftState(phi_w - steady / p.k_shaft, w_w)
+        # Start in steady state: the vehicle at the wheel's mean speed, the shaft wound up by
+        # the drag behind the wheel's mean line (its angle and speed plus ``mean_offset``).
+        # Started from the instantaneous wheel angle instead, the shaft carries the engine
+        # orders' mean angle offset (12 mrad on the default pinion) as a torque step that
+        # excites the nearly undamped vehicle mode (0.1 Hz): the wheel's load then swings
+        # by +-0.012 N.m for as long as the run lasts.
+        phi_mean, w_mean = phi_w + mean_offset[0], w_w + mean_offset[1]
+        steady = p.drag + p.drag_viscous * w_mean
+        self.state = ShaftState(phi_mean - steady / p.k_shaft, w_mean)
         self.tau_load = self.torque(phi_w, w_w, self.state)
+
+    @classmethod
+    def from_snapshot(cls, p: DrivelineParameters, state: ShaftState,
+                      tau_load: float) -> OutputShaft:
+        """The shaft in a saved state (no steady-state start)."""
+        shaft = cls.__new__(cls)
+        shaft.p = p
+        shaft.state = ShaftState(state.phi, state.w)
+        shaft.tau_load = tau_load
+        return shaft
 
     def torque(self, phi_w: float, w_w: float, s: ShaftState) -> float:
         """Shaft torque on the wheel [N.m], positive resisting forward rotation."""
         return self.p.k_shaft * (phi_w - s.phi) + self.p.c_shaft * (w_w - s.w)
+
+    def spectral_radius_bound(self) -> float:
+        """An upper bound [1/s] of the magnitude of the shaft's eigenvalues (at most twice
+        the largest): (c + drag_viscous)/J + sqrt(k/J)."""
+        p = self.p
+        return (p.c_shaft + p.drag_viscous) / p.J_vehicle + math.sqrt(p.k_shaft / p.J_vehicle)
 
     def step(self, h: float, phi_w: float, w_w: float) -> float:
         """Advance by h [s] with the wheel's step-start angle and speed; returns tau_load at
         the end of the step.  State is committed only on success."""
         p = self.p
         n = max(1, math.ceil(h / p.h_max * (1.0 - 1e-12)))
+        dt = h / n
+        if dt * self.spectral_radius_bound() > RK4_MAX_STEP_SCALE:
+            phi, w = self._exact(h, phi_w, w_w)
+        else:
+            phi, w = self._rk4(h, n, phi_w, w_w)
+        if not (math.isfinite(phi) and math.isfinite(w)):
+            raise ValueError("output shaft diverged: reduce solver.h_max")
+        self.state = ShaftState(phi, w)
+        self.tau_load = self.torque(phi_w + w_w * h, w_w, self.state)
+        return self.tau_load
+
+    def _rk4(self, h: float, n: int, phi_w: float, w_w: float) -> tuple[float, float]:
+        p = self.p
         dt = h / n
         phi, w = self.state.phi, self.state.w
 
@@ -249,24 +410,78 @@ class OutputShaft:
             a4 = acc(t + dt, phi + dt * (w + 0.5 * dt * a2), w + dt * a3)
             phi += dt * (w + dt / 6.0 * (a1 + a2 + a3))
             w += dt / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        if not (math.isfinite(phi) and math.isfinite(w)):
-            raise ValueError("output shaft diverged: reduce solver.h_max")
-        self.state = ShaftState(phi, w)
-        self.tau_load = self.torque(phi_w + w_w * h, w_w, self.state)
-        return self.tau_load
+        return phi, w
+
+    def _exact(self, h: float, phi_w: float, w_w: float) -> tuple[float, float]:
+        """The exact solution over h of the linear equation above.
+
+        With the wheel at phi_w + w_w t, x_p(t) = phi_w + w_w t - (drag + drag_viscous w_w)/k,
+        w_p = w_w solves it (the steadily wound shaft); the deviation e = (phi_v - x_p,
+        w_v - w_w) obeys e' = A e with A = [[0, 1], [-k/J, -(c + drag_viscous)/J]], so
+        e(h) = exp(A h) e(0).  exp(A h) is evaluated from the eigenvalues of A without
+        overflow: both have non-positive real parts."""
+        p = self.p
+        g = (p.c_shaft + p.drag_viscous) / p.J_vehicle  # -trace(A) >= 0
+        d = p.k_shaft / p.J_vehicle  # det(A) > 0
+        offset = (p.drag + p.drag_viscous * w_w) / p.k_shaft
+        e0 = self.state.phi - (phi_w - offset)
+        f0 = self.state.w - w_w
+        s = -0.5 * g
+        q2 = 0.25 * g * g - d
+        x2 = abs(q2) * h * h
+        if x2 < 1e-6:  # near critical damping: series of cosh(qh), sinh(qh)/q in q^2 h^2
+            es = math.exp(s * h)
+            ch = 1.0 + 0.5 * q2 * h * h * (1.0 + q2 * h * h / 12.0)
+            sh = h * (1.0 + q2 * h * h / 6.0 * (1.0 + q2 * h * h / 20.0))
+            m11, m12 = es * (ch - s * sh), es * sh
+            m21, m22 = -d * es * sh, es * (ch + (-g - s) * sh)
+        elif q2 < 0.0:  # underdamped: exp(sh) (cos(wd h) I + sin(wd h)/wd (A - sI))
+            wd = math.sqrt(-q2)
+            es = math.exp(s * h)
+            c, sn = es * math.cos(wd * h), es * math.sin(wd * h) / wd
+            m11, m12 = c - s * sn, sn
+            m21, m22 = -d * sn, c + (-g - s) * sn
+        else:  # overdamped: real eigenvalues l2 < l1 < 0, l1 from l1 l2 = det (no cancellation)
+            l2 = s - math.sqrt(q2)
+            l1 = d / l2
+            e1, e2 = math.exp(l1 * h), math.exp(l2 * h)
+            span = l1 - l2
+            m11, m12 = (l1 * e2 - l2 * e1) / span, (e1 - e2) / span
+            m21, m22 = -d * (e1 - e2) / span, (l1 * e1 - l2 * e2) / span
+        e1h = m11 * e0 + m12 * f0
+        f1h = m21 * e0 + m22 * f0
+        return phi_w + w_w * h - offset + e1h, w_w + f1h
+
+
+def _exists(path: Path) -> bool:
+    """Path.exists without raising (too long a name is an error there, not False)."""
+    try:
+        os.stat(path)
+    except (OSError, ValueError):
+        return False
+    return True
+
+
+def resolve_speed_table(name: str, resources: Path | None = None) -> Path:
+    """The file a speed-table parameter names: a relative path is looked up in ``resources``
+    (the FMU's resources folder) first, then in the working directory."""
+    path = Path(name)
+    if not path.is_absolute() and resources is not None and _exists(Path(resources) / path):
+        path = Path(resources) / path
+    return path
 
 
 def input_kinematics(p: DrivelineParameters, t_start: float = 0.0,
-                     resources: Path | None = None):
+                     resources: Path | None = None, table=None):
     """The input-shaft kinematics the parameters select: a speed table or engine orders.
 
-    A relative speed-table path is looked up in ``resources`` (the FMU's resources folder)
-    first, then in the working directory."""
+    ``table`` = ``(times, speeds)`` is the speed table already read (nothing is read then);
+    otherwise the file is read (see :func:`resolve_speed_table`)."""
     if p.speed_table:
-        path = Path(p.speed_table)
-        if not path.is_absolute() and resources is not None and (Path(resources) / path).exists():
-            path = Path(resources) / path
-        return SpeedTableKinematics(path, p.phi_start)
+        if table is None:
+            return SpeedTableKinematics(resolve_speed_table(p.speed_table, resources),
+                                        p.phi_start)
+        return SpeedTableKinematics.from_table(*table, p.phi_start)
     return EngineOrderKinematics(p, t_start)
 
 
@@ -274,15 +489,49 @@ class Driveline:
     """The driveline unit: input-shaft kinematics and output shaft, at communication points.
 
     ``phi_w``, ``w_w`` are the wheel's angle and speed at the start time; the shaft starts in
-    steady state behind them."""
+    steady state behind them.  ``table`` is the speed table already read (``(times, speeds)``,
+    see :func:`read_speed_table`); without it the file the parameters name is read here, once.
+    """
 
     def __init__(self, p: DrivelineParameters, t_start: float, phi_w: float, w_w: float,
-                 resources: Path | None = None):
+                 resources: Path | None = None, table=None):
         self.params = p
-        self.kinematics = input_kinematics(p, t_start, resources)
-        self.shaft = OutputShaft(p, phi_w, w_w)
+        self.t_start = t_start
+        if p.speed_table and table is None:
+            table = read_speed_table(resolve_speed_table(p.speed_table, resources))
+        # Tuples: kept in every FMU state, which deep-copies lists item by item.
+        self.table = (tuple(table[0]), tuple(table[1])) if p.speed_table else None
+        self.kinematics = input_kinematics(p, t_start, resources, self.table)
+        # The wheel's mean line: the pinion's, scaled by the speed ratio the wheel starts at.
+        _, w_p, _ = self.kinematics(t_start)
+        scale = w_w / w_p if w_p != 0.0 else 0.0
+        d_phi, d_w = self.kinematics.mean_offset(t_start)
+        self.shaft = OutputShaft(p, phi_w, w_w, (scale * d_phi, scale * d_w))
         self.time = t_start
         self.last_step = 0.0  # the last communication step [s]; 0 before the first
+
+    @classmethod
+    def from_snapshot(cls, p: DrivelineParameters, t_start: float, shaft: ShaftState,
+                      tau_load: float, time: float, last_step: float, table=None) -> Driveline:
+        """The driveline in a saved state: the shaft as saved (no steady-state start) and the
+        speed table ``(times, speeds)`` as saved with it -- no file is read.  ValueError if
+        the parameters name a speed table and ``table`` is missing or invalid."""
+        if p.speed_table and table is None:
+            raise ValueError("the saved driveline state lacks the speed table that parameter "
+                             "'engine.speed_table' names")
+        drive = cls.__new__(cls)
+        drive.params = p
+        drive.t_start = t_start
+        if p.speed_table:
+            times, speeds = check_speed_table(*table, "the saved speed table")
+            drive.table = (tuple(times), tuple(speeds))
+        else:
+            drive.table = None
+        drive.kinematics = input_kinematics(p, t_start, None, drive.table)
+        drive.shaft = OutputShaft.from_snapshot(p, shaft, tau_load)
+        drive.time = time
+        drive.last_step = last_step
+        return drive
 
     def step(self, t: float, h: float, phi_w: float, w_w: float) -> None:
         """Advance from the communication point t by h with the wheel's angle and speed at t."""

@@ -159,6 +159,18 @@ class CompiledWheelStepper(WheelStepper):
 
     def __init__(self, params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
                  tau_load: float = 0.0, *, library: ctypes.CDLL | None = None):
+        self._init_buffers(library)
+        super().__init__(params, phi_p, w_p, tau_load)
+        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
+
+    def _setup_from_snapshot(self, params, state, pinion, last, *, library=None) -> None:
+        """:meth:`WheelStepper.from_snapshot` for the kernel: its buffers, then the state."""
+        self._init_buffers(library)
+        super()._setup_from_snapshot(params, state, pinion, last)
+        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
+
+    def _init_buffers(self, library: ctypes.CDLL | None) -> None:
+        """The kernel library and the C arrays shared with it."""
         lib = library if library is not None else load_kernel()
         if lib is None:
             raise RuntimeError(
@@ -179,8 +191,6 @@ class CompiledWheelStepper(WheelStepper):
         self._out = _DoubleOutputs()
         self._out_mv = memoryview(self._out).cast("B").cast("d")
         self._err = ctypes.create_string_buffer(_ERRLEN)
-        super().__init__(params, phi_p, w_p, tau_load)
-        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
 
     # The state: a WheelState on demand, written back when it may have been changed.
     @property
@@ -241,6 +251,8 @@ class CompiledWheelStepper(WheelStepper):
             return ValueError(message)
         if code == _CODE["overflow_error"]:
             return OverflowError(message)
+        if code == _CODE["type_error"]:
+            return TypeError(message)
         return RuntimeError(f"rattle kernel: return code {code}: {message}")
 
     def wheel_angle_speed(self) -> tuple[float, float]:

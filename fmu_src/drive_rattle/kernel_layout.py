@@ -175,9 +175,10 @@ INPUT_FIELDS = ("h", "phi_p", "w_p", "a_p", "tau_load")
 #: raises it from the same checks); "diverged", "penetration", "too_stiff": the stepper's
 #: refusals, with the numbers of their messages in the error values; "value_error" and
 #: "overflow_error": what Python would raise as ValueError / OverflowError from a library call
-#: (a math function's argument out of range), with the same message in the error text.
+#: (a math function's argument out of range), "type_error" a comparison with None, each with
+#: the same message in the error text.
 ERROR_CODES = ("ok", "layout", "input", "diverged", "penetration", "too_stiff", "value_error",
-               "overflow_error")
+               "overflow_error", "type_error")
 
 #: Codes both sides use, as C macros.
 CODES = {

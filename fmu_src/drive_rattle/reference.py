@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .driveline import DrivelineParameters, EngineOrderKinematics, OutputShaft
+from .driveline import Driveline, DrivelineParameters, EngineOrderKinematics, OutputShaft
 from .geometry import COAST, DRIVE
 from .parameters import MeshParameters
 from .stepper import WheelStepper
@@ -53,7 +53,7 @@ def solve(mesh_params: MeshParameters | None = None,
     # The co-simulation's initial state (system.simulate): the mesh in equilibrium under the
     # driveline's initial load, the shaft wound up behind the wheel.
     wheel = WheelStepper(mp, phi_p0, w_p0, OutputShaft(dp, 0.0, 0.0).tau_load)
-    shaft = OutputShaft(dp, wheel.state.phi, wheel.state.w)
+    shaft = Driveline(dp, 0.0, wheel.state.phi, wheel.state.w).shaft
     mesh = wheel.mesh
     J, Jv = mp.J_wheel, dp.J_vehicle
     k, c = dp.k_shaft, dp.c_shaft

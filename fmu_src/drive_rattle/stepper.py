@@ -51,10 +51,11 @@ MAX_PENETRATION_MODULES = 0.05
 GRAZING_SAMPLES = 8
 
 #: Largest product of a contact substep and the contact's fastest rate, sqrt(k/m) + c/m.
-#: RK4 is stable to about 2.8 on both the imaginary and the negative real axis; 0.5 keeps an
-#: impact's restitution within ~1e-5 of the closed form and leaves the default grid (10 us)
-#: untouched at the default pair's rattle speeds (it acts above ~10 mm/s).
-CONTACT_RATE_SAFETY = 0.5
+#: RK4 is stable to about 2.8 on both the imaginary and the negative real axis; 0.25 keeps a
+#: single impact's restitution within 1e-4 of the closed form from 1 mm/s to 0.5 m/s at any
+#: legal damping (tests/core/test_impact.py), and leaves the default grid (10 us) untouched at
+#: the default pair's rattle speeds below ~20 mm/s.
+CONTACT_RATE_SAFETY = 0.25
 
 #: Largest number of contact substeps in one communication step; beyond it the contact is
 #: stiffer than the stepper resolves at a sensible cost and the step is refused.
@@ -94,7 +95,8 @@ class ContactEvent:
     """A located contact onset or release."""
 
     time: float  # time from the start of the step [s]
-    kind: str  # "onset", "release" or "reversal" (a pair's friction changes direction)
+    kind: str  # "onset", "release", "reversal" (a pair's friction turns) or "pair" (a crowned
+    # pair starts or stops carrying load)
     flank: int  # +1 drive, -1 coast
     speed: float  # normal approach speed d(delta)/dt at the event [m/s]
 
@@ -146,6 +148,30 @@ class WheelStepper:
         # Pinion kinematics at the end of the last step, for the "now" outputs.
         self.pinion = (phi_p, w_p)
         self.last = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
+
+    @classmethod
+    def from_snapshot(cls, params: MeshParameters, state: WheelState,
+                      pinion: tuple[float, float], last: StepResult, **options) -> WheelStepper:
+        """A stepper in a saved state (a restored FMU state): ``state``, ``pinion`` and the
+        last step's aggregates ``last`` are taken as they are.  Unlike the constructor, it
+        solves no start equilibrium and checks no start condition (the state was valid when
+        it was saved, and its pinion has moved on since the start).  ``options`` go to the
+        subclass' setup (e.g. the kernel ``library``)."""
+        stepper = cls.__new__(cls)
+        stepper._setup_from_snapshot(params, state, pinion, last, **options)
+        return stepper
+
+    def _setup_from_snapshot(self, params: MeshParameters, state: WheelState,
+                             pinion: tuple[float, float], last: StepResult) -> None:
+        """What ``from_snapshot`` sets: the constructor's mesh set-up, then copies of the
+        saved state (the caller keeps its objects)."""
+        self.params = params
+        self.mesh = MeshModel(params)
+        self.geometry = self.mesh.geometry
+        self.state = WheelState(*state.as_tuple())
+        self.pinion = (float(pinion[0]), float(pinion[1]))
+        self.last = StepResult(last.tau_wheel_mean, last.tau_pinion_mean, last.W_peak,
+                               last.delta_peak, last.onsets_drive, last.onsets_coast)
 
     # ------------------------------------------------------------------ initial state
     def equilibrium_state(self, phi_p: float, w_p: float, tau_load: float) -> WheelState:
@@ -438,6 +464,13 @@ class _StepRun:
         for slot, dt in reversals:
             if dt < dt_event:
                 dt_event, reversal, released = dt, slot, False
+        # A crowned pair starting or ending to carry load (its own penetration crossing zero)
+        # makes the force a C1 kink; ending the substep there keeps RK4's order.  One located
+        # at the substep start to rounding needs no split.
+        engaged = None
+        for slot, dt in self._engagement_times(t, h, phi_b, k1):
+            if dt < dt_event and t + dt > t:
+                dt_event, engaged, reversal, released = dt, slot, None, False
         if dt_event < h:
             h = dt_event
             t_end = t + h
@@ -452,6 +485,8 @@ class _StepRun:
         if reversal is not None:
             self.reversed[reversal] = -self.signs[reversal]
             self._event(t_end, "reversal", flank)
+        if engaged is not None:
+            self._event(t_end, "pair", flank)
         if released or delta_b <= 0.0:
             self._event(t_end, "release", flank)
             st.flank = 0
@@ -525,6 +560,34 @@ class _StepRun:
             if f_a == 0.0 or (f_a > 0.0) == (f_b > 0.0):
                 continue  # no sign change on the substep's own RK4 path
             out.append((slot, roots.brent(slide, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL)))
+        return out
+
+    def _engagement_times(self, t: float, h: float, phi_b: float, k1):
+        """``(slot, dt)`` for each pair with a crown offset whose own penetration
+        delta - g changes sign over the substep: the located offset of the change in [0, h]."""
+        st, m, g = self.state, self.mesh, self.geometry
+        flank = st.flank
+        out = []
+
+        def own_penetration(dt: float, phi_w: float, slot: int) -> float | None:
+            phi_p = self.phi_p(t + dt)
+            for other, _s, offset, _dg in g.pairs(flank, phi_p):
+                if other == slot:
+                    return m.penetration(flank, phi_p, phi_w) - offset
+            return None
+
+        for slot, _s, offset, _dg in g.pairs(flank, self.phi_p(t)):
+            if offset == 0.0:
+                continue
+            f_a = own_penetration(0.0, st.phi, slot)
+            f_b = own_penetration(h, phi_b, slot)
+            if f_a is None or f_b is None or (f_a > 0.0) == (f_b > 0.0):
+                continue
+
+            def crossing(dt: float, slot=slot) -> float:
+                return own_penetration(dt, self._rk4(t, dt, st.phi, st.w, k1)[0], slot)
+
+            out.append((slot, roots.brent(crossing, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL)))
         return out
 
     def _release_time(self, t: float, h: float, delta_a: float, delta_b: float, k1):

@@ -7,15 +7,17 @@ without redoing finished cases; a failed case is recorded with its error and the
 
     python -m drive_rattle_cosim.sweep \\
         --param GearMeshRattle.gear.backlash=0.05e-3:0.2e-3 \\
-        --param Driveline.vehicle.drag=0.1:0.3 --grid 4 --stop-time 0.3 \\
-        --out out/sweep.csv [--workers 2 | --scheduler tcp://host:8786]
+        --param Driveline.vehicle.drag=0.1:0.3 --grid 4 --stop-time 4 \\
+        --transient 1 --window 1 --out out/sweep.csv [--workers 2 | --scheduler tcp://host:8786]
 
 Rattle metrics (``rattle_metrics``): impacts per second per flank, mean and peak impact speed,
 peak and RMS total normal force, fraction of time with a pair in contact, band levels of the
 normal-force spectrum, and the **rattle index**: the kinetic energy of the impacts per second,
 ``1/2 m_n sum(v_i^2) / T`` [W], with ``m_n`` the wheel's effective mass on the tooth normal and
 ``v_i`` the normal approach speed of each contact onset -- the power the mesh turns into impact
-energy, which is what the housing radiates as rattle.
+energy, which is what the housing radiates as rattle.  The metrics leave out a start
+transient and are means over equal windows, each with its window-to-window standard deviation
+(``<metric>_std``; drive_rattle.analysis.windowed_statistics).
 """
 
 from __future__ import annotations
@@ -41,10 +43,23 @@ RECORDED = ["GearMeshRattle.wheel.phi", "GearMeshRattle.mesh.W", "GearMeshRattle
             "GearMeshRattle.mesh.n_contact", "GearMeshRattle.mesh.v_impact",
             "GearMeshRattle.mesh.impacts_drive", "GearMeshRattle.mesh.impacts_coast",
             "GearMeshRattle.mesh.delta_peak"]
-METRICS = ["impacts_per_s_drive", "impacts_per_s_coast", "mean_impact_speed",
-           "peak_impact_speed", "peak_normal_force", "rms_normal_force", "contact_fraction",
-           *(f"band_{int(lo)}_{int(hi)}_Hz_dB" for lo, hi in BANDS), "rattle_index_W",
-           "mean_wheel_speed", "wall_seconds"]
+#: Metric column -> the drive_rattle.analysis.RattleStatistics field it reports.
+STATISTIC_OF = {
+    "impacts_per_s_drive": "impacts_per_second_drive",
+    "impacts_per_s_coast": "impacts_per_second_coast",
+    "mean_impact_speed": "mean_impact_speed",
+    "peak_impact_speed": "peak_impact_speed",
+    "peak_normal_force": "peak_normal_force",
+    "rms_normal_force": "rms_normal_force",
+    "contact_fraction": "contact_fraction",
+    "rattle_index_W": "impact_energy_rate",
+    "mean_wheel_speed": "mean_wheel_speed",
+}
+_MEANS = [*list(STATISTIC_OF)[:7], *(f"band_{int(lo)}_{int(hi)}_Hz_dB" for lo, hi in BANDS),
+          *list(STATISTIC_OF)[7:]]
+#: Result columns: each metric (mean over the windows after the transient), then each
+#: metric's window-to-window standard deviation, the number of windows and the wall time.
+METRICS = [*_MEANS, *(f"{m}_std" for m in _MEANS), "windows", "wall_seconds"]
 
 
 @dataclass(frozen=True)
@@ -93,38 +108,46 @@ def latin_hypercube_design(params: dict[str, tuple[float, float]], samples: int,
     return [Case.of({n: float(v) for n, v in zip(names, row, strict=True)}) for row in scaled]
 
 
-def rattle_metrics(time_s, signals: dict, normal_mass: float) -> dict[str, float]:
-    """The metrics of one run from the mesh outputs recorded at every communication point."""
-    from drive_rattle.analysis import onsets_from_counters, rattle_statistics, welch_spectrum
+def rattle_metrics(time_s, signals: dict, normal_mass: float, transient: float = 0.0,
+                   window: float | None = None) -> dict[str, float]:
+    """The metrics of one run from the mesh outputs recorded at every communication point:
+    the first ``transient`` seconds dropped, the rest cut into windows of ``window`` seconds
+    (None: one window), each metric the mean over the windows and ``<metric>_std`` its
+    window-to-window standard deviation (nan with one window)."""
+    from drive_rattle.analysis import onsets_from_counters, welch_spectrum, windowed_statistics
 
     t = np.asarray(time_s, dtype=float)
-    _, speeds, flanks = onsets_from_counters(t, signals["mesh.impacts_drive"],
-                                            signals["mesh.impacts_coast"],
-                                            signals["mesh.v_impact"])
-    s = rattle_statistics(t, signals, speeds, flanks, normal_mass)
-    out = {
-        "impacts_per_s_drive": s.impacts_per_second_drive,
-        "impacts_per_s_coast": s.impacts_per_second_coast,
-        "mean_impact_speed": s.mean_impact_speed,
-        "peak_impact_speed": s.peak_impact_speed,
-        "peak_normal_force": s.peak_normal_force,
-        "rms_normal_force": s.rms_normal_force,
-        "contact_fraction": s.contact_fraction,
-        "rattle_index_W": s.impact_energy_rate,
-        "mean_wheel_speed": s.mean_wheel_speed,
-    }
-    spec = welch_spectrum(t, signals["mesh.W"], segment_seconds=min(0.1, s.duration / 4))
-    df = spec.frequency[1] - spec.frequency[0]
+    onset_t, speeds, flanks = onsets_from_counters(t, signals["mesh.impacts_drive"],
+                                                   signals["mesh.impacts_coast"],
+                                                   signals["mesh.v_impact"])
+    ws = windowed_statistics(t, signals, onset_t, speeds, flanks, normal_mass, transient, window)
+    per_window = {metric: [getattr(w, name) for w in ws.windows]
+                  for metric, name in STATISTIC_OF.items()}
+    W = np.asarray(signals["mesh.W"], dtype=float)
     for lo, hi in BANDS:
-        band = (spec.frequency >= lo) & (spec.frequency < hi)
-        power = float(np.sum(spec.psd[band]) * df)
-        out[f"band_{int(lo)}_{int(hi)}_Hz_dB"] = 10.0 * math.log10(power) if power > 0 else -300.0
+        per_window[f"band_{int(lo)}_{int(hi)}_Hz_dB"] = []
+    for span, w in zip(ws.slices, ws.windows, strict=True):
+        steps = slice(span.start + 1, span.stop)  # the samples that close the window's steps
+        spec = welch_spectrum(t[steps], W[steps], segment_seconds=min(0.1, w.duration / 4))
+        df = spec.frequency[1] - spec.frequency[0]
+        for lo, hi in BANDS:
+            band = (spec.frequency >= lo) & (spec.frequency < hi)
+            power = float(np.sum(spec.psd[band]) * df)
+            per_window[f"band_{int(lo)}_{int(hi)}_Hz_dB"].append(
+                10.0 * math.log10(power) if power > 0 else -300.0)
+    out: dict[str, float] = {"windows": float(len(ws.windows))}
+    for metric, values in per_window.items():
+        v = np.asarray(values, dtype=float)
+        out[metric] = float(np.mean(v))
+        out[f"{metric}_std"] = float(np.std(v, ddof=1)) if v.size > 1 else math.nan
     return out
 
 
-def run_case(case: Case, fmu_dir: str, stop_time: float, step: float) -> dict:
-    """One co-simulation (runs in a worker process): the case's parameters, then metrics.
-    Never raises: an error becomes the row's ``error`` field."""
+def run_case(case: Case, fmu_dir: str, stop_time: float, step: float, transient: float = 0.0,
+             window: float | None = None) -> dict:
+    """One co-simulation (runs in a worker process): the case's parameters, then metrics
+    after ``transient`` seconds in windows of ``window`` seconds.  Never raises: an error
+    becomes the row's ``error`` field."""
     row = {"case_id": case.case_id, **case.parameters, "error": ""}
     start = time.perf_counter()
     try:
@@ -140,7 +163,7 @@ def run_case(case: Case, fmu_dir: str, stop_time: float, step: float) -> dict:
                        if k.startswith("GearMeshRattle.")}
         normal_mass = MeshModel(MeshParameters.from_public(mesh_params)).normal_mass
         signals = {k.split(".", 1)[1]: v for k, v in res.columns.items()}
-        row.update(rattle_metrics(res.time, signals, normal_mass))
+        row.update(rattle_metrics(res.time, signals, normal_mass, transient, window))
     except Exception as err:  # recorded, never stops the sweep
         row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")[:2000]
     row["wall_seconds"] = time.perf_counter() - start
@@ -188,10 +211,12 @@ class ResultWriter:
 def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
               stop_time: float = 0.3, step: float = 1e-4, workers: int = 2,
               scheduler: str | None = None, progress: bool = True,
-              retry_failed: bool = False, stop_after: int | None = None) -> dict:
+              retry_failed: bool = False, stop_after: int | None = None,
+              transient: float = 0.0, window: float | None = None) -> dict:
     """Run the cases not yet in ``out`` on dask (a LocalCluster of ``workers`` processes, or
-    the cluster at ``scheduler``).  ``stop_after`` ends the sweep after that many new cases
-    (an interruption, for tests).  Returns counts of done, skipped and failed cases."""
+    the cluster at ``scheduler``); metrics after ``transient`` seconds in windows of
+    ``window`` seconds (``rattle_metrics``).  ``stop_after`` ends the sweep after that many
+    new cases (an interruption, for tests).  Returns counts of done, skipped and failed cases."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     out = Path(out)
@@ -209,7 +234,8 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
                                    dashboard_address=None)
             client = Client(cluster)
         with client:
-            futures = [client.submit(run_case, c, str(fmu_dir), stop_time, step, pure=False)
+            futures = [client.submit(run_case, c, str(fmu_dir), stop_time, step, transient, window,
+                                     pure=False)
                        for c in todo]
             stream = as_completed(futures)
             if progress and todo:
@@ -264,6 +290,10 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="Latin-hypercube seed")
     ap.add_argument("--stop-time", type=float, default=0.3, help="simulated time per case [s]")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
+    ap.add_argument("--transient", type=float, default=0.0,
+                    help="start transient left out of the metrics [s]")
+    ap.add_argument("--window", type=float, default=None,
+                    help="window of the statistics [s] (default: all after the transient)")
     ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist")
     ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")
     ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
@@ -274,7 +304,8 @@ def main(argv=None) -> int:
     cases = (grid_design(params, args.grid) if args.grid
              else latin_hypercube_design(params, args.lhs, args.seed))
     counts = run_sweep(cases, args.out, args.fmu_dir, args.stop_time, args.step, args.workers,
-                       args.scheduler, retry_failed=args.retry_failed)
+                       args.scheduler, retry_failed=args.retry_failed,
+                       transient=args.transient, window=args.window)
     print(f"{counts['done']} cases run ({counts['failed']} failed), {counts['skipped']} "
           f"already done, {counts['total']} in the design -> {args.out}")
     return 0

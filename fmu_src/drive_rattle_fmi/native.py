@@ -1,9 +1,11 @@
-"""Native status shim around pythonfmu's binary: build it and put it into an FMU.
+"""Native shim around pythonfmu's binary: build it and put it into an FMU.
 
 pythonfmu 0.7.0's C++ wrapper turns any Python exception into ``fmi2Fatal`` (after which
 freeing the instance corrupts the host process), ignores what the slave methods return (except
 ``do_step``: False gives ``fmi2Discard``), hands log messages to the host only with debug
-logging on and as a printf *format* string, and decodes only ``%20`` in the resource URI.
+logging on and as a printf *format* string, and checks nothing a master passes: docs/fmi.md
+("The native shim") lists what crashed, leaked or corrupted the host, and how the shim stops
+each.  Its sources are not shipped, so it cannot be rebuilt; the shim stands in front of it.
 
 ``native/rattle_fmi_shim.c`` is compiled into ``binaries/linux64/<modelIdentifier>.so``; it
 loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
@@ -11,8 +13,23 @@ and forwards every FMI 2.0 call to it, adding:
 
 * the **status protocol** below, so a slave can make any FMI call return Warning, Discard,
   Error or Fatal, with its message logged to the host whether debug logging is on or not;
-* full percent-decoding of ``file://`` resource URIs (``file:///p``, ``file://localhost/p``),
-  handed to pythonfmu as a plain path;
+* **argument checks** before anything reaches pythonfmu: instance name (non-blank UTF-8),
+  ``fmuType`` (co-simulation only), GUID, debug-logging categories, UTF-8 of String values,
+  value references of the hidden variables; refused calls return fmi2Error (NULL) with the
+  reason logged;
+* the **resource location** decoded (``file://`` URIs fully percent-decoded, plain absolute
+  paths) and checked (this FMU's ``slavemodule.txt`` and module); pythonfmu gets the canonical
+  path, or ``/proc/self/fd/<n>`` of the opened folder where the path would be misread by it
+  (a literal ``%20``, not UTF-8);
+* **FMU states** owned by the shim: tagged with the GUID, reused when the host passes one
+  back, freed with the instance; serialized with an envelope (GUID, version, length, FNV-1a
+  checksum) and never copied past pythonfmu's serialization;
+* status queries and unsupported functions answered with messages;
+  ``fmi2LastSuccessfulTime`` from the slave's own time (``vr_last_successful_time``);
+* in a native host, the **embedded interpreter started by the shim** (as ``Py_Initialize``
+  would, but with the error returned) and pythonfmu's instantiation messages forced on and
+  held, so that an interpreter that cannot start or a slave that cannot be imported is
+  reported through the host's logger, never silently;
 * pythonfmu's own log messages passed to the host as ``"%s", message`` (no format injection);
 * after pythonfmu itself returned ``fmi2Fatal`` (a Python exception), no further call reaches
   it: later calls return Fatal, and ``fmi2FreeInstance`` frees only the shim's part and leaks
@@ -76,27 +93,40 @@ def _check_vr(name: str, value: int) -> None:
 
 
 def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr_message: int,
-                 cc: str = "gcc", guid: str | None = None) -> Path:
+                 cc: str = "gcc", guid: str | None = None, model_identifier: str | None = None,
+                 vr_last_successful_time: int | None = None) -> Path:
     """Compile the shim into ``out_path`` (a shared library) and return ``out_path``.
 
     ``inner_lib_name`` is the file name (no directory) of pythonfmu's library, which the shim
     loads from its own directory.  With ``guid``, fmi2Instantiate refuses any other GUID (as
-    FMI 2.0 asks; pythonfmu does not check).  Raises RuntimeError with the compiler's output
-    on failure.
+    FMI 2.0 asks; pythonfmu does not check), and FMU states carry it.  With
+    ``model_identifier``, the resource folder must hold that slave module.  With
+    ``vr_last_successful_time`` (a hidden Real of the slave), fmi2GetRealStatus answers
+    fmi2LastSuccessfulTime from the slave, else from the shim's own count of accepted steps.
+    Raises RuntimeError with the compiler's output on failure.
     """
-    if guid is not None and not re.fullmatch(r"[A-Za-z0-9{}-]+", guid):
+    if guid is not None and not re.fullmatch(r"[A-Za-z0-9{}-]{1,63}", guid):
         raise ValueError(f"guid must consist of letters, digits, braces and '-', got {guid!r}")
     if not re.fullmatch(r"[A-Za-z0-9_.+-]+", inner_lib_name):
         raise ValueError(f"inner_lib_name must be a plain file name, got {inner_lib_name!r}")
+    if model_identifier is not None and not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,200}",
+                                                         model_identifier):
+        raise ValueError(f"model_identifier must be a C identifier, got {model_identifier!r}")
     _check_vr("vr_status_address", vr_status_address)
     _check_vr("vr_message", vr_message)
+    if vr_last_successful_time is not None:
+        _check_vr("vr_last_successful_time", vr_last_successful_time)
     out_path = Path(out_path)
     cmd = [
-        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC",
+        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
+        *([f"-DRATTLE_VR_LAST_TIME={vr_last_successful_time}u"]
+          if vr_last_successful_time is not None else []),
         *([f'-DRATTLE_GUID="{guid}"'] if guid is not None else []),
+        *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
+          if model_identifier is not None else []),
         "-o", str(out_path), str(SHIM_SOURCE), "-ldl",
     ]
     try:
@@ -118,7 +148,8 @@ def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:
     return cosim.get("modelIdentifier"), root.get("guid")
 
 
-def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> None:
+def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int,
+                 vr_last_successful_time: int | None = None) -> None:
     """Put the status shim into the FMU at ``fmu_path`` (rewritten in place).
 
     ``binaries/linux64/<modelIdentifier>.so`` (pythonfmu's library) becomes
@@ -141,7 +172,9 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> Non
 
         with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
             shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
-                                vr_status_address, vr_message, guid=guid)
+                                vr_status_address, vr_message, guid=guid,
+                                model_identifier=model_identifier,
+                                vr_last_successful_time=vr_last_successful_time)
             fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
             os.close(fd)
             try:

@@ -7,7 +7,8 @@ instance corrupts the host), and ignores every return value but do_step's.  So e
 point here catches everything, and reports failures through the status channel of the native
 shim (``native.py``): a C ``int`` whose address the shim reads at instantiation, plus the message
 variable.  The shim returns that status from the FMI call and logs the message to the host.
-A rejected call changes nothing: new values are computed into temporaries and committed last.
+A rejected call changes nothing: new values are computed into temporaries and committed last;
+a multi-value set is checked whole before any value is stored.
 
 Subclasses declare ``PARAMETERS`` (a parameter dataclass), ``INPUTS`` and ``OUTPUTS`` (signal
 specs), and implement ``_build``, ``_step``, ``_outputs`` and the model-state pair.
@@ -30,12 +31,32 @@ from pythonfmu.variables import Boolean, Integer, Real, String
 
 from drive_rattle.parameters import ParameterSpec, specs
 
-#: Names of the two hidden String variables of the status channel; registered last, so their
-#: value references follow the public ones, and left out of the modelDescription.
+#: Names of the hidden variables of the native shim: the two String variables of the status
+#: channel and the Real the shim answers fmi2GetRealStatus(fmi2LastSuccessfulTime) from.
+#: Registered last, so their value references follow the public ones; left out of the
+#: modelDescription, and refused by the shim when a host names them.
 STATUS_ADDRESS_VARIABLE = "_fmi.status_address"
 MESSAGE_VARIABLE = "_fmi.message"
+LAST_SUCCESSFUL_TIME_VARIABLE = "_fmi.last_successful_time"
 
 OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
+
+#: Version of the content of an FMU state (the dict of ``_get_fmu_state``).  The native shim
+#: wraps serialized states in an envelope with the FMU's GUID, its own version and a checksum.
+STATE_FORMAT = 3
+#: The modes of the slave's life cycle (FMI 2.0 co-simulation states, condensed).
+MODES = ("instantiated", "initialization", "stepping", "terminated")
+#: fmi2Integer is a 32-bit int: larger values (the cumulative impact counters) saturate.
+INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
+#: Largest magnitude of an Integer value in a restored state (the counters are held as
+#: doubles in the compiled kernel, exact up to 2^53).
+MAX_STATE_INTEGER = 2**53
+
+
+def vr_text(vr: int) -> str:
+    """A value reference as the host passed it: fmi2ValueReference is unsigned, pythonfmu hands
+    it to Python as a signed C int (so 2^31 arrives as -2^31)."""
+    return str(vr % 2**32) if isinstance(vr, int) else repr(vr)
 
 #: Tolerance of the communication-point continuity check, in units of the last step size;
 #: masters that compute t = t0 + k h differ from t_prev + h_prev by a few ulps of t.
@@ -121,10 +142,15 @@ class RattleSlave(Fmi2Slave):
         self.register_variable(String(
             MESSAGE_VARIABLE, causality=Fmi2Causality.local, variability=Fmi2Variability.discrete,
             getter=lambda: self._fmi_message), nested=False)
+        self.register_variable(Real(
+            LAST_SUCCESSFUL_TIME_VARIABLE, causality=Fmi2Causality.local,
+            variability=Fmi2Variability.continuous, getter=self._last_successful_time),
+            nested=False)
         # Per value reference: FMI type and getter, for the hot get/set paths.
-        self._vr_kind = [self._kinds.get(v.name, "String") for v in self.vars.values()]
+        self._vr_kind = [type(v).__name__ for v in self.vars.values()]
         self._vr_getter = [v.getter for v in self.vars.values()]
         self._vr_setter = [v.setter for v in self.vars.values()]
+        self._vr_name = [v.name for v in self.vars.values()]
         self._vrs_of_kind = {kind: frozenset(vr for vr, k in enumerate(self._vr_kind) if k == kind)
                              for kind in ("Real", "Integer", "Boolean", "String")}
 
@@ -161,6 +187,16 @@ class RattleSlave(Fmi2Slave):
             # pythonfmu hands messages to the host as a printf format: escape '%'.
             self.log(message.replace("%", "%%"), Fmi2Status(status))
 
+    def _last_successful_time(self) -> float:
+        """End of the last accepted communication step (the start time before the first):
+        the native shim's answer to fmi2GetRealStatus(fmi2LastSuccessfulTime)."""
+        if self._model is None:
+            self._report(ERROR, "getRealStatus(fmi2LastSuccessfulTime): no communication step "
+                                f"is possible yet (mode '{self._mode}'); allowed after "
+                                "exitInitializationMode")
+            return math.nan
+        return self._time
+
     def _guard(self, action: str, fn, *args):
         """Run ``fn``; a ModelError/ValueError becomes an Error status with its message, any
         other exception an Error with its traceback.  Returns fn's result or ``_FAILED``."""
@@ -187,7 +223,9 @@ class RattleSlave(Fmi2Slave):
         self._values.update(self._outputs(self._model))
         self._stale = False
 
-    def _set(self, name: str, value) -> None:
+    def _checked_value(self, name: str, value):
+        """``value`` converted to the variable's type, if ``name`` may be set now; ModelError
+        (nothing stored) otherwise."""
         kind = self._kinds[name]
         if name in self._output_set:
             raise ModelError(f"'{name}' is an output and cannot be set")
@@ -196,25 +234,40 @@ class RattleSlave(Fmi2Slave):
                 f"parameter '{name}' is fixed: it can only be set before the end of "
                 f"initialization (mode is '{self._mode}'); value {value!r} rejected")
         if kind == "Real":
-            value = float(value)
-        elif kind == "Integer":
-            value = int(value)
-        elif kind == "Boolean":
-            value = bool(value)
-        else:
-            value = str(value)
-        self._values[name] = value
+            return float(value)
+        if kind == "Integer":
+            return int(value)
+        if kind == "Boolean":
+            return bool(value)
+        return str(value)
+
+    def _set(self, name: str, value) -> None:
+        self._values[name] = self._checked_value(name, value)
         self._provisional = None
 
     def _set_values(self, vrs, values, kind: str) -> None:
-        kinds, setters = self._vr_kind, self._vr_setter
+        """Set several values: every entry is checked before any is stored, so a refused call
+        (one bad entry) stores nothing."""
+        kinds, setters, names = self._vr_kind, self._vr_setter, self._vr_name
         n = len(kinds)
 
         def apply():
+            if len(vrs) != len(values):
+                raise ModelError(f"{len(vrs)} value references but {len(values)} values")
+            staged = []
             for vr, value in zip(vrs, values, strict=True):
                 if not (0 <= vr < n and kinds[vr] == kind and setters[vr] is not None):
-                    raise ModelError(f"no {kind} variable with value reference {vr}")
-                setters[vr](value)
+                    raise ModelError(f"no {kind} variable with value reference {vr_text(vr)}; "
+                                     "nothing of this call was stored")
+                name = names[vr]
+                try:
+                    staged.append((name, self._checked_value(name, value)))
+                except ModelError as err:
+                    raise ModelError(f"{err}; nothing of this call was stored") from None
+            for name, value in staged:
+                self._values[name] = value
+            if staged:
+                self._provisional = None
         self._guard(f"set{kind}", apply)
 
     def _get_values(self, vrs, kind: str, default) -> list:
@@ -229,10 +282,11 @@ class RattleSlave(Fmi2Slave):
         out = []
         for vr in vrs:
             if not (0 <= vr < n and kinds[vr] == kind):
-                self._report(ERROR, f"get{kind}: no {kind} variable with value reference {vr}")
+                self._report(ERROR, f"get{kind}: no {kind} variable with value reference "
+                                    f"{vr_text(vr)}")
                 out.append(default)
                 continue
-            value = self._guard(f"get{kind} vr {vr}", getters[vr])
+            value = self._guard(f"get{kind} vr {vr_text(vr)}", getters[vr])
             out.append(default if value is _FAILED else value)
         return out
 
@@ -252,7 +306,9 @@ class RattleSlave(Fmi2Slave):
         return [float(v) for v in self._get_values(vrs, "Real", math.nan)]
 
     def get_integer(self, vrs):
-        return [int(v) for v in self._get_values(vrs, "Integer", 0)]
+        # fmi2Integer is 32 bits: saturate (the cumulative counters can exceed it), never wrap.
+        return [min(INT32_MAX, max(INT32_MIN, int(v)))
+                for v in self._get_values(vrs, "Integer", 0)]
 
     def get_boolean(self, vrs):
         return [bool(v) for v in self._get_values(vrs, "Boolean", False)]
@@ -329,6 +385,9 @@ class RattleSlave(Fmi2Slave):
             if not (math.isfinite(step_size) and step_size > 0.0):
                 raise ModelError(
                     f"communication step size {step_size!r} s is invalid; allowed: finite, > 0")
+            if not math.isfinite(current_time):  # (its ulp, inf, would pass the check below)
+                raise ModelError(f"communication point {current_time!r} s is not finite; "
+                                 f"allowed: the end of the last step, {self._time!r} s")
             tol = COMMUNICATION_POINT_TOLERANCE * step_size + 16.0 * math.ulp(
                 max(abs(self._time), abs(current_time)))
             if not (abs(current_time - self._time) <= tol):
@@ -359,6 +418,7 @@ class RattleSlave(Fmi2Slave):
         if self._stale:
             self._guard("getFMUstate", self._refresh_outputs)
         state = self._guard("getFMUstate", lambda: copy.deepcopy({
+            "format": STATE_FORMAT,
             "mode": self._mode,
             "start_time": self._start_time,
             "time": self._time,
@@ -368,24 +428,22 @@ class RattleSlave(Fmi2Slave):
         return {} if state is _FAILED else state
 
     def _set_fmu_state(self, state: dict) -> None:
+        """Restore a state of ``_get_fmu_state``: its content is checked whole (format, mode,
+        finite times, every variable present with a value of its type, the model's snapshot)
+        and the model is rebuilt from the snapshot -- no start equilibrium is solved, no start
+        condition checked and no file read.  An invalid state changes nothing."""
         def restore():
-            if not state:
-                raise ModelError("the FMU state is empty or invalid")
-            s = copy.deepcopy(state)
-            values = dict(self._values)
-            for name, value in s["values"].items():
-                if name not in values:
-                    raise ModelError(f"the FMU state holds an unknown variable '{name}'")
-                values[name] = value
+            s = self._checked_state(state)
             model = None
             if s["model"] is not None:
-                saved_values, self._values = self._values, values
+                params_values = {name: s["values"][name] for name in self._param_specs}
                 try:
-                    model = self._build(self.parameters(), self.inputs())
-                finally:
-                    self._values = saved_values
-                self._restore_model_state(model, s["model"])
-            self._values = values
+                    params = self.PARAMETERS.from_public(params_values)
+                    model = self._model_from_snapshot(params, s["start_time"], s["model"])
+                except (ValueError, TypeError, KeyError, IndexError) as err:
+                    raise ModelError(f"the FMU state is invalid: {err}; nothing changed"
+                                     ) from None
+            self._values = s["values"]
             self._model = model
             self._stale = False
             self._mode = s["mode"]
@@ -393,6 +451,44 @@ class RattleSlave(Fmi2Slave):
             self._time = s["time"]
             self._provisional = None
         self._guard("setFMUstate", restore)
+
+    def _checked_state(self, state) -> dict:
+        """A deep copy of ``state`` if its content is a valid state of this slave; ModelError
+        naming the first problem otherwise."""
+        def invalid(what: str) -> ModelError:
+            return ModelError(f"the FMU state is invalid: {what}; nothing changed")
+
+        if not isinstance(state, dict) or not state:
+            raise invalid("it is empty or not a state of this FMU")
+        if state.get("format") != STATE_FORMAT:
+            raise invalid(f"its format is {state.get('format')!r}, this FMU reads format "
+                          f"{STATE_FORMAT}")
+        keys = {"format", "mode", "start_time", "time", "values", "model"}
+        if set(state) != keys:
+            raise invalid(f"its entries are {sorted(state)}, expected {sorted(keys)}")
+        s = copy.deepcopy(state)
+        if s["mode"] not in MODES:
+            raise invalid(f"mode {s['mode']!r} is not one of {', '.join(MODES)}")
+        for key in ("start_time", "time"):
+            if not _is_finite_float(s[key]):
+                raise invalid(f"{key} = {s[key]!r} is not a finite float")
+        values = s["values"]
+        if not isinstance(values, dict) or set(values) != set(self._values):
+            missing = sorted(set(self._values) - set(values)) if isinstance(values, dict) else []
+            extra = sorted(set(values) - set(self._values)) if isinstance(values, dict) else []
+            raise invalid(f"its variables do not match this FMU's (missing {missing[:3]}, "
+                          f"unknown {extra[:3]})")
+        for name, value in values.items():
+            problem = _value_problem(self._kinds[name], value, name in self._output_set)
+            if problem:
+                raise invalid(f"variable '{name}' = {_short_repr(value)}: {problem}")
+        model_expected = s["mode"] == "stepping" or (
+            s["mode"] == "terminated" and s["model"] is not None)
+        if model_expected != (s["model"] is not None) or (
+                s["model"] is not None and not isinstance(s["model"], dict)):
+            raise invalid(f"mode {s['mode']!r} does not go with model snapshot "
+                          f"{_short_repr(s['model'])}")
+        return s
 
     @staticmethod
     def _fmu_state_to_bytes(state: dict) -> bytes:
@@ -431,10 +527,85 @@ class RattleSlave(Fmi2Slave):
         step); the rest are computed when first read.  Default: none."""
         return {}
 
-    def _model_state(self, model) -> Any:
+    def _model_state(self, model) -> dict:
         """JSON-able snapshot of the model's complete state."""
         raise NotImplementedError
 
-    def _restore_model_state(self, model, state) -> None:
-        """Load a snapshot made by ``_model_state`` into a freshly built model."""
+    def _model_from_snapshot(self, params, start_time: float, snapshot: dict):
+        """The model in the state of a snapshot made by ``_model_state`` (which may come from
+        a forged or corrupted FMU state: raise ValueError naming what is invalid).  It must
+        not solve start conditions or read files: the snapshot holds everything."""
         raise NotImplementedError
+
+
+def _is_finite_float(x) -> bool:
+    return isinstance(x, float) and math.isfinite(x)
+
+
+def _short_repr(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}..."
+
+
+def _value_problem(kind: str, value, output: bool) -> str:
+    """Why ``value`` cannot be a stored value of a variable of FMI type ``kind`` ("" if it
+    can).  Parameters and inputs may hold what a master set (a NaN is refused where it is
+    used); outputs are finite."""
+    if kind == "Real":
+        if not isinstance(value, float):
+            return "expected a float"
+        if output and not math.isfinite(value):
+            return "an output must be finite"
+    elif kind == "Integer":
+        if isinstance(value, bool) or not isinstance(value, int):
+            return "expected an integer"
+        if abs(value) > MAX_STATE_INTEGER:
+            return f"beyond +-2^53 (+-{MAX_STATE_INTEGER})"
+    elif kind == "Boolean":
+        if not isinstance(value, bool):
+            return "expected true or false"
+    elif not isinstance(value, str):
+        return "expected a string"
+    elif "\0" in value:
+        return "a string with a NUL character"
+    else:
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError:
+            return "a string that is not valid Unicode"
+    return ""
+
+
+def check_snapshot_fields(snapshot, layout: dict[str, tuple]) -> dict:
+    """``snapshot`` if it is a dict with exactly the keys of ``layout`` and each list entry
+    of the field kinds given there: "f" a finite float, "f+" a finite float >= 0, "n" an
+    integer in [0, 2^53], "flank" -1, 0 or 1, "any" unchecked.  ValueError otherwise."""
+    if not isinstance(snapshot, dict) or set(snapshot) != set(layout):
+        got = sorted(snapshot) if isinstance(snapshot, dict) else type(snapshot).__name__
+        raise ValueError(f"model snapshot has entries {got}, expected {sorted(layout)}")
+    for key, kinds in layout.items():
+        value = snapshot[key]
+        if kinds == ("any",):
+            continue
+        scalar = kinds[0].startswith("=")
+        items = [value] if scalar else value
+        if not scalar and not (isinstance(value, list) and len(value) == len(kinds)):
+            raise ValueError(f"model snapshot '{key}' = {_short_repr(value)}: expected a list "
+                             f"of {len(kinds)} values")
+        for i, (item, kind) in enumerate(zip(items, kinds, strict=True)):
+            kind = kind.lstrip("=")
+            ok = {
+                "f": _is_finite_float(item),
+                "f+": _is_finite_float(item) and item >= 0.0,
+                "n": isinstance(item, int) and not isinstance(item, bool)
+                and 0 <= item <= MAX_STATE_INTEGER,
+                "flank": isinstance(item, int) and not isinstance(item, bool)
+                and item in (-1, 0, 1),
+            }[kind]
+            if not ok:
+                where = key if scalar else f"{key}[{i}]"
+                wanted = {"f": "a finite float", "f+": "a finite float >= 0",
+                          "n": "an integer in [0, 2^53]", "flank": "-1, 0 or 1"}[kind]
+                raise ValueError(f"model snapshot {where} = {_short_repr(item)}: "
+                                 f"expected {wanted}")
+    return snapshot

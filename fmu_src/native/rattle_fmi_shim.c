@@ -1,34 +1,57 @@
 /*
  * rattle_fmi_shim.c - FMI 2.0 co-simulation "status shim" around pythonfmu's binary.
  *
- * Why this exists (measured on pythonfmu 0.7.0, see docs in drive_rattle_fmi/native.py):
- *   - pythonfmu turns every Python exception into fmi2Fatal and ignores the return value of
- *     every slave method except do_step, so a Python slave cannot make e.g.
- *     fmi2ExitInitializationMode return fmi2Error;
- *   - it hands log messages to the host only when debug logging is on, and passes them as a
- *     printf FORMAT string (a '%' in a message makes the host read missing arguments);
- *   - it decodes only "%20" in the resource URI.
+ * pythonfmu 0.7.0's C++ wrapper (whose sources are not shipped, so it cannot be rebuilt) turns
+ * every Python exception into fmi2Fatal, ignores the return value of every slave method except
+ * do_step, hands log messages to the host only when debug logging is on (and as a printf
+ * FORMAT), and does not check what a master passes.  Measured (docs/fmi.md, "The native
+ * shim"), each of these killed or corrupted the host process:
+ *   - it replaces "%20" in the resource path by a space (after any decoding of ours) and
+ *     deletes "file://"; a resource location without slavemodule.txt and <module>.py (the
+ *     unzip root, a missing folder, a relative path, an http:// URI) ends in
+ *     PyObject_Call(NULL); a NULL location, instance name or debug-logging category ends in
+ *     std::string(NULL); a non-UTF-8 instance name or unpack path, or a non-UTF-8 fmi2String
+ *     value, fails inside Python's C API;
+ *   - fmi2SerializeFMUstate copies as many bytes as the host's buffer holds from a Python
+ *     bytes object of the state's size (heap disclosure, SIGSEGV for large buffers);
+ *     fmi2GetFMUstate into a non-NULL *state leaks the old state; a state from elsewhere is
+ *     used as a Python object;
+ *   - fmi2ModelExchange is accepted; fmi2GetRealStatus(fmi2LastSuccessfulTime) answers the
+ *     end of a step the slave refused; its unsupported functions return fmi2Error silently.
  *
  * The shim becomes binaries/linux64/<modelIdentifier>.so and forwards every FMI call to
- * pythonfmu's library, renamed to RATTLE_INNER_LIB and loaded from the shim's own directory.
- * Status protocol: at instantiation the slave gives (String variable RATTLE_VR_STATUS_ADDRESS)
- * the address of a C int it owns, as "0x...".  After every forwarded call that returns an
- * fmi2Status the shim looks at that int; if it is non-zero, the shim resets it to 0, reads the
- * message (String variable RATTLE_VR_MESSAGE), logs it to the host regardless of debug logging
- * and returns the larger of pythonfmu's status and the slave's.
- *
- * Besides: file:// resource URIs are fully percent-decoded; pythonfmu's own log messages reach
- * the host as "%s" arguments; after pythonfmu returned fmi2Fatal its instance is never called
- * (nor freed) again; and a pythonfmu double release at process exit is defused (see
- * release_python_state_at_exit).
+ * pythonfmu's library, renamed to RATTLE_INNER_LIB and loaded from the shim's own directory,
+ * after checking the call's arguments: what pythonfmu cannot take is refused here with
+ * fmi2Error (NULL from fmi2Instantiate) and a message to the host's logger, and nothing
+ * reaches pythonfmu.  On top:
+ *   - status protocol: at instantiation the slave gives (String variable
+ *     RATTLE_VR_STATUS_ADDRESS) the address of a C int it owns, as "0x...".  After every
+ *     forwarded call the shim looks at that int; if it is non-zero, the shim resets it to 0,
+ *     reads the message (String variable RATTLE_VR_MESSAGE), logs it to the host regardless of
+ *     debug logging and returns the larger of pythonfmu's status and the slave's;
+ *   - the resource location is decoded and checked here; pythonfmu gets a plain absolute
+ *     path it cannot misread, or /proc/self/fd/<n> of the opened folder where the path holds
+ *     "%20" or is not UTF-8 (see resolve_resources);
+ *   - FMU states are the shim's: each wraps pythonfmu's state with the FMU's GUID; serialized
+ *     states carry an envelope (GUID, version, length, checksum; see the STATE_ section);
+ *   - an embedded interpreter that cannot start, or a slave that cannot be imported, is
+ *     reported through the host's logger whatever the debug-logging setting (start_python);
+ *   - pythonfmu's own log messages reach the host as "%s" arguments; after pythonfmu returned
+ *     fmi2Fatal its instance is never called (nor freed) again; and a pythonfmu double
+ *     release at process exit is defused (see release_python_state_at_exit).
  *
  * Build: gcc -std=c99 -O2 -Wall -Wextra -shared -fPIC \
  *            -DRATTLE_INNER_LIB="\"<id>_pythonfmu.so\"" -DRATTLE_VR_STATUS_ADDRESS=<n> \
- *            -DRATTLE_VR_MESSAGE=<m> -o <id>.so rattle_fmi_shim.c -ldl
+ *            -DRATTLE_VR_MESSAGE=<m> [-DRATTLE_VR_LAST_TIME=<t>] [-DRATTLE_GUID="\"<guid>\""] \
+ *            [-DRATTLE_MODEL_IDENTIFIER="\"<id>\""] -o <id>.so rattle_fmi_shim.c -ldl -lpthread
  */
-#define _GNU_SOURCE /* dladdr / Dl_info, strncasecmp and pthread_once under -std=c99 */
+#define _GNU_SOURCE /* dladdr / Dl_info, strncasecmp, realpath, O_DIRECTORY under -std=c99 */
 
 #include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -37,6 +60,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #ifndef RATTLE_INNER_LIB
 #error "define RATTLE_INNER_LIB, e.g. -DRATTLE_INNER_LIB=\"\\\"Model_pythonfmu.so\\\"\""
@@ -46,6 +71,9 @@
 #endif
 #ifndef RATTLE_VR_MESSAGE
 #error "define RATTLE_VR_MESSAGE (value reference of the message String)"
+#endif
+#ifndef RATTLE_GUID
+#define RATTLE_GUID ""
 #endif
 
 /* ------------------------------------------------------------------ FMI 2.0 types */
@@ -63,6 +91,8 @@ typedef int fmi2Boolean;
 typedef char fmi2Char;
 typedef const fmi2Char* fmi2String;
 typedef char fmi2Byte;
+#define fmi2True 1
+#define fmi2False 0
 
 typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
 typedef enum { fmi2ModelExchange, fmi2CoSimulation } fmi2Type;
@@ -245,7 +275,143 @@ static int ensure_inner(void)
     return inner_loaded;
 }
 
+
+/* ------------------------------------------------------------------ the embedded interpreter */
+
+/* Started by the shim, not by pythonfmu, so that a failure is an answer instead of the end of
+ * the process.  pythonfmu 0.7.0 calls plain Py_Initialize() (in a thread of its own) when no
+ * interpreter runs yet, i.e. in a native host; Py_Initialize ends the process through
+ * Py_FatalError / exit() when the interpreter cannot start (e.g. a python3 first on PATH
+ * whose prefix has no "encodings"), so the host never learns why.  The shim does what
+ * Py_Initialize does -- _PyConfig_InitCompatConfig (exactly Py_Initialize's configuration,
+ * exported by CPython 3.8 to 3.13) then Py_InitializeFromConfig -- but gets the PyStatus back
+ * and keeps the reason for the host's logger.  Like pythonfmu it runs in a thread of its own
+ * that releases the GIL (so Python's "main thread", the one that handles signals, is never a
+ * host thread).  pythonfmu then finds the interpreter running and leaves it alone; it is not
+ * finalized at exit (the process exit releases it).  Where the symbols are missing (a Python
+ * that does not export them), pythonfmu starts the interpreter as before. */
+
+typedef struct { /* PyStatus, CPython 3.8+: {_type, func, err_msg, exitcode} */
+    int type;    /* 0 ok, 1 error, 2 exit */
+    const char* func;
+    const char* err_msg;
+    int exitcode;
+} PyStatusAbi;
+
+typedef int PyIsInitializedFn(void);
+typedef void PyConfigInitFn(void*);
+typedef PyStatusAbi PyInitializeFromConfigFn(const void*);
+typedef void* PyEvalSaveThreadFn(void);
+typedef const char* PyGetVersionFn(void);
+
+static pthread_once_t python_once = PTHREAD_ONCE_INIT;
+static int python_started_here;        /* 1: the shim started the interpreter */
+static char python_error[1024];        /* why it could not start ("" if it could) */
+
+static void* python_symbol(const char* name)
+{
+    return dlsym(RTLD_DEFAULT, name);
+}
+
+static void* python_start_thread(void* unused)
+{
+    /* max_align_t-aligned room for a PyConfig (about 0.5 KiB in CPython 3.10 to 3.13) */
+    static union { long double ld; void* p; long long ll; char bytes[16384]; } config;
+    PyConfigInitFn* init_compat;
+    PyInitializeFromConfigFn* initialize;
+    PyConfigInitFn* clear;
+    PyEvalSaveThreadFn* save_thread;
+    void* sym;
+    PyStatusAbi status;
+    (void)unused;
+
+#define PY_SYMBOL(var, name)                                                                   \
+    sym = python_symbol(name);                                                                 \
+    if (sym == NULL) return NULL;                                                              \
+    memcpy(&var, &sym, sizeof sym);
+    PY_SYMBOL(init_compat, "_PyConfig_InitCompatConfig")
+    PY_SYMBOL(initialize, "Py_InitializeFromConfig")
+    PY_SYMBOL(clear, "PyConfig_Clear")
+    PY_SYMBOL(save_thread, "PyEval_SaveThread")
+#undef PY_SYMBOL
+    init_compat(&config);
+    status = initialize(&config);
+    clear(&config);
+    if (status.type != 0) {
+        if (status.type == 2)
+            snprintf(python_error, sizeof python_error, "it asked to exit with code %d",
+                     status.exitcode);
+        else
+            snprintf(python_error, sizeof python_error, "%s%s%s",
+                     status.func != NULL ? status.func : "",
+                     status.func != NULL ? ": " : "",
+                     status.err_msg != NULL ? status.err_msg : "(no reason given)");
+        return NULL;
+    }
+    python_started_here = 1;
+    save_thread(); /* release the GIL for the threads that call the FMU */
+    return NULL;
+}
+
+static void start_python_once(void)
+{
+    PyIsInitializedFn* is_initialized;
+    void* sym = python_symbol("Py_IsInitialized");
+    pthread_t thread;
+
+    if (sym == NULL) return; /* no libpython: loading pythonfmu's library reported it */
+    memcpy(&is_initialized, &sym, sizeof sym);
+    if (is_initialized()) return; /* a Python host, or started before */
+    if (pthread_create(&thread, NULL, python_start_thread, NULL) != 0) return;
+    pthread_join(thread, NULL);
+}
+
+/* 1 if the interpreter runs or pythonfmu may start it; 0 with python_error set if it cannot
+ * start (every later fmi2Instantiate is refused with the same reason: a failed start cannot
+ * be retried in the same process). */
+static int start_python(void)
+{
+    pthread_once(&python_once, start_python_once);
+    return python_error[0] == '\0';
+}
+
+/* The version of the loaded libpython ("3.11.7"), for messages. */
+static const char* python_version(void)
+{
+    static char text[32];
+    void* sym = python_symbol("Py_GetVersion");
+    PyGetVersionFn* version;
+    if (sym == NULL) return "?";
+    memcpy(&version, &sym, sizeof sym);
+    snprintf(text, sizeof text, "%.*s", (int)strcspn(version(), " "), version());
+    return text;
+}
+
+/* The first executable "python3" on PATH (where the embedded interpreter takes its prefix
+ * from), for messages; "" if none. */
+static void python3_on_path(char* out, size_t size)
+{
+    const char* path = getenv("PATH");
+    out[0] = '\0';
+    while (path != NULL && *path != '\0') {
+        const char* end = strchr(path, ':');
+        size_t len = end != NULL ? (size_t)(end - path) : strlen(path);
+        char candidate[PATH_BUFFER];
+        if (len > 0 && len + 9 < sizeof candidate) {
+            memcpy(candidate, path, len);
+            strcpy(candidate + len, "/python3");
+            if (access(candidate, X_OK) == 0) {
+                snprintf(out, size, "%s", candidate);
+                return;
+            }
+        }
+        path = end != NULL ? end + 1 : NULL;
+    }
+}
+
 /* ------------------------------------------------------------------ the shim's instance */
+
+typedef struct ShimState ShimState;
 
 typedef struct {
     fmi2Component inner;
@@ -257,6 +423,13 @@ typedef struct {
     int inner_dead;                 /* pythonfmu returned fmi2Fatal: do not touch it again */
     char** kept_strings;            /* fmi2GetString results copied before a message fetch */
     size_t n_kept;
+    int resource_fd;                /* the resource folder opened for /proc/self/fd, or -1 */
+    int host_logging;               /* the host's loggingOn */
+    int collecting;                 /* in fmi2Instantiate: pythonfmu's messages are held */
+    char collected[4096];           /* ... here, for the host if instantiation fails */
+    fmi2Status collected_status;
+    ShimState* states;              /* FMU states made by this instance (freed with it) */
+    double last_time;               /* end of the last accepted step, without RATTLE_VR_LAST_TIME */
 } Shim;
 
 static char* copy_string(const char* s)
@@ -276,37 +449,133 @@ static void host_message(const Shim* s, fmi2Status status, const char* category,
                        message);
 }
 
-/* The shim's own messages (formatted here, then passed on verbatim). */
-static void shim_log(const Shim* s, fmi2Status status, const char* category, const char* fmt, ...)
-{
-    char text[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    host_message(s, status, category, text);
-}
-
-/* pythonfmu's logger callback.  pythonfmu passes the finished message as the FORMAT argument
- * (with no arguments), so it must not reach the host's printf-style logger as a format. */
-static void inner_logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2Status status,
-                         fmi2String category, fmi2String message, ...)
-{
-    const Shim* s = env;
-    if (s != NULL && s->host.logger != NULL)
-        s->host.logger(s->host.componentEnvironment, instanceName, status, category, "%s",
-                       message != NULL ? message : "");
-}
-
 static const char* status_category(int code)
 {
     switch (code) {
+    case fmi2OK: return "logAll";
     case fmi2Warning: return "logStatusWarning";
     case fmi2Discard: return "logStatusDiscard";
     case fmi2Error: return "logStatusError";
     default: return "logStatusFatal";
     }
 }
+
+/* The shim's own messages (formatted here, then passed on verbatim). */
+static void shim_log(const Shim* s, fmi2Status status, const char* fmt, ...)
+{
+    char text[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    host_message(s, status, status_category(status), text);
+}
+
+/* A refused call: the reason to the host's logger, fmi2Error back. */
+static fmi2Status refuse(const Shim* s, const char* function, const char* fmt, ...)
+{
+    char text[2048];
+    int n;
+    va_list ap;
+    n = snprintf(text, sizeof text, "%s: ", function);
+    va_start(ap, fmt);
+    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
+    va_end(ap);
+    host_message(s, fmi2Error, "logStatusError", text);
+    return fmi2Error;
+}
+
+/* pythonfmu's logger callback.  pythonfmu passes the finished message as the FORMAT argument
+ * (with no arguments), so it must not reach the host's printf-style logger as a format.
+ * During fmi2Instantiate (debug logging forced on, see there) the messages are held. */
+static void inner_logger(fmi2ComponentEnvironment env, fmi2String instanceName, fmi2Status status,
+                         fmi2String category, fmi2String message, ...)
+{
+    Shim* s = env;
+    const char* text = message != NULL ? message : "";
+    if (s == NULL) return;
+    if (s->collecting) {
+        size_t used = strlen(s->collected);
+        if (used > 0 && used + 1 < sizeof s->collected) s->collected[used++] = '\n';
+        snprintf(s->collected + used, sizeof s->collected - used, "%s", text);
+        if (status > s->collected_status) s->collected_status = status;
+        return;
+    }
+    if (s->host.logger != NULL)
+        s->host.logger(s->host.componentEnvironment, instanceName, status,
+                       category != NULL ? category : "", "%s", text);
+}
+
+/* ------------------------------------------------------------------ argument checks */
+
+/* Offset of the first byte of `s` that is not valid UTF-8 (RFC 3629: no overlong forms, no
+ * surrogates, at most U+10FFFF -- what Python's decoder accepts), or (size_t)-1 if valid. */
+static size_t utf8_error_at(const char* text)
+{
+    const unsigned char* s = (const unsigned char*)text;
+    size_t i = 0;
+    while (s[i] != 0) {
+        unsigned c = s[i];
+        size_t n;
+        unsigned min, cp;
+        if (c < 0x80) { i++; continue; }
+        if (c >= 0xC2 && c <= 0xDF) { n = 1; min = 0x80; cp = c & 0x1F; }
+        else if (c >= 0xE0 && c <= 0xEF) { n = 2; min = 0x800; cp = c & 0x0F; }
+        else if (c >= 0xF0 && c <= 0xF4) { n = 3; min = 0x10000; cp = c & 0x07; }
+        else return i;
+        for (size_t k = 1; k <= n; k++) {
+            if ((s[i + k] & 0xC0) != 0x80) return i;
+            cp = (cp << 6) | (s[i + k] & 0x3F);
+        }
+        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return i;
+        i += n + 1;
+    }
+    return (size_t)-1;
+}
+
+/* A copy of `text` for messages: bytes that are not UTF-8 become '?', at most `size` - 1. */
+static void printable(char* out, size_t size, const char* text)
+{
+    size_t j = 0;
+    const char* p = text;
+    while (*p != '\0' && j + 1 < size) {
+        size_t bad = utf8_error_at(p);
+        if (bad == 0) { out[j++] = '?'; p++; continue; }
+        size_t good = bad == (size_t)-1 ? strlen(p) : bad;
+        if (good > size - 1 - j) good = size - 1 - j;
+        memcpy(out + j, p, good);
+        j += good;
+        p += good;
+    }
+    out[j] = '\0';
+}
+
+/* Value references the host may not use: the hidden variables of the status protocol. */
+static int hidden_vr(fmi2ValueReference vr)
+{
+#ifdef RATTLE_VR_LAST_TIME
+    if (vr == RATTLE_VR_LAST_TIME) return 1;
+#endif
+    return vr == RATTLE_VR_STATUS_ADDRESS || vr == RATTLE_VR_MESSAGE;
+}
+
+/* fmi2Error (with the reason logged) unless the vr/value arrays of a get/set can be passed on. */
+static fmi2Status check_vrs(const Shim* s, const char* function, const fmi2ValueReference vr[],
+                            size_t nvr, const void* values)
+{
+    size_t i;
+    if (nvr == 0) return fmi2OK;
+    if (vr == NULL || values == NULL)
+        return refuse(s, function, "nvr = %zu but the %s array is NULL", nvr,
+                      vr == NULL ? "value-reference" : "value");
+    for (i = 0; i < nvr; i++)
+        if (hidden_vr(vr[i]))
+            return refuse(s, function, "no variable with value reference %u (entry %zu); "
+                          "nothing of this call was applied", (unsigned)vr[i], i);
+    return fmi2OK;
+}
+
+/* ------------------------------------------------------------------ status protocol */
 
 /* After pythonfmu returned fmi2Fatal (always a Python exception) it has already released the
  * slave's Python objects; any further call, fmi2FreeInstance included, would release them
@@ -344,7 +613,7 @@ static fmi2Status after_call(Shim* s, fmi2Status st)
     message_status = inner_api.fmi2GetString(s->inner, &vr_message, 1, &message);
     if (message_status == fmi2Fatal) {
         mark_inner_dead(s);
-        shim_log(s, (fmi2Status)code, status_category(code),
+        shim_log(s, (fmi2Status)code,
                  "(the slave reported this status, but reading its message failed)");
         return fmi2Fatal;
     }
@@ -359,24 +628,26 @@ static Shim* usable(fmi2Component c, const char* function)
     Shim* s = c;
     if (s == NULL) return NULL;
     if (s->inner_dead) {
-        shim_log(s, fmi2Fatal, "logStatusFatal",
+        shim_log(s, fmi2Fatal,
                  "%s refused: this instance returned fmi2Fatal before and cannot be used", function);
         return NULL;
     }
     return s;
 }
 
-/* Forward + status check, the body of almost every function below.  ARGS is the argument list
- * of the inner call, in parentheses, using INNER for the wrapped component. */
+#define REFUSED(c) ((c) == NULL ? fmi2Error : fmi2Fatal)
+
+/* Forward + status check, the body of the simplest functions below.  ARGS is the argument
+ * list of the inner call, in parentheses, using INNER for the wrapped component. */
 #define INNER (s_->inner)
 #define FORWARD(c, name, ARGS)                                                                 \
     do {                                                                                       \
         Shim* s_ = usable((c), #name);                                                         \
-        if (s_ == NULL) return (c) == NULL ? fmi2Error : fmi2Fatal;                            \
+        if (s_ == NULL) return REFUSED(c);                                                     \
         return after_call(s_, inner_api.name ARGS);                                            \
     } while (0)
 
-/* ------------------------------------------------------------------ resource URI */
+/* ------------------------------------------------------------------ resource location */
 
 static int hex_value(char ch)
 {
@@ -386,32 +657,66 @@ static int hex_value(char ch)
     return -1;
 }
 
-/* "file:///p", "file://localhost/p" or "file:/p" -> malloc'ed "/p" with every %XX decoded.
- * Returns NULL for anything else (other schemes, remote hosts, plain paths): those are passed
- * to pythonfmu unchanged.  pythonfmu itself decodes only %20, so non-ASCII or '%' in the
- * unpack directory would otherwise give it a wrong path.  A "%00" or malformed escape stays
- * literal; '?' and '#' are kept as part of the path (resource URIs carry no query). */
-static char* file_uri_to_path(const char* uri)
+/* The local path a resource location names, malloc'ed, or NULL with the reason in `why`.
+ * Accepted: "file:///p", "file://localhost/p", "file:/p" with every %XX decoded (pythonfmu
+ * itself decodes only %20), and a plain absolute path "/p" (taken as it is).  A malformed
+ * escape stays literal; "%00" is refused ('?' and '#' belong to the path: resource URIs carry
+ * no query). */
+static char* location_to_path(const char* location, char* why, size_t why_size)
 {
     const char* p;
     char* out;
     char* q;
+    size_t scheme = 0;
 
-    if (uri == NULL || strncasecmp(uri, "file:", 5) != 0) return NULL;
-    p = uri + 5;
-    if (p[0] == '/' && p[1] == '/') { /* authority */
-        p += 2;
-        if (strncasecmp(p, "localhost/", 10) == 0) p += 9;
-        else if (p[0] != '/') return NULL; /* a remote host: not a local file */
+    if (strncasecmp(location, "file:", 5) == 0) {
+        p = location + 5;
+        if (p[0] == '/' && p[1] == '/') { /* authority */
+            p += 2;
+            if (strncasecmp(p, "localhost/", 10) == 0) p += 9;
+            else if (p[0] != '/') {
+                snprintf(why, why_size, "names a file on another host; allowed: a local "
+                                        "file:// URI or an absolute path");
+                return NULL;
+            }
+        }
+        if (p[0] != '/') {
+            snprintf(why, why_size, "is a relative file URI; allowed: file:///<absolute path>");
+            return NULL;
+        }
+    } else {
+        while ((location[scheme] >= 'a' && location[scheme] <= 'z')
+               || (location[scheme] >= 'A' && location[scheme] <= 'Z')
+               || (scheme > 0 && ((location[scheme] >= '0' && location[scheme] <= '9')
+                                  || strchr("+-.", location[scheme]) != NULL)))
+            scheme++;
+        if (scheme > 1 && location[scheme] == ':') {
+            snprintf(why, why_size, "has the URI scheme '%.*s', which this FMU cannot read; "
+                                    "allowed: file:// URIs and absolute paths",
+                     (int)(scheme > 32 ? 32 : scheme), location);
+            return NULL;
+        }
+        if (location[0] != '/') {
+            snprintf(why, why_size, "is %s; allowed: a file:// URI or an absolute path",
+                     location[0] == '\0' ? "empty" : "a relative path");
+            return NULL;
+        }
+        return copy_string(location);
     }
-    if (p[0] != '/') return NULL;
 
     out = malloc(strlen(p) + 1);
-    if (out == NULL) return NULL;
+    if (out == NULL) {
+        snprintf(why, why_size, "cannot be decoded: out of memory");
+        return NULL;
+    }
     for (q = out; *p != '\0'; p++) {
         int hi, lo;
-        if (p[0] == '%' && (hi = hex_value(p[1])) >= 0 && (lo = hex_value(p[2])) >= 0 &&
-            (hi | lo) != 0) {
+        if (p[0] == '%' && (hi = hex_value(p[1])) >= 0 && (lo = hex_value(p[2])) >= 0) {
+            if ((hi | lo) == 0) {
+                free(out);
+                snprintf(why, why_size, "holds %%00, which no path can contain");
+                return NULL;
+            }
             *q++ = (char)(hi * 16 + lo);
             p += 2;
         } else {
@@ -422,18 +727,264 @@ static char* file_uri_to_path(const char* uri)
     return out;
 }
 
+/* The first line of a small text file (without the line end) into `out`; 0 on success. */
+static int first_line(const char* path, char* out, size_t size)
+{
+    FILE* f = fopen(path, "r");
+    size_t n;
+    if (f == NULL) return 1;
+    if (fgets(out, (int)size, f) == NULL) out[0] = '\0';
+    fclose(f);
+    n = strcspn(out, "\r\n");
+    out[n] = '\0';
+    return 0;
+}
+
+static int is_regular_file(const char* path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+/* Checks that `location` names this FMU's resources folder and returns the path to hand to
+ * pythonfmu (malloc'ed), or NULL with the reason in `why`.
+ *
+ * The folder must exist and hold slavemodule.txt naming this FMU's module
+ * (RATTLE_MODEL_IDENTIFIER) and that module's .py file: pythonfmu reads both and, without
+ * them, calls a NULL Python object.  pythonfmu then replaces every "%20" of the path it is
+ * given by a space and removes "file://", and hands the path to Python as UTF-8.  So it gets
+ * the canonical absolute path (realpath: no "//", hence no "file://") when that holds no
+ * "%20" and is valid UTF-8; otherwise (a folder literally named "x%20y", a Latin-1 unpack
+ * path) the folder is opened and pythonfmu gets "/proc/self/fd/<n>", which names the same
+ * folder while the descriptor stays open (until fmi2FreeInstance; *fd receives it). */
+static char* resolve_resources(const char* location, int* fd, char* why, size_t why_size)
+{
+    char* decoded;
+    char* real;
+    char file[PATH_BUFFER + 64];
+    char module[256];
+    char shown[256];
+    struct stat st;
+
+    *fd = -1;
+    if (location == NULL) {
+        snprintf(why, why_size, "is NULL; allowed: the URI of this FMU's resources folder");
+        return NULL;
+    }
+    decoded = location_to_path(location, why, why_size);
+    if (decoded == NULL) return NULL;
+    printable(shown, sizeof shown, decoded);
+    real = realpath(decoded, NULL);
+    if (real == NULL || stat(real, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(why, why_size, "names '%s', which %s; allowed: this FMU's resources folder",
+                 shown, real == NULL ? strerror(errno) : "is not a folder");
+        free(decoded);
+        free(real);
+        return NULL;
+    }
+    free(decoded);
+    printable(shown, sizeof shown, real);
+    if (strlen(real) > PATH_BUFFER - 16) {
+        snprintf(why, why_size, "names a path of %zu bytes; allowed: at most %d",
+                 strlen(real), PATH_BUFFER - 16);
+        free(real);
+        return NULL;
+    }
+    snprintf(file, sizeof file, "%s/slavemodule.txt", real);
+    if (first_line(file, module, sizeof module) != 0) {
+        snprintf(file, sizeof file, "%s/resources/slavemodule.txt", real);
+        if (is_regular_file(file))
+            snprintf(why, why_size, "names '%s', the folder the FMU was unpacked to; allowed: "
+                                    "its resources folder, '%s/resources'", shown, shown);
+        else
+            snprintf(why, why_size, "names '%s', which has no slavemodule.txt: not the "
+                                    "resources folder of this FMU", shown);
+        free(real);
+        return NULL;
+    }
+#ifdef RATTLE_MODEL_IDENTIFIER
+    if (strcmp(module, RATTLE_MODEL_IDENTIFIER) != 0) {
+        char other[64];
+        printable(other, sizeof other, module);
+        snprintf(why, why_size, "names '%s', the resources of FMU '%s', not of %s", shown,
+                 other, RATTLE_MODEL_IDENTIFIER);
+        free(real);
+        return NULL;
+    }
+#endif
+    snprintf(file, sizeof file, "%s/%s.py", real, module);
+    if (module[0] == '\0' || strchr(module, '/') != NULL || !is_regular_file(file)) {
+        snprintf(why, why_size, "names '%s', which lacks the slave module '%.64s.py'", shown,
+                 module);
+        free(real);
+        return NULL;
+    }
+    if (strstr(real, "%20") == NULL && utf8_error_at(real) == (size_t)-1) return real;
+
+    *fd = open(real, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    free(real);
+    if (*fd >= 0) {
+        char* proc = malloc(64);
+        if (proc != NULL) {
+            snprintf(proc, 64, "/proc/self/fd/%d", *fd);
+            snprintf(file, sizeof file, "%s/slavemodule.txt", proc);
+            if (is_regular_file(file)) return proc;
+            free(proc);
+        }
+        close(*fd);
+        *fd = -1;
+    }
+    snprintf(why, why_size, "names '%s', which pythonfmu would misread (it holds \"%%20\" or is "
+                            "not UTF-8) and /proc/self/fd is not available to avoid that; "
+                            "unpack the FMU to a folder with a plain UTF-8 path", shown);
+    return NULL;
+}
+
+/* ------------------------------------------------------------------ FMU states */
+
+/* An FMU state handed to the host: pythonfmu's state (a Python object) with the GUID of the
+ * FMU that made it, on the list of the instance that made it (fmi2FreeInstance frees what
+ * the host did not).  A state of another FMU, or anything else, is refused by its magic and
+ * GUID (a pointer that is not a state at all -- dangling, or NULL-like garbage -- FMI does
+ * not allow). */
+#define STATE_MAGIC "RTLSTATE"
+
+struct ShimState {
+    char magic[8];
+    char guid[64];
+    fmi2FMUstate inner;
+    Shim* owner;
+    ShimState* next;
+    ShimState* prev;
+};
+
+/* Serialized states: an envelope of STATE_HEADER bytes, then pythonfmu's serialization of the
+ * slave's state (JSON).  Little-endian:
+ *   0  8  "RTLSTSER"
+ *   8  4  envelope version (STATE_ENVELOPE_VERSION)
+ *  12  4  0 (reserved)
+ *  16  8  payload length n
+ *  24  8  FNV-1a 64 of the payload
+ *  32 64  the FMU's GUID, NUL-padded
+ *  96  n  payload
+ * The host's buffer may be larger than the reported size (FMI 2.0 allows it): the rest is
+ * zeroed and ignored when the state is read back. */
+#define STATE_SERIAL_MAGIC "RTLSTSER"
+#define STATE_ENVELOPE_VERSION 1u
+#define STATE_HEADER 96u
+
+static uint64_t fnv1a64(const unsigned char* p, size_t n)
+{
+    uint64_t h = 14695981039346656037ull;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static void put_le(unsigned char* p, uint64_t v, int bytes)
+{
+    int i;
+    for (i = 0; i < bytes; i++) p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static uint64_t get_le(const unsigned char* p, int bytes)
+{
+    uint64_t v = 0;
+    int i;
+    for (i = bytes - 1; i >= 0; i--) v = (v << 8) | p[i];
+    return v;
+}
+
+/* `state` as a state of this FMU, or NULL with the refusal logged. */
+static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* function)
+{
+    ShimState* st = state;
+    if (st == NULL) {
+        refuse(s, function, "the FMU state is NULL");
+        return NULL;
+    }
+    if (memcmp(st->magic, STATE_MAGIC, 8) != 0) {
+        refuse(s, function, "not an FMU state of this FMU (made by fmi2GetFMUstate or "
+                            "fmi2DeSerializeFMUstate of %s); nothing changed",
+               RATTLE_GUID[0] ? RATTLE_GUID : "this FMU");
+        return NULL;
+    }
+    if (strcmp(st->guid, RATTLE_GUID) != 0) {
+        char other[64];
+        printable(other, sizeof other, st->guid);
+        refuse(s, function, "the FMU state belongs to the FMU with GUID %s, not to this one "
+                            "(%s); nothing changed", other, RATTLE_GUID);
+        return NULL;
+    }
+    return st;
+}
+
+static void free_inner_state(Shim* s, fmi2FMUstate* inner)
+{
+    if (*inner != NULL && !s->inner_dead)
+        after_call(s, inner_api.fmi2FreeFMUstate(s->inner, inner));
+    *inner = NULL;
+}
+
+static ShimState* new_state(Shim* s, fmi2FMUstate inner)
+{
+    ShimState* st = calloc(1, sizeof *st);
+    if (st == NULL) return NULL;
+    memcpy(st->magic, STATE_MAGIC, 8);
+    snprintf(st->guid, sizeof st->guid, "%s", RATTLE_GUID);
+    st->inner = inner;
+    st->owner = s;
+    st->next = s->states;
+    if (s->states != NULL) s->states->prev = st;
+    s->states = st;
+    return st;
+}
+
+/* Frees a state of this FMU (through `s`, whichever instance made it). */
+static void delete_state(Shim* s, ShimState* st)
+{
+    Shim* owner = st->owner;
+    free_inner_state(s, &st->inner);
+    if (st->prev != NULL) st->prev->next = st->next;
+    else if (owner != NULL) owner->states = st->next;
+    if (st->next != NULL) st->next->prev = st->prev;
+    memset(st->magic, 0, sizeof st->magic);
+    free(st);
+}
+
+/* Takes the new inner state `fresh` into *state: into the state already there (FMI 2.0
+ * allows *state to be a state of this FMU, to be reused) or a new one. */
+static fmi2Status store_state(Shim* s, const char* function, ShimState* reuse,
+                              fmi2FMUstate fresh, fmi2FMUstate* state)
+{
+    ShimState* st;
+    if (reuse != NULL) {
+        free_inner_state(s, &reuse->inner);
+        reuse->inner = fresh;
+        return fmi2OK;
+    }
+    st = new_state(s, fresh);
+    if (st == NULL) {
+        free_inner_state(s, &fresh);
+        return refuse(s, function, "out of memory");
+    }
+    *state = st;
+    return fmi2OK;
+}
+
 /* ------------------------------------------------------------------ exported API */
 
 const char* fmi2GetTypesPlatform(void)
 {
-    return ensure_inner() ? inner_api.fmi2GetTypesPlatform() : "default";
+    return "default"; /* fmi2TypesPlatform.h of FMI 2.0; pythonfmu answers the same */
 }
 
 const char* fmi2GetVersion(void)
 {
-    /* Without the wrapped library the shim is still an FMI 2.0 binary; fmi2Instantiate then
-     * reports why it cannot work. */
-    return ensure_inner() ? inner_api.fmi2GetVersion() : "2.0";
+    return "2.0";
 }
 
 static void free_kept_strings(Shim* s)
@@ -447,7 +998,9 @@ static void free_kept_strings(Shim* s)
 
 static void free_shim(Shim* s)
 {
+    while (s->states != NULL) delete_state(s, s->states);
     free_kept_strings(s);
+    if (s->resource_fd >= 0) close(s->resource_fd);
     free(s->instance_name);
     free(s);
 }
@@ -467,7 +1020,7 @@ static int fetch_status_address(Shim* s)
         address = strtoull(text + 2, &end, 16);
     if (end == NULL || *end != '\0' || address == 0 || address % sizeof(int) != 0 ||
         address > UINTPTR_MAX) {
-        shim_log(s, fmi2Warning, "logStatusWarning",
+        shim_log(s, fmi2Warning,
                  "status protocol disabled: variable %u holds \"%.64s\", not an address",
                  (unsigned)vr, text);
         return 1;
@@ -476,44 +1029,103 @@ static int fetch_status_address(Shim* s)
     return 1;
 }
 
+/* fmi2Instantiate's refusals go to the host's logger before any instance exists. */
+static void instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
+                            fmi2Status status, const char* fmt, ...)
+{
+    char text[3072];
+    int n;
+    va_list ap;
+    if (functions->logger == NULL) return;
+    n = snprintf(text, sizeof text, "rattle FMI shim: fmi2Instantiate: ");
+    va_start(ap, fmt);
+    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
+    va_end(ap);
+    functions->logger(functions->componentEnvironment, name, status, status_category(status),
+                      "%s", text);
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions* functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn)
 {
-    const char* name = instanceName != NULL ? instanceName : "";
+    char name[256];
+    char why[1536];
     char* path;
+    int fd;
+    size_t bad;
     Shim* s;
 
-    if (functions == NULL) return NULL;
-#ifdef RATTLE_GUID
-    /* FMI 2.0 2.1.5: the FMU checks that the master's modelDescription is the one it was
-     * built with (pythonfmu does not). */
-    if (fmuGUID == NULL || strcmp(fmuGUID, RATTLE_GUID) != 0) {
-        if (functions->logger != NULL)
-            functions->logger(functions->componentEnvironment, name, fmi2Error,
-                              "logStatusError", "%s%s%s%s",
-                              "rattle FMI shim: fmi2Instantiate: GUID ",
-                              fmuGUID != NULL ? fmuGUID : "(null)",
-                              " does not match this FMU's ", RATTLE_GUID);
+    if (functions == NULL) return NULL; /* nobody to tell */
+    if (instanceName == NULL || instanceName[strspn(instanceName, " \t\r\n")] == '\0') {
+        instantiate_log(functions, "", fmi2Error, "instanceName is %s; allowed: a non-empty "
+                        "string (FMI 2.0, 2.1.5)", instanceName == NULL ? "NULL" : "blank");
         return NULL;
     }
-#endif
+    printable(name, sizeof name, instanceName);
+    bad = utf8_error_at(instanceName);
+    if (bad != (size_t)-1) {
+        instantiate_log(functions, name, fmi2Error, "instanceName '%s' is not valid UTF-8 "
+                        "(byte 0x%02X at offset %zu); allowed: UTF-8 text", name,
+                        (unsigned)(unsigned char)instanceName[bad], bad);
+        return NULL;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        instantiate_log(functions, name, fmi2Error, "fmuType = %d (%s) is not supported: this "
+                        "FMU is for co-simulation only; allowed: fmi2CoSimulation (1)",
+                        (int)fmuType, fmuType == fmi2ModelExchange ? "fmi2ModelExchange"
+                                                                   : "not an fmi2Type");
+        return NULL;
+    }
+    /* FMI 2.0 2.1.5: the FMU checks that the master's modelDescription is the one it was
+     * built with (pythonfmu does not). */
+    if (RATTLE_GUID[0] != '\0' && (fmuGUID == NULL || strcmp(fmuGUID, RATTLE_GUID) != 0)) {
+        char guid[128];
+        printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
+        instantiate_log(functions, name, fmi2Error, "GUID %s does not match this FMU's %s",
+                        guid, RATTLE_GUID);
+        return NULL;
+    }
     if (!ensure_inner()) {
-        if (functions->logger != NULL)
-            functions->logger(functions->componentEnvironment, name, fmi2Fatal, "logStatusFatal",
-                              "%s%s", "rattle FMI shim: ", inner_error);
+        instantiate_log(functions, name, fmi2Fatal, "%s", inner_error);
+        return NULL;
+    }
+    path = resolve_resources(fmuResourceLocation, &fd, why, sizeof why);
+    if (path == NULL) {
+        char location[512];
+        printable(location, sizeof location,
+                  fmuResourceLocation != NULL ? fmuResourceLocation : "(null)");
+        instantiate_log(functions, name, fmi2Error, "fmuResourceLocation '%s' %s", location,
+                        why);
+        return NULL;
+    }
+    if (!start_python()) {
+        char python3[PATH_BUFFER];
+        python3_on_path(python3, sizeof python3);
+        instantiate_log(functions, name, fmi2Fatal,
+                        "the embedded Python interpreter (libpython %s) cannot start: %s. It "
+                        "takes its standard library from the prefix of the python3 first on "
+                        "PATH (%s): put the python3 of the loaded libpython first on PATH "
+                        "(docs/native_host.md)", python_version(), python_error,
+                        python3[0] ? python3 : "none found");
+        free(path);
+        if (fd >= 0) close(fd);
         return NULL;
     }
 
     s = calloc(1, sizeof *s);
-    if (s == NULL) return NULL;
-    s->host = *functions;
-    s->instance_name = copy_string(name);
-    if (s->instance_name == NULL) {
+    if (s == NULL || (s->instance_name = copy_string(instanceName)) == NULL) {
+        instantiate_log(functions, name, fmi2Fatal, "out of memory");
         free(s);
+        free(path);
+        if (fd >= 0) close(fd);
         return NULL;
     }
+    s->host = *functions;
+    s->resource_fd = fd;
+    s->host_logging = loggingOn != fmi2False;
+    s->last_time = NAN;
     /* pythonfmu logs through to_inner with the shim as environment (see inner_logger).
      * stepFinished is withheld: pythonfmu never steps asynchronously, and its environment
      * argument would be the shim, not the host's. */
@@ -521,21 +1133,47 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     s->to_inner.logger = inner_logger;
     s->to_inner.stepFinished = NULL;
     s->to_inner.componentEnvironment = s;
+    if (path != NULL && fd >= 0 && s->host_logging)
+        shim_log(s, fmi2OK, "the resources folder's path holds \"%%20\" or is not UTF-8, which "
+                            "pythonfmu would misread: it gets %s instead", path);
 
-    path = file_uri_to_path(fmuResourceLocation);
-    s->inner = inner_api.fmi2Instantiate(s->instance_name, fmuType, fmuGUID,
-                                         path != NULL ? path : fmuResourceLocation, &s->to_inner,
-                                         visible, loggingOn);
+    /* pythonfmu reports why it cannot create the slave (the slave module does not import,
+     * ...) only with debug logging on: it is on during the call, and its messages are held
+     * and given to the host if the instantiation fails (or if the host asked for them). */
+    s->collecting = 1;
+    s->inner = inner_api.fmi2Instantiate(s->instance_name, fmi2CoSimulation, fmuGUID, path,
+                                         &s->to_inner, visible, fmi2True);
+    s->collecting = 0;
     free(path);
     if (s->inner == NULL) {
+        char python3[PATH_BUFFER];
+        python3_on_path(python3, sizeof python3);
+        if (s->collected[0] != '\0')
+            host_message(s, s->collected_status >= fmi2Error ? s->collected_status : fmi2Fatal,
+                         "logStatusFatal", s->collected);
+        if (python_started_here) /* a native host */
+            shim_log(s, fmi2Fatal, "rattle FMI shim: fmi2Instantiate: pythonfmu could not "
+                                   "create the slave%s. The embedded interpreter (libpython %s) "
+                                   "imports it with the standard library and packages of the "
+                                   "python3 first on PATH (%s), which must belong to the loaded "
+                                   "libpython (docs/native_host.md)",
+                     s->collected[0] ? " (reason above)" : "", python_version(),
+                     python3[0] ? python3 : "none found");
+        else
+            shim_log(s, fmi2Fatal, "rattle FMI shim: fmi2Instantiate: pythonfmu could not "
+                                   "create the slave%s", s->collected[0] ? " (reason above)" : "");
         free_shim(s);
         return NULL;
     }
+    if (s->host_logging && s->collected[0] != '\0')
+        host_message(s, s->collected_status, status_category(s->collected_status),
+                     s->collected);
+    if (!s->host_logging) inner_api.fmi2SetDebugLogging(s->inner, fmi2False, 0, NULL);
     if (!fetch_status_address(s)) {
         /* pythonfmu's instance is broken (already released its Python objects): leak it. */
-        shim_log(s, fmi2Fatal, "logStatusFatal",
-                 "rattle FMI shim: reading variable %u (status address) failed",
+        shim_log(s, fmi2Fatal, "rattle FMI shim: reading variable %u (status address) failed",
                  (unsigned)RATTLE_VR_STATUS_ADDRESS);
+        s->inner_dead = 1;
         free_shim(s);
         return NULL;
     }
@@ -546,6 +1184,7 @@ void fmi2FreeInstance(fmi2Component c)
 {
     Shim* s = c;
     if (s == NULL) return;
+    while (s->states != NULL) delete_state(s, s->states); /* before the instance goes */
     if (!s->inner_dead) inner_api.fmi2FreeInstance(s->inner);
     free_shim(s);
 }
@@ -553,7 +1192,25 @@ void fmi2FreeInstance(fmi2Component c)
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[])
 {
-    FORWARD(c, fmi2SetDebugLogging, (INNER, loggingOn, nCategories, categories));
+    Shim* s = usable(c, "fmi2SetDebugLogging");
+    size_t i;
+    if (s == NULL) return REFUSED(c);
+    if (nCategories > 0 && categories == NULL)
+        return refuse(s, "fmi2SetDebugLogging", "nCategories = %zu but categories is NULL; "
+                      "nothing changed", nCategories);
+    for (i = 0; i < nCategories; i++) {
+        size_t bad;
+        if (categories[i] == NULL)
+            return refuse(s, "fmi2SetDebugLogging", "category %zu of %zu is NULL; nothing "
+                          "changed", i, nCategories);
+        bad = utf8_error_at(categories[i]);
+        if (bad != (size_t)-1)
+            return refuse(s, "fmi2SetDebugLogging", "category %zu is not valid UTF-8 (offset "
+                          "%zu); nothing changed", i, bad);
+    }
+    s->host_logging = loggingOn != fmi2False;
+    return after_call(s, inner_api.fmi2SetDebugLogging(s->inner, loggingOn, nCategories,
+                                                       categories));
 }
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
@@ -582,32 +1239,31 @@ fmi2Status fmi2Reset(fmi2Component c)
 {
     Shim* s = usable(c, "fmi2Reset");
     fmi2Status st;
-    if (s == NULL) return c == NULL ? fmi2Error : fmi2Fatal;
+    if (s == NULL) return REFUSED(c);
     /* pythonfmu's reset constructs a NEW slave object: the old status int goes away with the
      * old object, and the new one has its own address. */
     s->status = NULL;
     st = inner_api.fmi2Reset(s->inner);
     if (st != fmi2Fatal && !fetch_status_address(s)) st = fmi2Fatal;
+    s->last_time = NAN;
     return after_call(s, st);
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       fmi2Real value[])
-{
-    FORWARD(c, fmi2GetReal, (INNER, vr, nvr, value));
-}
-
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Integer value[])
-{
-    FORWARD(c, fmi2GetInteger, (INNER, vr, nvr, value));
-}
-
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          fmi2Boolean value[])
-{
-    FORWARD(c, fmi2GetBoolean, (INNER, vr, nvr, value));
-}
+#define GET_SET(name, type)                                                                    \
+    fmi2Status name(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, type value)   \
+    {                                                                                          \
+        Shim* s = usable(c, #name);                                                            \
+        if (s == NULL) return REFUSED(c);                                                      \
+        if (check_vrs(s, #name, vr, nvr, value) != fmi2OK) return fmi2Error;                   \
+        return after_call(s, inner_api.name(s->inner, vr, nvr, value));                        \
+    }
+GET_SET(fmi2GetReal, fmi2Real*)
+GET_SET(fmi2GetInteger, fmi2Integer*)
+GET_SET(fmi2GetBoolean, fmi2Boolean*)
+GET_SET(fmi2SetReal, const fmi2Real*)
+GET_SET(fmi2SetInteger, const fmi2Integer*)
+GET_SET(fmi2SetBoolean, const fmi2Boolean*)
+#undef GET_SET
 
 /* pythonfmu frees the strings of the previous fmi2GetString at the start of the next one.  The
  * message fetch of the status protocol is such a call, so when a message is about to be read
@@ -634,125 +1290,313 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 {
     Shim* s = usable(c, "fmi2GetString");
     fmi2Status st;
-    if (s == NULL) return c == NULL ? fmi2Error : fmi2Fatal;
+    if (s == NULL) return REFUSED(c);
+    if (check_vrs(s, "fmi2GetString", vr, nvr, value) != fmi2OK) return fmi2Error;
     st = inner_api.fmi2GetString(s->inner, vr, nvr, value);
-    if (st != fmi2Fatal && status_pending(s) && keep_strings(s, value, nvr) != fmi2OK) {
-        shim_log(s, fmi2Error, "logStatusError", "rattle FMI shim: out of memory in fmi2GetString");
-        st = fmi2Error;
-    }
+    if (st != fmi2Fatal && status_pending(s) && keep_strings(s, value, nvr) != fmi2OK)
+        st = refuse(s, "fmi2GetString", "out of memory");
     return after_call(s, st);
-}
-
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                       const fmi2Real value[])
-{
-    FORWARD(c, fmi2SetReal, (INNER, vr, nvr, value));
-}
-
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Integer value[])
-{
-    FORWARD(c, fmi2SetInteger, (INNER, vr, nvr, value));
-}
-
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                          const fmi2Boolean value[])
-{
-    FORWARD(c, fmi2SetBoolean, (INNER, vr, nvr, value));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[])
 {
-    FORWARD(c, fmi2SetString, (INNER, vr, nvr, value));
+    Shim* s = usable(c, "fmi2SetString");
+    size_t i;
+    if (s == NULL) return REFUSED(c);
+    if (check_vrs(s, "fmi2SetString", vr, nvr, value) != fmi2OK) return fmi2Error;
+    for (i = 0; i < nvr; i++) {
+        size_t bad;
+        if (value[i] == NULL)
+            return refuse(s, "fmi2SetString", "value %zu (value reference %u) is NULL; nothing "
+                          "of this call was stored", i, (unsigned)vr[i]);
+        bad = utf8_error_at(value[i]);
+        if (bad != (size_t)-1)
+            return refuse(s, "fmi2SetString", "value %zu (value reference %u) is not valid "
+                          "UTF-8 (byte 0x%02X at offset %zu); nothing of this call was stored",
+                          i, (unsigned)vr[i], (unsigned)(unsigned char)value[i][bad], bad);
+    }
+    return after_call(s, inner_api.fmi2SetString(s->inner, vr, nvr, value));
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
 {
-    FORWARD(c, fmi2GetFMUstate, (INNER, state));
+    Shim* s = usable(c, "fmi2GetFMUstate");
+    ShimState* reuse = NULL;
+    fmi2FMUstate fresh = NULL;
+    fmi2Status st;
+    if (s == NULL) return REFUSED(c);
+    if (state == NULL) return refuse(s, "fmi2GetFMUstate", "the FMUstate pointer is NULL");
+    if (*state != NULL && (reuse = own_state(s, *state, "fmi2GetFMUstate")) == NULL)
+        return fmi2Error;
+    st = after_call(s, inner_api.fmi2GetFMUstate(s->inner, &fresh));
+    if (st > fmi2Warning) {
+        free_inner_state(s, &fresh);
+        return st;
+    }
+    if (store_state(s, "fmi2GetFMUstate", reuse, fresh, state) != fmi2OK) return fmi2Error;
+    return st;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state)
 {
-    FORWARD(c, fmi2SetFMUstate, (INNER, state));
+    Shim* s = usable(c, "fmi2SetFMUstate");
+    ShimState* st;
+    if (s == NULL) return REFUSED(c);
+    if ((st = own_state(s, state, "fmi2SetFMUstate")) == NULL) return fmi2Error;
+    return after_call(s, inner_api.fmi2SetFMUstate(s->inner, st->inner));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
 {
-    FORWARD(c, fmi2FreeFMUstate, (INNER, state));
+    Shim* s = usable(c, "fmi2FreeFMUstate");
+    ShimState* st;
+    if (s == NULL) return REFUSED(c);
+    if (state == NULL || *state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if ((st = own_state(s, *state, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
+    delete_state(s, st);
+    *state = NULL;
+    return fmi2OK;
+}
+
+/* Size of pythonfmu's serialization of `st`, through the status protocol. */
+static fmi2Status payload_size(Shim* s, ShimState* st, size_t* n)
+{
+    *n = 0;
+    return after_call(s, inner_api.fmi2SerializedFMUstateSize(s->inner, st->inner, n));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t* size)
 {
-    FORWARD(c, fmi2SerializedFMUstateSize, (INNER, state, size));
+    Shim* s = usable(c, "fmi2SerializedFMUstateSize");
+    ShimState* st;
+    size_t n;
+    fmi2Status status;
+    if (s == NULL) return REFUSED(c);
+    if (size == NULL) return refuse(s, "fmi2SerializedFMUstateSize", "size is NULL");
+    if ((st = own_state(s, state, "fmi2SerializedFMUstateSize")) == NULL) return fmi2Error;
+    status = payload_size(s, st, &n);
+    if (status <= fmi2Warning) *size = STATE_HEADER + n;
+    return status;
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte serializedState[],
                                  size_t size)
 {
-    FORWARD(c, fmi2SerializeFMUstate, (INNER, state, serializedState, size));
+    Shim* s = usable(c, "fmi2SerializeFMUstate");
+    ShimState* st;
+    size_t n;
+    fmi2Status status;
+    unsigned char* out = (unsigned char*)serializedState;
+    if (s == NULL) return REFUSED(c);
+    if ((st = own_state(s, state, "fmi2SerializeFMUstate")) == NULL) return fmi2Error;
+    if (serializedState == NULL)
+        return refuse(s, "fmi2SerializeFMUstate", "the buffer is NULL");
+    status = payload_size(s, st, &n);
+    if (status > fmi2Warning) return status;
+    if (size < STATE_HEADER || size - STATE_HEADER < n)
+        return refuse(s, "fmi2SerializeFMUstate", "the buffer of %zu bytes is too small: this "
+                      "state needs %zu bytes (fmi2SerializedFMUstateSize); nothing written",
+                      size, STATE_HEADER + n);
+    /* pythonfmu copies exactly n bytes here: never more than its serialization holds. */
+    status = after_call(s, inner_api.fmi2SerializeFMUstate(s->inner, st->inner,
+                                                           serializedState + STATE_HEADER, n));
+    if (status > fmi2Warning) return status;
+    memset(out, 0, STATE_HEADER);
+    memcpy(out, STATE_SERIAL_MAGIC, 8);
+    put_le(out + 8, STATE_ENVELOPE_VERSION, 4);
+    put_le(out + 16, n, 8);
+    put_le(out + 24, fnv1a64(out + STATE_HEADER, n), 8);
+    memcpy(out + 32, RATTLE_GUID, strlen(RATTLE_GUID) < 63 ? strlen(RATTLE_GUID) : 63);
+    memset(out + STATE_HEADER + n, 0, size - STATE_HEADER - n);
+    return status;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate* state)
 {
-    FORWARD(c, fmi2DeSerializeFMUstate, (INNER, serializedState, size, state));
+    static const char function[] = "fmi2DeSerializeFMUstate";
+    Shim* s = usable(c, function);
+    const unsigned char* in = (const unsigned char*)serializedState;
+    ShimState* reuse = NULL;
+    fmi2FMUstate fresh = NULL;
+    uint64_t n, version;
+    char guid[65];
+    fmi2Status st;
+    if (s == NULL) return REFUSED(c);
+    if (state == NULL) return refuse(s, function, "the FMUstate pointer is NULL");
+    if (serializedState == NULL && size > 0) return refuse(s, function, "the buffer is NULL");
+    if (size < STATE_HEADER || memcmp(in, STATE_SERIAL_MAGIC, 8) != 0)
+        return refuse(s, function, "the %zu bytes are not a serialized state of a drive-rattle "
+                      "FMU (no \"" STATE_SERIAL_MAGIC "\" header); nothing changed", size);
+    version = get_le(in + 8, 4);
+    if (version != STATE_ENVELOPE_VERSION)
+        return refuse(s, function, "the serialized state has envelope version %llu; this FMU "
+                      "reads version %u; nothing changed", (unsigned long long)version,
+                      STATE_ENVELOPE_VERSION);
+    memcpy(guid, in + 32, 64);
+    guid[64] = '\0';
+    if (strcmp(guid, RATTLE_GUID) != 0) {
+        char shown[80];
+        printable(shown, sizeof shown, guid);
+        return refuse(s, function, "the serialized state belongs to the FMU with GUID %s, not "
+                      "to this one (%s); nothing changed", shown, RATTLE_GUID);
+    }
+    n = get_le(in + 16, 8);
+    if (n > size - STATE_HEADER)
+        return refuse(s, function, "the serialized state is truncated: %zu bytes, its header "
+                      "announces %llu; nothing changed", size,
+                      (unsigned long long)(STATE_HEADER + n));
+    if (fnv1a64(in + STATE_HEADER, (size_t)n) != get_le(in + 24, 8))
+        return refuse(s, function, "the serialized state is corrupt (checksum mismatch); "
+                      "nothing changed");
+    if (*state != NULL && (reuse = own_state(s, *state, function)) == NULL) return fmi2Error;
+    st = after_call(s, inner_api.fmi2DeSerializeFMUstate(
+                           s->inner, serializedState + STATE_HEADER, (size_t)n, &fresh));
+    if (st > fmi2Warning) {
+        free_inner_state(s, &fresh);
+        return st;
+    }
+    if (store_state(s, function, reuse, fresh, state) != fmi2OK) return fmi2Error;
+    return st;
 }
 
+/* Derivatives and asynchronous stepping are not provided (the modelDescription says so:
+ * providesDirectionalDerivative, canInterpolateInputs, maxOutputDerivativeOrder and
+ * canRunAsynchronuously are absent, i.e. false); pythonfmu's own refusals are silent. */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[])
 {
-    FORWARD(c, fmi2GetDirectionalDerivative,
-            (INNER, vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown, dvUnknown));
+    Shim* s = usable(c, "fmi2GetDirectionalDerivative");
+    (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown;
+    (void)dvUnknown;
+    if (s == NULL) return REFUSED(c);
+    return refuse(s, "fmi2GetDirectionalDerivative", "not provided by this FMU "
+                  "(providesDirectionalDerivative = false)");
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
-    FORWARD(c, fmi2SetRealInputDerivatives, (INNER, vr, nvr, order, value));
+    Shim* s = usable(c, "fmi2SetRealInputDerivatives");
+    (void)vr, (void)nvr, (void)order, (void)value;
+    if (s == NULL) return REFUSED(c);
+    return refuse(s, "fmi2SetRealInputDerivatives", "not provided by this FMU "
+                  "(canInterpolateInputs = false): set pinion.a as an input instead; nothing "
+                  "stored");
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
                                         size_t nvr, const fmi2Integer order[], fmi2Real value[])
 {
-    FORWARD(c, fmi2GetRealOutputDerivatives, (INNER, vr, nvr, order, value));
+    Shim* s = usable(c, "fmi2GetRealOutputDerivatives");
+    (void)vr, (void)nvr, (void)order, (void)value;
+    if (s == NULL) return REFUSED(c);
+    return refuse(s, "fmi2GetRealOutputDerivatives", "not provided by this FMU "
+                  "(maxOutputDerivativeOrder = 0)");
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    FORWARD(c, fmi2DoStep, (INNER, currentCommunicationPoint, communicationStepSize,
-                            noSetFMUStatePriorToCurrentPoint));
+    Shim* s = usable(c, "fmi2DoStep");
+    fmi2Status st;
+    if (s == NULL) return REFUSED(c);
+    st = after_call(s, inner_api.fmi2DoStep(s->inner, currentCommunicationPoint,
+                                            communicationStepSize,
+                                            noSetFMUStatePriorToCurrentPoint));
+    if (st <= fmi2Warning) s->last_time = currentCommunicationPoint + communicationStepSize;
+    return st;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    FORWARD(c, fmi2CancelStep, (INNER));
+    Shim* s = usable(c, "fmi2CancelStep");
+    if (s == NULL) return REFUSED(c);
+    return refuse(s, "fmi2CancelStep", "no asynchronous step to cancel: every fmi2DoStep of "
+                  "this FMU completes within the call (canRunAsynchronuously = false)");
 }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
+static const char* status_kind_name(int kind)
 {
-    FORWARD(c, fmi2GetStatus, (INNER, s, value));
+    switch (kind) {
+    case fmi2DoStepStatus: return "fmi2DoStepStatus";
+    case fmi2PendingStatus: return "fmi2PendingStatus";
+    case fmi2LastSuccessfulTime: return "fmi2LastSuccessfulTime";
+    case fmi2Terminated: return "fmi2Terminated";
+    default: return "not an fmi2StatusKind";
+    }
 }
 
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
+/* The refusal of a status inquiry FMI 2.0 does not define for this function, or that only
+ * means something after fmi2Pending (which this FMU never returns). */
+static fmi2Status status_refused(const Shim* s, const char* function, int kind,
+                                 const char* allowed)
 {
-    FORWARD(c, fmi2GetRealStatus, (INNER, s, value));
+    return refuse(s, function, "status kind %d (%s) is not answered here: this FMU completes "
+                  "every step within fmi2DoStep (never fmi2Pending); allowed: %s", kind,
+                  status_kind_name(kind), allowed);
 }
 
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value)
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)
 {
-    FORWARD(c, fmi2GetIntegerStatus, (INNER, s, value));
+    Shim* s = usable(c, "fmi2GetStatus");
+    (void)value;
+    if (s == NULL) return REFUSED(c);
+    return status_refused(s, "fmi2GetStatus", (int)kind, "none");
 }
 
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value)
 {
-    FORWARD(c, fmi2GetBooleanStatus, (INNER, s, value));
+    Shim* s = usable(c, "fmi2GetRealStatus");
+    if (s == NULL) return REFUSED(c);
+    if (kind != fmi2LastSuccessfulTime)
+        return status_refused(s, "fmi2GetRealStatus", (int)kind, "fmi2LastSuccessfulTime");
+    if (value == NULL) return refuse(s, "fmi2GetRealStatus", "value is NULL");
+#ifdef RATTLE_VR_LAST_TIME
+    {
+        /* The slave's own time: the end of the last step it accepted, also after a refused
+         * step or a restored state (pythonfmu's answer is the end of the last step called). */
+        const fmi2ValueReference vr = RATTLE_VR_LAST_TIME;
+        fmi2Real t = NAN;
+        fmi2Status st = after_call(s, inner_api.fmi2GetReal(s->inner, &vr, 1, &t));
+        if (st <= fmi2Warning) *value = t;
+        return st;
+    }
+#else
+    if (isnan(s->last_time))
+        return refuse(s, "fmi2GetRealStatus", "no communication step was accepted yet");
+    *value = s->last_time;
+    return fmi2OK;
+#endif
 }
 
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Integer* value)
 {
-    FORWARD(c, fmi2GetStringStatus, (INNER, s, value));
+    Shim* s = usable(c, "fmi2GetIntegerStatus");
+    (void)value;
+    if (s == NULL) return REFUSED(c);
+    return status_refused(s, "fmi2GetIntegerStatus", (int)kind, "none (FMI 2.0 defines no "
+                          "Integer status)");
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value)
+{
+    Shim* s = usable(c, "fmi2GetBooleanStatus");
+    if (s == NULL) return REFUSED(c);
+    if (kind != fmi2Terminated)
+        return status_refused(s, "fmi2GetBooleanStatus", (int)kind, "fmi2Terminated");
+    if (value == NULL) return refuse(s, "fmi2GetBooleanStatus", "value is NULL");
+    *value = fmi2False; /* the slave never asks to end the simulation (no fmi2Discard) */
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind kind, fmi2String* value)
+{
+    Shim* s = usable(c, "fmi2GetStringStatus");
+    (void)value;
+    if (s == NULL) return REFUSED(c);
+    return status_refused(s, "fmi2GetStringStatus", (int)kind, "none");
 }

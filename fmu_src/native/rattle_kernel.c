@@ -4,8 +4,8 @@
  * This file is a line-by-line port of
  *   drive_rattle/stepper.py     WheelStepper.step, contact_flank and _StepRun (free flight,
  *                               RK4 contact substeps split at breakpoints and subdivided from
- *                               the contact's time scales, release and friction-reversal
- *                               location, peak tracking, rattle index, guards)
+ *                               the contact's time scales, release, friction-reversal and
+ *                               pair-engagement location, peak tracking, rattle index, guards)
  *   drive_rattle/mesh.py        MeshModel._loads / torques / static_force / contact_rates /
  *                               energy_balance_delta_max / penetration / approach_rate ...
  *   drive_rattle/geometry.py    pairs_at_roll, next_breakpoint, normal_radii, flank_roll
@@ -1084,6 +1084,7 @@ static double slide_after(void* vctx, double dt)
     return slot_sliding_speed(c, dt, w_b);
 }
 
+/* A located event of one pair slot: a friction reversal or an engagement. */
 typedef struct {
     int64_t slot;
     double dt;
@@ -1121,6 +1122,75 @@ static int reversal_times(Run* r, double t, double h, double w_b, const double* 
             continue; /* no sign change on the substep's own RK4 path */
         out[count].slot = slot;
         out[count].dt = brent(r->f, slide_after, &c, 0.0, h, f_a, f_b, M->event_xtol,
+                              M->brent_rtol, M->brent_max_iter);
+        count++;
+    }
+    return count;
+}
+
+/* own_penetration() of _engagement_times: the penetration delta - g of the pair in `slot` at
+ * t + dt for wheel angle phi_w.  Python's None (the pair has left the zone) would make
+ * roots.brent compare None with 0.0: the TypeError is raised here. */
+static double slot_own_penetration(EventCtx* c, double dt, double phi_w, int* found)
+{
+    Run* r = c->r;
+    double phi_p = run_phi_p(r, c->t + dt);
+    PairSet* ps = pairs_at(r->M, r->f, &r->pairs, flank_roll(r->M, c->flank, phi_p));
+    for (int i = 0; i < ps->n; i++) {
+        if (ps->slot[i] == c->slot) {
+            *found = 1;
+            return penetration(r->M, c->flank, phi_p, phi_w) - ps->offset[i];
+        }
+    }
+    *found = 0;
+    return 0.0;
+}
+
+/* crossing() of _engagement_times: the pair's own penetration after the RK4 step of length
+ * dt from t. */
+static double crossing_after(void* vctx, double dt)
+{
+    EventCtx* c = (EventCtx*)vctx;
+    Run* r = c->r;
+    double phi_b, w_b, q;
+    int found;
+    rk4(r, c->t, dt, r->st.phi, r->st.w, c->k1, &phi_b, &w_b, &q);
+    double pen = slot_own_penetration(c, dt, phi_b, &found);
+    if (!found)
+        fail_message(r->f, RK_ERR_TYPE_ERROR,
+                     "'>' not supported between instances of 'NoneType' and 'float'");
+    return pen;
+}
+
+/* _engagement_times: the located changes of sign of the crowned pairs' own penetrations
+ * (slot, offset) in pair order; returns their count. */
+static int engagement_times(Run* r, double t, double h, double phi_b, const double* k1,
+                            Reversal* out)
+{
+    const Model* M = r->M;
+    State* st = &r->st;
+    int64_t flank = st->flank;
+    /* the pairs at t, copied: locating a change evaluates other pair sets */
+    PairSet* ps = pairs_at(M, r->f, &r->pairs, flank_roll(M, flank, run_phi_p(r, t)));
+    int n = ps->n;
+    int64_t slots[PAIR_MAX];
+    double offsets[PAIR_MAX];
+    for (int i = 0; i < n; i++) {
+        slots[i] = ps->slot[i];
+        offsets[i] = ps->offset[i];
+    }
+    int count = 0;
+    for (int i = 0; i < n; i++) {
+        if (offsets[i] == 0.0)
+            continue;
+        EventCtx c = {r, t, k1, flank, slots[i]};
+        int found_a, found_b;
+        double f_a = slot_own_penetration(&c, 0.0, st->phi, &found_a);
+        double f_b = slot_own_penetration(&c, h, phi_b, &found_b);
+        if (!found_a || !found_b || (f_a > 0.0) == (f_b > 0.0))
+            continue;
+        out[count].slot = slots[i];
+        out[count].dt = brent(r->f, crossing_after, &c, 0.0, h, f_a, f_b, M->event_xtol,
                               M->brent_rtol, M->brent_max_iter);
         count++;
     }
@@ -1260,6 +1330,19 @@ static double contact_substep(Run* r, double t)
             released = 0;
         }
     }
+    /* a crowned pair starting or ending to carry load: end the substep there (one located at
+     * the substep start to rounding needs no split) */
+    int64_t engaged = -1;
+    Reversal eng[PAIR_MAX];
+    int n_eng = engagement_times(r, t, h, phi_b, k1, eng);
+    for (int i = 0; i < n_eng; i++) {
+        if (eng[i].dt < dt_event && t + eng[i].dt > t) {
+            dt_event = eng[i].dt;
+            engaged = eng[i].slot;
+            reversal = -1;
+            released = 0;
+        }
+    }
     if (dt_event < h) {
         h = dt_event;
         t_end = t + h;
@@ -1278,6 +1361,8 @@ static double contact_substep(Run* r, double t)
         r->reversed[reversal] = -r->signs[reversal];
         r->events++; /* reversal */
     }
+    if (engaged >= 0)
+        r->events++; /* pair */
     if (released || delta_b <= 0.0) {
         r->events++; /* release */
         st->flank = 0;

@@ -151,7 +151,8 @@ enum { /* RK_ERR_: see kernel_layout.py */
     RK_ERR_TOO_STIFF = 5,
     RK_ERR_VALUE_ERROR = 6,
     RK_ERR_OVERFLOW_ERROR = 7,
-    RK_ERR_COUNT = 8
+    RK_ERR_TYPE_ERROR = 8,
+    RK_ERR_COUNT = 9
 };
 
 #define RK_DRIVE (1)
@@ -168,6 +169,6 @@ enum { /* RK_ERR_: see kernel_layout.py */
 #define RK_ABI_VERSION (2)
 #define RK_MAGIC 7261747465.0
 
-#define RK_LAYOUT_HASH 4511761199180ULL
+#define RK_LAYOUT_HASH 65771321247252ULL
 
 #endif

@@ -199,3 +199,68 @@ def test_horizon_contains_impacts(runs):
     column = 1 + list(OUTPUTS).index("mesh.impacts_drive")
     assert host_table[-1][column] > 0
     assert reference[-1][column] == host_table[-1][column]
+
+
+# ------------------------------------------------------------------ issue 11, item 7
+def wrong_python(folder: Path, with_stdlib: bool) -> Path:
+    """A prefix with a ``python3`` that does not belong to the preloaded libpython: with
+    ``with_stdlib`` its lib/pythonX.Y holds the real standard library but an empty
+    lib-dynload (the interpreter starts; the slave's imports of extension modules fail), else
+    only the landmark os.py (the interpreter cannot find "encodings" and cannot start)."""
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    lib = folder / "lib" / version
+    (lib / "lib-dynload").mkdir(parents=True)
+    (folder / "bin").mkdir()
+    python3 = folder / "bin" / "python3"
+    python3.write_text("#!/bin/sh\nexit 1\n")
+    python3.chmod(0o755)
+    if with_stdlib:
+        stdlib = Path(sysconfig.get_paths()["stdlib"])
+        for entry in stdlib.iterdir():
+            if entry.name != "lib-dynload":
+                (lib / entry.name).symlink_to(entry)
+    else:
+        (lib / "os.py").write_text("")
+    return folder / "bin"
+
+
+@pytest.mark.parametrize("case, reasons", [
+    ("cannot import the slave", ["Fatal py exception", "ModuleNotFoundError",
+                                 "pythonfmu could not create the slave",
+                                 "python3 first on PATH", "must belong to the loaded"]),
+    ("cannot start", ["the embedded Python interpreter", "cannot start",
+                      "encoding", "python3 first on PATH", "put the python3 of the loaded"]),
+])
+def test_native_host_never_fails_silently(case, reasons, host, native_env, fmus,
+                                          tmp_path):
+    """Issue 11, item 7: with a wrong python3 first on PATH the embedded interpreter cannot
+    start or cannot import the slave; with logging off the host's logger still gets the
+    reason, fmi2Instantiate returns NULL, and the host process ends normally."""
+    stdlib = Path(sysconfig.get_paths()["stdlib"])
+    if not (stdlib / "encodings").is_dir() or not (stdlib / "lib-dynload").is_dir():
+        pytest.skip(f"unexpected standard-library layout at {stdlib}")
+    fmu = fmus["GearMeshRattle"]
+    unpacked = tmp_path / "fmu"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(unpacked)
+    md = read_model_description(str(fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    inputs_csv = tmp_path / "inputs.csv"
+    write_inputs(inputs_csv, scenario_inputs()[:3])
+    bindir = wrong_python(tmp_path / "wrong-python", with_stdlib=case != "cannot start")
+    env = {**native_env, "PATH": f"{bindir}:/usr/bin:/bin"}
+    command = [
+        str(host), str(unpacked / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"),
+        (unpacked / "resources").as_uri(), md.guid, str(inputs_csv), str(tmp_path / "out.csv"),
+        ",".join(str(variables[n].valueReference) for n in INPUTS),
+        f"R:{variables['wheel.w'].valueReference}:wheel.w",
+    ]
+    run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, (run.returncode, run.stderr[-3000:])
+    assert "native_host: fmi2Instantiate returned NULL" in run.stderr
+    # What the host's logger printed ("[Fatal] <category>: <message>", messages may span lines)
+    logged = run.stderr.split("native_host: fmi2Instantiate returned NULL")[0]
+    logged = logged[logged.index("[Fatal]"):]
+    for reason in reasons:
+        assert reason in logged, (reason, run.stderr[-3000:])
+    assert str(bindir / "python3") in logged

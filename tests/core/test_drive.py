@@ -39,7 +39,8 @@ def test_steady_drive_kinematics_and_torque_balance(friction):
 
 
 def test_free_wheel_crosses_backlash_and_hits_both_flanks():
-    p = MeshParameters(init_in_contact=False, friction_enabled=False, w_start=0.05)
+    p = MeshParameters(init_in_contact=False, friction_enabled=False, w_start=0.05,
+                       dissipation=0)
     st = WheelStepper(p, 0.0, 0.0, 0.0)  # pinion at rest, wheel drifting forward
     events = []
     for k in range(2000):
@@ -48,7 +49,7 @@ def test_free_wheel_crosses_backlash_and_hits_both_flanks():
     onsets = [e for _, e in events if e.kind == "onset"]
     # Moving forward, the wheel closes the coast flank first, rebounds to the drive flank...
     assert [e.flank for e in onsets[:4]] == [COAST, DRIVE, COAST, DRIVE]
-    # ...with the approach speed conserved (no friction, no damping).
+    # ...with the approach speed conserved (no friction, no dissipation).
     v0 = 0.05 * st.mesh.arm_wheel
     for e in onsets:
         assert e.speed == pytest.approx(v0, rel=1e-4)
@@ -75,12 +76,15 @@ def test_speed_fluctuation_produces_coast_impacts(amp, expect_coast):
 
 
 def test_paper_scenario_rattles_with_paper_magnitudes():
-    # Orders 2/4/6 of MODEL_NOTES section 3 at light load: creep rattle with impacts of mm/s
-    # and penetrations of order 1 um.
+    # Orders 2/4/6 of MODEL_NOTES section 3 at half the separation load M* (the default
+    # scenario's drag, docs/model.md section 6): creep rattle with the paper's magnitudes
+    # within a factor of two -- impact speeds of order 4 mm/s, penetrations of order 1 um --
+    # on the drive flank mostly, a few coast impacts per engine cycle.
     p = MeshParameters()
-    load, H = 0.2, 1e-4
+    H = 1e-4
     amps = {2: 300.0, 4: 200.0, 6: 150.0}
     f_eng = 830 / 60
+    load = 0.5 * p.J_wheel * p.z_pinion / p.z_wheel * 250.0
 
     def pinion(t):
         phi, w, a = W_PINION * t, W_PINION, 0.0
@@ -90,12 +94,16 @@ def test_paper_scenario_rattles_with_paper_magnitudes():
         return phi, w, a
 
     st = WheelStepper(p, *pinion(0.0)[:2], load)
-    d_peak, speeds = 0.0, []
-    for k in range(3000):
+    d_peak, speeds, flanks = 0.0, [], []
+    transient = 1000  # 0.1 s
+    for k in range(transient + 2000):
         r = st.step(H, *pinion(k * H), load)
-        d_peak = max(d_peak, r.delta_peak)
-        speeds += [e.speed for e in r.events if e.kind == "onset"]
-    assert len(speeds) > 10
-    assert 0.1e-6 < d_peak < 5e-6
-    assert 1e-4 < np.median(speeds) < 5e-2
+        if k >= transient:
+            d_peak = max(d_peak, r.delta_peak)
+            speeds += [e.speed for e in r.events if e.kind == "onset"]
+            flanks += [e.flank for e in r.events if e.kind == "onset"]
+    assert len(speeds) > 30
+    assert 0.5e-6 < d_peak < 2e-6
+    assert 2e-3 < np.median(speeds) < 8e-3
+    assert flanks.count(DRIVE) > 2 * flanks.count(COAST) > 0
     assert math.isfinite(st.state.phi)

@@ -208,6 +208,7 @@ def test_paper_scenario_bit_for_bit(lib):
     run = lockstep(MeshParameters(), init, inputs, lib)
     assert run.py.state.impacts_drive > 10  # it rattled
     assert run.events["reversal"] > 5  # pairs' friction reversed at the pitch point
+    assert run.events["pair"] > 5  # crowned pairs started or stopped carrying load
     assert run.py.state.rattle_index > 0.0
 
 
@@ -336,7 +337,8 @@ def test_exact_touch_at_rest_accelerated_into_contact(lib, a_p, tau_load, flank)
     py, cc = pair(p, (0.0, 0.0, tau_load), lib, state.as_tuple())
     rp, rc = py.step(*inputs[0]), cc.step(*inputs[0])
     assert_same(py, cc, 0, rp, rc, outputs=True)
-    assert [(e.kind, e.time) for e in rp.events[:1]] == ([("onset", 0.0)] if flank == 0 else [])
+    onsets = [e.time for e in rp.events if e.kind == "onset"]
+    assert onsets == ([0.0] if flank == 0 else [])
     assert py.state.flank == DRIVE
     for k, args in enumerate(inputs[1:], 1):
         assert_same(py, cc, k, py.step(*args), cc.step(*args), outputs=True)

@@ -334,7 +334,7 @@ def test_missing_inner_library_is_reported(fmus, tmp_path):
     assert r["instantiated"] is False
     [(status, category, message)] = r["log"]
     assert (status, category) == (FATAL, "logStatusFatal")
-    assert message.startswith("rattle FMI shim: cannot load ")
+    assert message.startswith("rattle FMI shim: fmi2Instantiate: cannot load ")
     assert "ShimProbe_pythonfmu.so" in message
 
 
@@ -365,6 +365,10 @@ def test_compile_shim_reports_compiler_errors(tmp_path, monkeypatch):
         native.compile_shim(tmp_path / "x.so", "x_pythonfmu.so", 4, 5)
     with pytest.raises(ValueError):
         native.compile_shim(tmp_path / "x.so", "../x.so", 4, 5)
+    with pytest.raises(ValueError, match="model_identifier"):
+        native.compile_shim(tmp_path / "x.so", "x.so", 4, 5, model_identifier='a"; b')
+    with pytest.raises(ValueError, match="vr_last_successful_time"):
+        native.compile_shim(tmp_path / "x.so", "x.so", 4, 5, vr_last_successful_time=-1)
 
 
 if __name__ == "__main__":

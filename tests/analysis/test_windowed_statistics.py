@@ -1,0 +1,209 @@
+"""Statistics after the transient in windows, against records built with known answers."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drive_rattle.analysis import (
+    LineCatalogue,
+    LineSearch,
+    Scatter,
+    markdown_table,
+    onsets_from_counters,
+    paper_comparison,
+    rattle_statistics,
+    windowed_statistics,
+)
+from drive_rattle_cosim.sweep import rattle_metrics
+
+H = 1e-3  # s, sampling step
+T_REC, TRANSIENT, WINDOW = 10.0, 1.0, 2.0  # 4 windows, 1 s tail left out
+SPEEDS = (40.0, 42.0, 44.0, 46.0)  # rad/s, the wheel's speed in windows 0..3
+M_N = 0.76  # kg
+
+
+def record():
+    """A 10 s record: a wild transient (speed 80 rad/s, penetration 9 um, 5 coast impacts at
+    0.5 m/s) then 4 windows of known speed, impacts and loads, then a 1 s tail."""
+    t = np.arange(round(T_REC / H) + 1) * H
+    speed = np.where(t <= TRANSIENT, 80.0, 0.0)
+    for i, w in enumerate(SPEEDS):
+        a, b = TRANSIENT + i * WINDOW, TRANSIENT + (i + 1) * WINDOW
+        speed[(t > a) & (t <= b)] = w
+    speed[t > TRANSIENT + 4 * WINDOW] = 10.0
+    phi = np.concatenate([[0.0], np.cumsum(speed[1:] * H)])  # angle advanced per step
+    delta_peak = np.zeros(t.size)
+    n_contact = np.full(t.size, 3)
+    n_contact[t <= TRANSIENT] = 1
+    W = np.full(t.size, 5.0)
+    drive = np.zeros(t.size, dtype=int)
+    coast = np.zeros(t.size, dtype=int)
+    v = np.zeros(t.size)
+
+    onsets = [(0.1 + 0.1 * k, -1, 0.5) for k in range(5)]
+    delta_peak[round(0.3 / H)] = 9e-6
+    for i in range(4):  # window i: i+1 drive onsets at (i+1) mm/s, one coast onset at 2 mm/s
+        a = TRANSIENT + i * WINDOW
+        onsets += [(a + 0.2 + 0.3 * j, 1, (i + 1) * 1e-3) for j in range(i + 1)]
+        onsets.append((a + 1.5, -1, 2e-3))
+        delta_peak[round((a + 1.0) / H)] = (i + 1) * 1e-7
+        n_contact[(t > a + 0.5) & (t <= a + 1.0)] = 4 if i % 2 else 0
+    # An onset exactly at the end of window 0 belongs to window 0: (start, end].
+    onsets.append((TRANSIENT + WINDOW, 1, 1e-3))
+    onsets.append((T_REC - 0.5, 1, 0.3))  # in the tail: in no window
+    for time, flank, speed_ in sorted(onsets):  # counters and the last onset's speed
+        k = round(time / H)
+        (drive if flank > 0 else coast)[k:] += 1
+        v[k:] = speed_
+    signals = {"wheel.phi": phi, "mesh.W": W, "mesh.W_peak": W, "mesh.delta_peak": delta_peak,
+               "mesh.n_contact": n_contact, "mesh.impacts_drive": drive,
+               "mesh.impacts_coast": coast, "mesh.v_impact": v}
+    return t, signals
+
+
+def test_windows_after_the_transient_against_the_record():
+    t, s = record()
+    onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
+                                  s["mesh.v_impact"])
+    ws = windowed_statistics(t, s, *onsets, M_N, TRANSIENT, WINDOW)
+    assert len(ws.windows) == 4
+    assert (ws.transient, ws.window) == pytest.approx((TRANSIENT, WINDOW), rel=1e-12)
+    assert ws.starts == pytest.approx([1.0, 3.0, 5.0, 7.0])
+    assert ws.unused_tail == pytest.approx(1.0)
+    speed = ws.scatter("mean_wheel_speed")
+    assert [w.mean_wheel_speed for w in ws.windows] == pytest.approx(SPEEDS, rel=1e-12)
+    assert speed.mean == pytest.approx(43.0) and speed.std == pytest.approx(np.std(SPEEDS,
+                                                                                   ddof=1))
+    assert (speed.min, speed.max, speed.n) == pytest.approx((40.0, 46.0, 4))
+    # Window 0 holds its one onset at 1 mm/s and the one dated exactly at its end.
+    drive = [w.impacts_per_second_drive * WINDOW for w in ws.windows]
+    assert drive == pytest.approx([2, 2, 3, 4])
+    assert [w.impacts_per_second_coast * WINDOW for w in ws.windows] == pytest.approx([1] * 4)
+    assert [w.peak_impact_speed for w in ws.windows] == pytest.approx([2e-3, 2e-3, 3e-3, 4e-3])
+    assert ws.windows[2].median_impact_speed == pytest.approx(3e-3)
+    energy = 0.5 * M_N * (3 * (3e-3) ** 2 + (2e-3) ** 2) / WINDOW
+    assert ws.windows[2].impact_energy_rate == pytest.approx(energy)
+    # Nothing of the transient (9 um, 0.5 m/s) nor of the tail (0.3 m/s) leaks in.
+    assert ws.scatter("max_penetration").max == pytest.approx(4e-7)
+    assert ws.scatter("peak_impact_speed").max == pytest.approx(4e-3)
+    # Pairs: 0 for 0.5 s in even windows (contact 75 %, 3 pairs while in contact), 4 in odd.
+    assert [w.contact_fraction for w in ws.windows] == pytest.approx([0.75, 1, 0.75, 1])
+    assert [w.mean_loaded_pairs for w in ws.windows] == pytest.approx([3, 3.25, 3, 3.25])
+    assert [w.max_loaded_pairs for w in ws.windows] == [3, 4, 3, 4]
+    # Without a line search the spectral figures are absent, not zero.
+    assert math.isnan(ws.windows[0].dominant_line_frequency)
+    assert ws.scatter("dominant_line_frequency").n == 0
+
+
+def test_one_window_after_the_transient_and_the_whole_record():
+    t, s = record()
+    onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
+                                  s["mesh.v_impact"])
+    ws = windowed_statistics(t, s, *onsets, M_N, TRANSIENT)
+    assert len(ws.windows) == 1 and ws.window == pytest.approx(9.0) and ws.unused_tail == 0
+    assert ws.windows[0].mean_wheel_speed == pytest.approx((sum(SPEEDS) * 2 + 10) / 9)
+    assert math.isnan(ws.scatter("mean_wheel_speed").std)
+    assert ws.scatter("mean_wheel_speed").text().endswith("(one window)")
+    whole = rattle_statistics(t, s, onsets[1], onsets[2], M_N)
+    assert whole.max_penetration == pytest.approx(9e-6)
+    assert whole.impacts_per_second_coast == pytest.approx((5 + 4) / T_REC)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"transient": 10.0}, "transient"),
+    ({"transient": -1.0}, "transient"),
+    ({"window": 9.5}, "does not fit"),
+    ({"window": 0.0}, "window"),
+])
+def test_bad_windows_are_refused(kwargs, message):
+    t, s = record()
+    args = {"transient": TRANSIENT, "window": WINDOW, **kwargs}
+    with pytest.raises(ValueError, match=message):
+        windowed_statistics(t, s, [], [], [], M_N, **args)
+
+
+def test_bad_records_are_refused():
+    t, s = record()
+    uneven = t.copy()
+    uneven[5] += 0.3 * H
+    with pytest.raises(ValueError, match="uniformly"):
+        windowed_statistics(uneven, s, [], [], [], M_N, TRANSIENT, WINDOW)
+    with pytest.raises(ValueError, match=r"wheel\.phi"):
+        rattle_statistics(t, {"mesh.W": s["mesh.W"]}, [], [], M_N)
+
+
+def test_spectral_figures_per_window():
+    """A force with a strong 620 Hz line and, in windows 0 and 2 only, one at 310 Hz: the
+    half-frequency line is found in half of the windows.  Neither is an excited order at
+    830 rpm (44.8 and 22.4 times 13.83 Hz, more than a bin from even orders): unexplained."""
+    fs, window = 10_000.0, 2.0
+    t = np.arange(round(4 * window * fs) + 1) / fs
+    rng = np.random.default_rng(3)
+    W = 10.0 + rng.standard_normal(t.size) + 0.4 * np.sin(2 * np.pi * 620.0 * t)
+    half = (t % (2 * window)) < window
+    W += np.where(half, 0.2 * np.sin(2 * np.pi * 310.0 * t), 0.0)
+    s = {"wheel.phi": 44.5 * t, "mesh.W": W}
+    cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
+                             catalogue=cat)
+    assert [w.dominant_line_frequency for w in ws.windows] == pytest.approx([620.0] * 4,
+                                                                            abs=1.0)
+    assert [w.half_line_found for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
+    assert ws.scatter("half_line_found").mean == 0.5
+    assert [w.lines_detected for w in ws.windows] == [2, 1, 2, 1]
+    assert all(w.lines_unexplained == w.lines_detected for w in ws.windows)
+    assert ws.most_common("dominant_line_name") == ("unexplained", 4)
+    rows = paper_comparison(ws)
+    assert ("windows with a line at half the strongest's frequency [1]",
+            "0.5 ± 0.58 (0–1)", "yes (190 Hz)") in rows
+    assert "| strongest line 100–1500 Hz [Hz] | 620" in markdown_table(rows)
+
+
+def test_white_noise_force_has_no_dominant_line():
+    """The old "dominant line with a half-frequency sub-harmonic" found one in 47 of 50
+    white-noise spectra; now neither is found (at most the false-alarm count)."""
+    fs = 10_000.0
+    t = np.arange(round(2.0 * fs) + 1) / fs
+    found = 0
+    for seed in range(25):
+        W = 10.0 + np.random.default_rng(seed).standard_normal(t.size)
+        ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N,
+                                 lines=LineSearch())
+        found += not math.isnan(ws.windows[0].dominant_line_frequency)
+        assert ws.windows[0].half_line_found == 0.0
+    assert found <= 2
+
+
+def test_scatter_text():
+    assert Scatter.of([1.0, 2.0, 3.0]).text(1e3) == "2000 ± 1e+03 (1000–3000)"
+    assert Scatter.of([math.nan, 4.0]).n == 1
+    assert Scatter.of([]).text() == "none in any window"
+    assert Scatter.of([2.0, 2.0]).relative_scatter == 0.0
+
+
+def test_sweep_metrics_in_windows():
+    t, s = record()
+    m = rattle_metrics(t, s, M_N, TRANSIENT, WINDOW)
+    assert m["windows"] == 4
+    assert m["mean_wheel_speed"] == pytest.approx(43.0)
+    assert m["mean_wheel_speed_std"] == pytest.approx(np.std(SPEEDS, ddof=1))
+    assert m["impacts_per_s_drive"] == pytest.approx((2 + 2 + 3 + 4) / 4 / WINDOW)
+    assert m["peak_impact_speed"] == pytest.approx(np.mean([2e-3, 2e-3, 3e-3, 4e-3]))
+    # A constant force has no power in any band: the floor value, with no scatter.
+    assert m["band_100_500_Hz_dB"] == -300.0 and m["band_100_500_Hz_dB_std"] == 0.0
+    whole = rattle_metrics(t, s, M_N)
+    assert whole["windows"] == 1 and math.isnan(whole["mean_wheel_speed_std"])
+
+
+def test_a_line_in_some_windows_says_in_how_many():
+    fs, window = 10_000.0, 1.0
+    t = np.arange(round(4 * window * fs) + 1) / fs
+    W = 10.0 + np.random.default_rng(8).standard_normal(t.size)
+    W += np.where(t < 2 * window, 0.4 * np.sin(2 * np.pi * 620.0 * t), 0.0)
+    ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, window,
+                             lines=LineSearch())
+    assert ws.scatter("dominant_line_frequency").n == 2
+    assert ws.text("dominant_line_frequency").endswith("; in 2 of 4 windows")
+    assert [w.dominant_line_name for w in ws.windows] == ["unexplained"] * 2 + ["none found"] * 2
+    assert ws.text("mean_wheel_speed") == "1 ± 0 (1–1)"
