@@ -38,8 +38,9 @@
  *
  * Refusals: where the Python step raises, rk_step returns a code, leaves state and result
  * unchanged and passes the numbers of the message (RK_ERR_DIVERGED, _PENETRATION, _TOO_STIFF)
- * or the message itself (RK_ERR_VALUE_ERROR, _OVERFLOW_ERROR: what a math function or
- * int() raises in Python); kernel.py raises the same exception with the same text.
+ * or the message itself (RK_ERR_VALUE_ERROR, _OVERFLOW_ERROR, _TYPE_ERROR: what a math
+ * function, int() or a comparison with None raises in Python); kernel.py raises the same
+ * exception with the same text.
  */
 #include <math.h>
 #include <setjmp.h>
