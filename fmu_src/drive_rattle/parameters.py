@@ -317,7 +317,7 @@ class MeshParameters(ParameterSet):
         minimum=1e-8, maximum=1e-2)
     compiled: bool = declare(
         "solver.compiled", True, "",
-        "run the compiled kernel (C, bit-identical to the Python core, ~10-30x faster) when "
+        "run the compiled kernel (C, bit-identical to the Python core, ~50x faster per step) when "
         "it is available; false = the pure-Python core")
     h_comm_max: float = declare(
         "solver.h_comm_max", 1e-2, "s",
