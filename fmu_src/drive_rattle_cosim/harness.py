@@ -104,6 +104,15 @@ class Variable:
     unit: str
 
 
+def raw_function(slave: FMU2Slave, name: str):
+    """The ctypes function ``name`` of the FMU's library, argument types set by fmpy.
+
+    fmpy >= 0.3.20 keeps them in ``slave._functions``; 0.3.19 (the newest that gemseo-fmu
+    accepts) only in the library object, where both versions set them."""
+    functions = getattr(slave, "_functions", None)
+    return functions[name] if functions is not None else getattr(slave.dll, name)
+
+
 class _Raw:
     """getX/setX of a fixed list of value references on preallocated ctypes arrays."""
 
@@ -114,8 +123,8 @@ class _Raw:
         self.unit, self.kind, self.n = unit, kind, n
         self.vrs = (c_uint * n)(*vrs)
         self.values = (self._CTYPES[kind] * n)()
-        self._get = unit.slave._functions[f"fmi2Get{kind}"]
-        self._set = unit.slave._functions[f"fmi2Set{kind}"]
+        self._get = raw_function(unit.slave, f"fmi2Get{kind}")
+        self._set = raw_function(unit.slave, f"fmi2Set{kind}")
         self.component = unit.slave.component
 
     def fetch(self):
@@ -323,7 +332,7 @@ class CoSimulation:
         raw_rec = [(_Raw(u, kind, vrs), names) for u, kind, vrs, names in rec]
         raw_plan = [(_Raw(src, "Real", outs), _Raw(dst, "Real", ins))
                     for src, outs, dst, ins in self._plan]
-        steppers = [(u, u.slave._functions["fmi2DoStep"], u.slave.component)
+        steppers = [(u, raw_function(u.slave, "fmi2DoStep"), u.slave.component)
                     for u in self.units.values()]
         columns = result.columns
         last = len(points) - 1
