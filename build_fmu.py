@@ -32,7 +32,7 @@ MODELS = ("GearMeshRattle", "Driveline")
 #: Modules of the core that run inside the FMUs (the rest needs numpy/scipy or is tooling).
 CORE_RUNTIME = ("__init__", "parameters", "geometry", "hertz", "lubrication", "mesh", "roots",
                 "stepper", "driveline", "interface", "kernel")
-FMI_RUNTIME = ("__init__", "slave", "model_description", "units")
+FMI_RUNTIME = ("__init__", "slave", "model_description", "units", "boundary")
 
 sys.path.insert(0, str(SRC))
 
@@ -154,6 +154,39 @@ def build(out_dir: Path = ROOT / "dist", update_templates: bool = False,
     return [build_one(name, out_dir, update_templates, use_fmutool) for name in MODELS]
 
 
+#: The system file written next to the FMUs.
+SYSTEM_NAME = "DriveRattle.ssp"
+
+
+def write_system(fmus: list[Path], out_dir: Path) -> Path:
+    """``out_dir/DriveRattle.ssp``: both FMUs, their connections, every parameter at its
+    default and every input's start value at what its partner outputs at the start (so it
+    also runs in masters that exchange nothing during initialization), at the FMUs' default
+    experiment; validated against the SSP 1.0 schema."""
+    from fmpy import read_model_description
+
+    from drive_rattle_cosim.ssp import (
+        SSD_NAME,
+        default_parameters,
+        validate_ssd,
+        write_ssp,
+    )
+
+    by_name = {p.stem: p for p in fmus}
+    experiment = read_model_description(str(by_name[MODELS[0]])).defaultExperiment
+    path = write_ssp(out_dir / SYSTEM_NAME, by_name["GearMeshRattle"], by_name["Driveline"],
+                     default_parameters(by_name), step=float(experiment.stepSize),
+                     start_time=float(experiment.startTime),
+                     stop_time=float(experiment.stopTime), input_starts="consistent")
+    with tempfile.TemporaryDirectory() as tmp, zipfile.ZipFile(path) as z:
+        z.extract(SSD_NAME, tmp)
+        try:
+            validate_ssd(Path(tmp) / SSD_NAME)
+        except Exception as err:
+            raise BuildError(f"{path.name}: the SSD is not valid SSP 1.0: {err}") from None
+    return path
+
+
 DOCS = ROOT / "docs" / "fmi.md"
 
 
@@ -186,8 +219,10 @@ def main(argv=None) -> int:
         print(f"updated {DOCS}")
         return 0
     try:
-        for fmu in build(args.out, args.update_templates, not args.no_fmutool):
+        fmus = build(args.out, args.update_templates, not args.no_fmutool)
+        for fmu in fmus:
             print(f"built and validated {fmu}")
+        print(f"wrote the system {write_system(fmus, args.out)}")
     except BuildError as err:
         print(f"build_fmu.py: {err}", file=sys.stderr)
         return 1

@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import itertools
 import shutil
 import sys
 from ctypes import c_double, c_int, c_uint
@@ -305,9 +306,15 @@ class CoSimulation:
             dst.call("setReal", dst.slave.setReal, ins,
                      src.call("getReal", src.slave.getReal, outs))
 
-    def run(self, stop_time: float, outputs=None, progress: bool = False) -> Result:
+    def run(self, stop_time: float, outputs=None, progress: bool = False,
+            grid: str | tuple[list[float], list[float]] = "nanoseconds") -> Result:
         """Step to ``stop_time`` [s], recording ``outputs`` (``"<Unit>.<output>"``; default:
-        every output of both units) at every communication point, the current one first."""
+        every output of both units) at every communication point, the current one first.
+
+        ``grid`` places the communication points as a master does: a name of ``time_grid``
+        (the default integer nanoseconds of libcosim, or the time sums of other masters) or
+        explicit ``(points, step sizes)`` from the current time, so that a master's run can be
+        compared with this one bit for bit."""
         if outputs is None:
             outputs = [f"{u.name}.{v.name}" for u in self.units.values()
                        for v in u.variables.values() if v.causality == "output"]
@@ -321,7 +328,13 @@ class CoSimulation:
         result = Result(units={o: self._split(o)[0].var(self._split(o)[1]).unit or "1"
                                for o in outputs})
         result.columns = {o: [] for o in outputs}
-        points = communication_points(self.time, self.step, stop_time)
+        if isinstance(grid, str):
+            points, sizes = time_grid(self.time, self.step, stop_time, grid)
+        else:
+            points, sizes = (list(x) for x in grid)
+            if not (points and points[0] == self.time and len(sizes) == len(points) - 1):
+                raise ValueError("grid: expected (points from the current time, one step size "
+                                 "fewer)")
         steps = range(len(points))
         if progress and len(points) > PROGRESS_MIN_STEPS:
             from tqdm import tqdm
@@ -346,13 +359,44 @@ class CoSimulation:
                 break
             for src, dst in raw_plan:
                 dst.put(src.fetch())
-            h = points[k + 1] - t
+            h = sizes[k]
             for u, do_step, component in steppers:
                 status = do_step(component, t, h, 1)
                 if status > 1:
                     u.fail(f"doStep at t = {t!r} s", status)
             self.time = points[k + 1]
         return result
+
+
+#: How masters place communication points (``time_grid``).
+GRIDS = ("nanoseconds", "accumulated", "multiplied")
+
+
+def time_grid(start: float, step: float, stop: float,
+              grid: str = "nanoseconds") -> tuple[list[float], list[float]]:
+    """``(points, sizes)``: the communication points from ``start`` to ``stop`` [s] and the
+    step size passed at each (one fewer), as a master computes them:
+
+    * ``"nanoseconds"``: ``t_k = (t0_ns + k step_ns)/1e9``, each step ``t_{k+1} - t_k``
+      (libcosim, this harness, ``drive_rattle.system.simulate``);
+    * ``"accumulated"``: ``t_{k+1} = t_k + step`` while ``t_k < stop``, every step ``step``
+      (fmpy's SSP runner, gemseo-fmu);
+    * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` (fmpy's ``simulate_fmu``
+      from a zero start).
+
+    The last two end at the first point at or past ``stop``."""
+    if grid == "nanoseconds":
+        points = communication_points(start, step, stop)
+        return points, [b - a for a, b in itertools.pairwise(points)]
+    if grid not in GRIDS:
+        raise ValueError(f"grid = {grid!r}; allowed: {', '.join(GRIDS)}")
+    if not (step > 0.0 and stop - start < 1e9 * step):
+        raise ValueError(f"communication step {step!r} s is invalid for {start!r}..{stop!r} s")
+    points = [start]
+    while points[-1] < stop:
+        points.append(points[-1] + step if grid == "accumulated"
+                      else start + len(points) * step)
+    return points, [step] * (len(points) - 1)
 
 
 def _parse_value(text: str):
