@@ -81,9 +81,15 @@ class GearMeshRattle(HeldInputTracking, RattleSlave):
             settled = self._settle(model, phi_p, w_p, tau_load)
         try:
             model.step(h, phi_p, w_p, a_p, tau_load)
-        except Exception:
+        except Exception as err:
             if settled is not None:  # a rejected step leaves the unit as it was
                 model.state, model.pinion = settled
+            advised = self.DEFAULT_EXPERIMENT["stepSize"]
+            if isinstance(err, ValueError) and h > advised:
+                raise ValueError(
+                    f"{err}. The communication step {h!r} s is {h / advised:.3g} times the "
+                    f"default experiment's: use {advised!r} s (docs/tools.md: accuracy "
+                    "against the step)") from None
             raise
         model.fmi_first_step = False
         self._motion_step_done()
