@@ -369,7 +369,7 @@ class CoSimulation:
 
 
 #: How masters place communication points (``time_grid``).
-GRIDS = ("nanoseconds", "accumulated", "multiplied")
+GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied")
 
 
 def time_grid(start: float, step: float, stop: float,
@@ -380,11 +380,15 @@ def time_grid(start: float, step: float, stop: float,
     * ``"nanoseconds"``: ``t_k = (t0_ns + k step_ns)/1e9``, each step ``t_{k+1} - t_k``
       (libcosim, this harness, ``drive_rattle.system.simulate``);
     * ``"accumulated"``: ``t_{k+1} = t_k + step`` while ``t_k < stop``, every step ``step``
-      (fmpy's SSP runner, gemseo-fmu);
-    * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` (fmpy's ``simulate_fmu``
-      from a zero start).
+      (fmpy's SSP runner);
+    * ``"accumulated-clipped"``: ``t_{k+1} = t_k + min(step, stop - t_k)`` while
+      ``t_k < stop``, each step ``min(step, t_{k+1} - t_k)`` (gemseo-fmu's
+      ``TimeSteppingSystem``; its last step can be a rounding residue of 1e-14 s);
+    * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` but a last one that
+      ends at ``stop`` (fmpy's ``simulate_fmu`` from a zero start; fmu-manipulation-toolbox's
+      container inside).
 
-    The last two end at the first point at or past ``stop``."""
+    The sums end at the first point at or past ``stop``."""
     if grid == "nanoseconds":
         points = communication_points(start, step, stop)
         return points, [b - a for a, b in itertools.pairwise(points)]
@@ -392,11 +396,22 @@ def time_grid(start: float, step: float, stop: float,
         raise ValueError(f"grid = {grid!r}; allowed: {', '.join(GRIDS)}")
     if not (step > 0.0 and stop - start < 1e9 * step):
         raise ValueError(f"communication step {step!r} s is invalid for {start!r}..{stop!r} s")
-    points = [start]
-    while points[-1] < stop:
-        points.append(points[-1] + step if grid == "accumulated"
-                      else start + len(points) * step)
-    return points, [step] * (len(points) - 1)
+    points, sizes = [start], []
+    while (t := points[-1]) < stop:
+        if grid == "accumulated":
+            points.append(t + step)
+            sizes.append(step)
+        elif grid == "multiplied":
+            if t + step <= stop:
+                points.append(start + len(points) * step)
+                sizes.append(step)
+            else:  # the last step ends at stop
+                points.append(stop)
+                sizes.append(stop - t)
+        else:
+            points.append(t + min(step, stop - t))
+            sizes.append(min(step, points[-1] - t))
+    return points, sizes
 
 
 def _parse_value(text: str):
