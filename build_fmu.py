@@ -1,11 +1,14 @@
-"""Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation) and validate
-them.
+"""Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), validate
+them, and write the system dist/DriveRattle.ssp (both FMUs, their connections, every parameter
+and every input's start value bound).
 
     python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
     python build_fmu.py --update-docs     # regenerate the interface tables of docs/fmi.md
 
 Each FMU bundles the slave module, the runtime part of the physics core (standard library
-only), the FMI glue, generated documentation and the native status shim.  The normalised
+only), the FMI glue, generated documentation and the native status shim.  The kernel and the
+shim are compiled with gcc, or, where there is none, the clang of the ``ziglang`` package
+(``c_compiler``).  The normalised
 modelDescription of each build is compared with the committed one in
 modelDescription_templates/: an interface change fails the build until the template is
 updated (--update-templates) and the diff committed.  Every FMU is checked with fmpy's
@@ -16,6 +19,7 @@ fails the build.
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import subprocess
 import sys
@@ -41,6 +45,61 @@ class BuildError(RuntimeError):
     pass
 
 
+#: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline x86-64
+#: (instructions every x86-64 host has) with glibc, whose libm is the one CPython uses (the
+#: kernel's results are bit-identical to the Python core's only with the same libm).
+ZIG_TARGET = {"x86_64": "x86_64-linux-gnu"}
+_ZIG_WRAPPER: list[str] = []
+
+
+def c_compiler() -> str:
+    """The C compiler of the build, as one executable: ``$CC`` if set, else ``gcc`` or ``cc``
+    on ``PATH``, else the clang of the ``ziglang`` package (a dependency of this project:
+    ``python -m ziglang cc``, through a small wrapper script).  BuildError when none works."""
+    import platform
+
+    requested = os.environ.get("CC")
+    if requested:
+        found = shutil.which(requested)
+        if found is None:
+            raise BuildError(f"CC = {requested!r} is not an executable on PATH; allowed: a C "
+                             "compiler such as gcc, or unset CC to use gcc or ziglang's clang")
+        return found
+    for name in ("gcc", "cc"):
+        found = shutil.which(name)
+        if found:
+            return found
+    if _ZIG_WRAPPER:
+        return _ZIG_WRAPPER[0]
+    try:
+        import ziglang  # noqa: F401  (only its presence: it runs as python -m ziglang)
+    except ImportError:
+        raise BuildError(
+            "no C compiler: gcc (or cc) is not on PATH and the ziglang package is not "
+            "installed. Install one: `pip install ziglang` (a dependency of this project: "
+            "reinstall it with `pip install -e .`) or your system's gcc (Debian/Ubuntu: "
+            "`apt-get install gcc`), or set CC to a C compiler") from None
+    import atexit
+    import shlex
+
+    folder = Path(tempfile.mkdtemp(prefix="drive_rattle_cc_"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    target = ZIG_TARGET.get(platform.machine())
+    args = ["-target", target] if target else []
+    wrapper = folder / "zig-cc"
+    wrapper.write_text(
+        "#!/bin/sh\n# ziglang's C compiler (drive-rattle build: no gcc on PATH)\n"
+        f"exec {shlex.join([sys.executable, '-m', 'ziglang', 'cc', *args])} \"$@\"\n",
+        encoding="utf-8")
+    wrapper.chmod(0o755)
+    probe = subprocess.run([str(wrapper), "--version"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        raise BuildError(f"no working C compiler: gcc is not on PATH and ziglang's clang "
+                         f"fails:\n{probe.stderr}")
+    _ZIG_WRAPPER.append(str(wrapper))
+    return str(wrapper)
+
+
 def _stage_references(name: str, staging: Path) -> list[Path]:
     """The committed regression references of the model, staged for resources/regression/."""
     from drive_rattle_cosim.regression import reference_files
@@ -57,8 +116,9 @@ def _stage_references(name: str, staging: Path) -> list[Path]:
     return [dest]
 
 
-def _stage_packages(staging: Path) -> list[Path]:
-    """The runtime packages, with the compiled kernel next to drive_rattle/kernel.py."""
+def _stage_packages(staging: Path, cc: str) -> list[Path]:
+    """The runtime packages, with the kernel compiled by ``cc`` next to
+    drive_rattle/kernel.py."""
     from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
 
     out = []
@@ -68,7 +128,10 @@ def _stage_packages(staging: Path) -> list[Path]:
         for m in modules:
             shutil.copy2(SRC / package / f"{m}.py", dest / f"{m}.py")
         out.append(dest)
-    compile_kernel(staging / "drive_rattle" / LIBRARY_NAME)
+    try:
+        compile_kernel(staging / "drive_rattle" / LIBRARY_NAME, cc=cc)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
     return out
 
 
@@ -90,11 +153,12 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
 
     name = script.stem
     cls = _slave_class(name, script)
+    cc = c_compiler()
     out_dir.mkdir(parents=True, exist_ok=True)
     fmu = out_dir / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
         tmp = Path(tmp)
-        packages = _stage_packages(tmp / "stage")
+        packages = _stage_packages(tmp / "stage", cc)
         if references:
             packages += _stage_references(name, tmp / "stage")
         doc = tmp / "documentation"
@@ -106,7 +170,10 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
                              canSerializeFMUstate=True)
     slave = cls(instance_name="build")
     vrs = {v.name: v.value_reference for v in slave.vars.values()}
-    install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE])
+    try:
+        install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE], cc=cc)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
     return fmu
 
 

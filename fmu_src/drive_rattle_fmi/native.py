@@ -118,12 +118,13 @@ def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:
     return cosim.get("modelIdentifier"), root.get("guid")
 
 
-def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> None:
+def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int,
+                 cc: str = "gcc") -> None:
     """Put the status shim into the FMU at ``fmu_path`` (rewritten in place).
 
     ``binaries/linux64/<modelIdentifier>.so`` (pythonfmu's library) becomes
-    ``binaries/linux64/<modelIdentifier>_pythonfmu.so`` and the shim, compiled with gcc for the
-    given value references, takes its place.  Every other member is copied byte for byte.
+    ``binaries/linux64/<modelIdentifier>_pythonfmu.so`` and the shim, compiled with ``cc`` for
+    the given value references, takes its place.  Every other member is copied byte for byte.
     Only linux64 is handled: other platforms (e.g. ``binaries/win64``) keep pythonfmu's plain
     binary, without the status protocol.  Raises ValueError if the FMU has no linux64 binary
     or already contains the shim.
@@ -141,7 +142,7 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int) -> Non
 
         with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
             shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
-                                vr_status_address, vr_message, guid=guid)
+                                vr_status_address, vr_message, cc=cc, guid=guid)
             fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)
             os.close(fd)
             try:
