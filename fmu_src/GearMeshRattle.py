@@ -25,7 +25,8 @@ class GearMeshRattleParameters(MeshParameters):
         "when the pinion inputs or wheel.tau_load of the first doStep differ from those at the "
         "end of initialization (a master that exchanges no values during initialization), "
         "first settle the wheel in the static flank equilibrium for them, as init.in_contact "
-        "does at initialization; false = step from the initialized wheel state")
+        "does at initialization (only with init.in_contact); false = step from the "
+        "initialized wheel state")
     continue_when_held: bool = continue_when_held_parameter(
         "when the master set none of pinion.phi, pinion.w, pinion.a since the last step (it "
         "holds them, e.g. fmpy simulate of this FMU alone), the pinion runs on at constant "
