@@ -96,10 +96,11 @@ class DrivelineParameters(ParameterSet):
         "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
         minimum=1e-8, maximum=1.0)
     h_comm_max: float = declare(
-        "solver.h_comm_max", 0.0, "s",
-        "largest communication step accepted; 0 (default) = any step (the wheel is "
-        "extrapolated linearly over a step: accuracy against the step in docs/tools.md)",
-        minimum=0.0, maximum=1e6)
+        "solver.h_comm_max", 1.0, "s",
+        "largest communication step accepted: a guard against absurd steps (a step costs "
+        "h/solver.h_max substeps), not an accuracy limit; the wheel is extrapolated linearly "
+        "over a step, accuracy against the step in docs/tools.md",
+        minimum=1e-7, maximum=1.0)
 
     def order_terms(self) -> list[tuple[float, float, float]]:
         """``(order, amplitude [rad/s^2], phase [rad])`` of the active engine orders."""

@@ -12,7 +12,6 @@ Standard library only at run time; compiling the kernel needs a C compiler (gcc)
 from __future__ import annotations
 
 import ctypes
-import math
 import os
 import struct
 from pathlib import Path
@@ -187,8 +186,7 @@ def pack_model(stepper: WheelStepper) -> list[float]:
         "damping": p.damping, "friction_enabled": float(p.friction_enabled),
         "friction_form": float(p.friction_form), "shear_speed": float(p.shear_speed),
         "tau_s": p.tau_s, "eta": p.eta, "sigma": p.sigma, "gamma": p.gamma,
-        "density": p.density, "h_max": p.h_max, "m_n": p.m_n,
-        "h_comm_max": p.h_comm_max or math.inf,  # 0 = any step
+        "density": p.density, "h_max": p.h_max, "h_comm_max": p.h_comm_max, "m_n": p.m_n,
         "pen_modules": MAX_PENETRATION_MODULES,
         "pen_limit": MAX_PENETRATION_MODULES * p.m_n,  # as WheelStepper.step computes it
         "bp_tol": geometry.BREAKPOINT_TOLERANCE, "grazing_samples": float(GRAZING_SAMPLES),

@@ -288,10 +288,11 @@ class MeshParameters(ParameterSet):
         "run the compiled kernel (C, bit-identical to the Python core, ~10-30x faster) when "
         "it is available; false = the pure-Python core")
     h_comm_max: float = declare(
-        "solver.h_comm_max", 0.0, "s",
-        "largest communication step accepted; 0 (default) = any step (the substeps carry a "
-        "long step; the coupling's accuracy against the step is in docs/tools.md)",
-        minimum=0.0, maximum=1e6)
+        "solver.h_comm_max", 1.0, "s",
+        "largest communication step accepted: a guard against absurd steps (a step costs "
+        "h/solver.h_max substeps in contact), not an accuracy limit; the coupling's accuracy "
+        "against the step is in docs/tools.md",
+        minimum=1e-7, maximum=1.0)
 
     def _check_combination(self) -> None:
         # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the

@@ -437,11 +437,10 @@ class _StepRun:
 
 
 def check_step_size(h: float, h_max: float) -> None:
-    """Raise ValueError unless 0 < h <= h_max (the parameter solver.h_comm_max; 0 = no
-    limit)."""
+    """Raise ValueError unless 0 < h <= h_max (the parameter solver.h_comm_max)."""
     if not (h > 0.0 and math.isfinite(h)):
         raise ValueError(f"step size h = {h!r} s is invalid; allowed: finite and > 0")
-    if 0.0 < h_max < h:
+    if h > h_max:
         raise ValueError(
             f"step size h = {h!r} s exceeds solver.h_comm_max = {h_max!r} s; allowed: "
             f"(0, {h_max!r}] s")

@@ -202,7 +202,7 @@ def _snapshot(s):
     ((1e-4, 0.0, 0.0, 0.0, 1e308), "diverged"),
 ])
 def test_refused_steps_raise_and_leave_the_state(lib, args, match):
-    p = MeshParameters(init_in_contact=False, h_comm_max=1e-2)  # 0 (default) = any step
+    p = MeshParameters(init_in_contact=False, h_comm_max=1e-2)  # below the default 1 s
     H = 1e-4
     py, cc = pair(p, (0.0, 87.0, 0.1), lib)
     for k in range(5):  # some history first

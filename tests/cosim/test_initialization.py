@@ -130,14 +130,18 @@ def test_held_inputs_taken_literally_drive_the_teeth_into_each_other():
     assert code == ERROR and "penetrate" in message and "use 0.0001 s" in message
 
 
-def test_setting_any_pinion_input_ends_the_hold():
-    mesh = started(GearMeshRattle)
-    assert mesh.step(0.0, 1e-4) == (OK, "")
-    mesh.set_named({"pinion.w": MESH_STARTS["pinion.w"]})  # set, not held: taken as given
-    assert mesh.step(1e-4, 1e-4) == (OK, "")
+def test_the_same_values_set_again_keep_the_hold_new_values_end_it():
     h, w, a = 1e-4, MESH_STARTS["pinion.w"], MESH_STARTS["pinion.a"]
-    phi = MESH_STARTS["pinion.phi"]
-    assert mesh.slave._model.pinion == (phi + w * h + 0.5 * a * h * h, w + a * h)
+    mesh = started(GearMeshRattle)
+    assert mesh.step(0.0, h) == (OK, "")  # nothing set: held, the pinion runs on
+    mesh.set_named(MESH_STARTS)  # the values of the last step again: still held
+    assert mesh.step(h, h) == (OK, "")
+    phi = MESH_STARTS["pinion.phi"] + w * h + 0.0 * h * h
+    phi = phi + w * h + 0.0 * h * h
+    assert mesh.slave._model.pinion == (phi, w)  # two steps at constant speed
+    mesh.set_named({"pinion.phi": phi, "pinion.w": w + 1.0})  # new values: taken as given
+    assert mesh.step(2 * h, h) == (OK, "")
+    assert mesh.slave._model.pinion == (phi + (w + 1.0) * h + 0.5 * a * h * h, w + 1.0 + a * h)
 
 
 def test_held_wheel_drives_the_vehicle_steadily():
