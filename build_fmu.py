@@ -1,12 +1,15 @@
-"""Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation) and validate
-them.
+"""Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), validate
+them, and write the system dist/DriveRattle.ssp (both FMUs, their connections, every parameter
+and every input's start value bound).
 
     python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
     python build_fmu.py --update-docs     # regenerate the interface tables of docs/fmi.md
     python build_fmu.py --update-kernel-header  # regenerate fmu_src/native/rattle_kernel_layout.h
 
 Each FMU bundles the slave module, the runtime part of the physics core (standard library
-only), the FMI glue, generated documentation and the native status shim.  The normalised
+only), the FMI glue, generated documentation and the native status shim.  The kernel and the
+shim are compiled with gcc, or, where there is none, the clang of the ``ziglang`` package
+(``c_compiler``).  The normalised
 modelDescription of each build is compared with the committed one in
 modelDescription_templates/: an interface change fails the build until the template is
 updated (--update-templates) and the diff committed.  Every FMU is checked with fmpy's
@@ -17,6 +20,7 @@ fails the build.
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import subprocess
 import sys
@@ -33,13 +37,68 @@ MODELS = ("GearMeshRattle", "Driveline")
 #: Modules of the core that run inside the FMUs (the rest needs numpy/scipy or is tooling).
 CORE_RUNTIME = ("__init__", "parameters", "geometry", "hertz", "lubrication", "mesh", "roots",
                 "stepper", "driveline", "interface", "kernel", "kernel_layout")
-FMI_RUNTIME = ("__init__", "slave", "model_description", "units")
+FMI_RUNTIME = ("__init__", "slave", "model_description", "units", "boundary")
 
 sys.path.insert(0, str(SRC))
 
 
 class BuildError(RuntimeError):
     pass
+
+
+#: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline x86-64
+#: (instructions every x86-64 host has) with glibc, whose libm is the one CPython uses (the
+#: kernel's results are bit-identical to the Python core's only with the same libm).
+ZIG_TARGET = {"x86_64": "x86_64-linux-gnu"}
+_ZIG_WRAPPER: list[str] = []
+
+
+def c_compiler() -> str:
+    """The C compiler of the build, as one executable: ``$CC`` if set, else ``gcc`` or ``cc``
+    on ``PATH``, else the clang of the ``ziglang`` package (a dependency of this project:
+    ``python -m ziglang cc``, through a small wrapper script).  BuildError when none works."""
+    import platform
+
+    requested = os.environ.get("CC")
+    if requested:
+        found = shutil.which(requested)
+        if found is None:
+            raise BuildError(f"CC = {requested!r} is not an executable on PATH; allowed: a C "
+                             "compiler such as gcc, or unset CC to use gcc or ziglang's clang")
+        return found
+    for name in ("gcc", "cc"):
+        found = shutil.which(name)
+        if found:
+            return found
+    if _ZIG_WRAPPER:
+        return _ZIG_WRAPPER[0]
+    try:
+        import ziglang  # noqa: F401  (only its presence: it runs as python -m ziglang)
+    except ImportError:
+        raise BuildError(
+            "no C compiler: gcc (or cc) is not on PATH and the ziglang package is not "
+            "installed. Install one: `pip install ziglang` (a dependency of this project: "
+            "reinstall it with `pip install -e .`) or your system's gcc (Debian/Ubuntu: "
+            "`apt-get install gcc`), or set CC to a C compiler") from None
+    import atexit
+    import shlex
+
+    folder = Path(tempfile.mkdtemp(prefix="drive_rattle_cc_"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    target = ZIG_TARGET.get(platform.machine())
+    args = ["-target", target] if target else []
+    wrapper = folder / "zig-cc"
+    wrapper.write_text(
+        "#!/bin/sh\n# ziglang's C compiler (drive-rattle build: no gcc on PATH)\n"
+        f"exec {shlex.join([sys.executable, '-m', 'ziglang', 'cc', *args])} \"$@\"\n",
+        encoding="utf-8")
+    wrapper.chmod(0o755)
+    probe = subprocess.run([str(wrapper), "--version"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        raise BuildError(f"no working C compiler: gcc is not on PATH and ziglang's clang "
+                         f"fails:\n{probe.stderr}")
+    _ZIG_WRAPPER.append(str(wrapper))
+    return str(wrapper)
 
 
 def _stage_references(name: str, staging: Path) -> list[Path]:
@@ -58,8 +117,9 @@ def _stage_references(name: str, staging: Path) -> list[Path]:
     return [dest]
 
 
-def _stage_packages(staging: Path) -> list[Path]:
-    """The runtime packages, with the compiled kernel next to drive_rattle/kernel.py."""
+def _stage_packages(staging: Path, cc: str) -> list[Path]:
+    """The runtime packages, with the kernel compiled by ``cc`` next to
+    drive_rattle/kernel.py."""
     from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
 
     update_kernel_header()
@@ -71,7 +131,10 @@ def _stage_packages(staging: Path) -> list[Path]:
         for m in modules:
             shutil.copy2(SRC / package / f"{m}.py", dest / f"{m}.py")
         out.append(dest)
-    compile_kernel(staging / "drive_rattle" / LIBRARY_NAME)
+    try:
+        compile_kernel(staging / "drive_rattle" / LIBRARY_NAME, cc=cc)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
     return out
 
 
@@ -106,11 +169,12 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
 
     name = script.stem
     cls = _slave_class(name, script)
+    cc = c_compiler()
     out_dir.mkdir(parents=True, exist_ok=True)
     fmu = out_dir / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
         tmp = Path(tmp)
-        packages = _stage_packages(tmp / "stage")
+        packages = _stage_packages(tmp / "stage", cc)
         if references:
             packages += _stage_references(name, tmp / "stage")
         doc = tmp / "documentation"
@@ -122,8 +186,11 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
                              canSerializeFMUstate=True)
     slave = cls(instance_name="build")
     vrs = {v.name: v.value_reference for v in slave.vars.values()}
-    install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE],
-                 vrs[LAST_SUCCESSFUL_TIME_VARIABLE])
+    try:
+        install_shim(fmu, vrs[STATUS_ADDRESS_VARIABLE], vrs[MESSAGE_VARIABLE],
+                     vrs[LAST_SUCCESSFUL_TIME_VARIABLE], cc=cc)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
     return fmu
 
 
@@ -171,6 +238,39 @@ def build(out_dir: Path = ROOT / "dist", update_templates: bool = False,
     return [build_one(name, out_dir, update_templates, use_fmutool) for name in MODELS]
 
 
+#: The system file written next to the FMUs.
+SYSTEM_NAME = "DriveRattle.ssp"
+
+
+def write_system(fmus: list[Path], out_dir: Path) -> Path:
+    """``out_dir/DriveRattle.ssp``: both FMUs, their connections, every parameter at its
+    default and every input's start value at what its partner outputs at the start (so it
+    also runs in masters that exchange nothing during initialization), at the FMUs' default
+    experiment; validated against the SSP 1.0 schema."""
+    from fmpy import read_model_description
+
+    from drive_rattle_cosim.ssp import (
+        SSD_NAME,
+        default_parameters,
+        validate_ssd,
+        write_ssp,
+    )
+
+    by_name = {p.stem: p for p in fmus}
+    experiment = read_model_description(str(by_name[MODELS[0]])).defaultExperiment
+    path = write_ssp(out_dir / SYSTEM_NAME, by_name["GearMeshRattle"], by_name["Driveline"],
+                     default_parameters(by_name), step=float(experiment.stepSize),
+                     start_time=float(experiment.startTime),
+                     stop_time=float(experiment.stopTime), input_starts="consistent")
+    with tempfile.TemporaryDirectory() as tmp, zipfile.ZipFile(path) as z:
+        z.extract(SSD_NAME, tmp)
+        try:
+            validate_ssd(Path(tmp) / SSD_NAME)
+        except Exception as err:
+            raise BuildError(f"{path.name}: the SSD is not valid SSP 1.0: {err}") from None
+    return path
+
+
 DOCS = ROOT / "docs" / "fmi.md"
 
 
@@ -208,8 +308,10 @@ def main(argv=None) -> int:
         print(f"updated {DOCS}")
         return 0
     try:
-        for fmu in build(args.out, args.update_templates, not args.no_fmutool):
+        fmus = build(args.out, args.update_templates, not args.no_fmutool)
+        for fmu in fmus:
             print(f"built and validated {fmu}")
+        print(f"wrote the system {write_system(fmus, args.out)}")
     except BuildError as err:
         print(f"build_fmu.py: {err}", file=sys.stderr)
         return 1

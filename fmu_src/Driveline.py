@@ -5,27 +5,25 @@ the reflected vehicle inertia.  Thin: physics in drive_rattle, FMI glue in drive
 from pathlib import Path
 
 from drive_rattle.driveline import Driveline as DrivelineModel
-from drive_rattle.driveline import (
-    DrivelineParameters,
-    ShaftState,
-    read_speed_table,
-    resolve_speed_table,
-)
+from drive_rattle.driveline import ShaftState, read_speed_table, resolve_speed_table
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS
+from drive_rattle_fmi.boundary import DrivelineInputReading, DrivelineUnitParameters
 from drive_rattle_fmi.slave import RattleSlave, check_snapshot_fields
 
 #: The model snapshot of an FMU state (check_snapshot_fields layout): the shaft's vehicle-side
-#: angle and speed and its torque, the time, the last step, and the speed table read at
-#: initialization ([times, speeds], or None for engine orders; checked when rebuilt).
+#: angle and speed and its torque, the time, the last step, the speed table read at
+#: initialization ([times, speeds], or None for engine orders; checked when rebuilt), and how
+#: the unit reads its inputs (drive_rattle_fmi.boundary, checked there).
 SNAPSHOT_LAYOUT = {
     "shaft": ("f", "f", "f"),
     "time": ("=f",),
     "last_step": ("=f+",),
     "table": ("any",),
+    "fmi": ("any",),
 }
 
 
-class Driveline(RattleSlave):
+class Driveline(DrivelineInputReading, RattleSlave):
     """Engine-order (or measured) pinion kinematics out; wheel angle and speed in, output-shaft
     load torque out."""
 
@@ -33,13 +31,14 @@ class Driveline(RattleSlave):
         "Driveline around the drive-rattle gear mesh: input-shaft kinematics from engine orders "
         "or a measured speed table, output shaft as a torsional spring-damper to a reflected "
         "vehicle inertia with drag")
-    PARAMETERS = DrivelineParameters
+    PARAMETERS = DrivelineUnitParameters
     INPUTS = DRIVELINE_INPUTS
     OUTPUTS = DRIVELINE_OUTPUTS
 
     def _build(self, params, inputs):
-        return DrivelineModel(params, self._start_time, inputs["wheel.phi"], inputs["wheel.w"],
-                              table=self._speed_table(params))
+        model = DrivelineModel(params, self._start_time, inputs["wheel.phi"], inputs["wheel.w"],
+                               table=self._speed_table(params))
+        return self._started(model, inputs)
 
     def _speed_table(self, params):
         """The speed table the parameters name, read once per file name (initialization mode
@@ -53,8 +52,7 @@ class Driveline(RattleSlave):
             self._table_cache = cached = (params.speed_table, table)
         return cached[1]
 
-    def _step(self, t, h, inputs):
-        self._model.step(t, h, inputs["wheel.phi"], inputs["wheel.w"])
+    # _step: DrivelineInputReading (drive_rattle_fmi.boundary)
 
     def _outputs(self, model):
         return model.outputs()
@@ -64,7 +62,8 @@ class Driveline(RattleSlave):
     def _model_state(self, model):
         return {"shaft": [model.shaft.state.phi, model.shaft.state.w, model.shaft.tau_load],
                 "time": model.time, "last_step": model.last_step,
-                "table": None if model.table is None else [model.table[0], model.table[1]]}
+                "table": None if model.table is None else [model.table[0], model.table[1]],
+                "fmi": self._boundary_state(model)}
 
     def _model_from_snapshot(self, params, start_time, snapshot):
         s = check_snapshot_fields(snapshot, SNAPSHOT_LAYOUT)
@@ -73,5 +72,7 @@ class Driveline(RattleSlave):
             raise ValueError(f"model snapshot 'table' = {str(table)[:60]!r}: expected "
                              "[times, speeds] or null")
         phi, w, tau = s["shaft"]
-        return DrivelineModel.from_snapshot(params, start_time, ShaftState(phi, w), tau,
-                                            s["time"], s["last_step"], table)
+        model = DrivelineModel.from_snapshot(params, start_time, ShaftState(phi, w), tau,
+                                             s["time"], s["last_step"], table)
+        self._restore_boundary(model, s["fmi"])
+        return model

@@ -6,20 +6,22 @@ from pathlib import Path
 
 from drive_rattle.interface import MESH_INPUTS, MESH_OUTPUTS, mesh_outputs
 from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
-from drive_rattle.parameters import MeshParameters
 from drive_rattle.stepper import StepResult, WheelState, WheelStepper
+from drive_rattle_fmi.boundary import MeshInputReading, MeshUnitParameters
 from drive_rattle_fmi.slave import WARNING, RattleSlave, check_snapshot_fields
 
 #: The model snapshot of an FMU state (check_snapshot_fields layout): WheelState.as_tuple(),
-#: the pinion's angle and speed, the last step's aggregates.
+#: the pinion's angle and speed, the last step's aggregates, and how the unit reads its inputs
+#: (drive_rattle_fmi.boundary, checked there).
 SNAPSHOT_LAYOUT = {
     "wheel": ("f", "f", "flank", "f", "f", "f", "n", "n", "f+"),
     "pinion": ("f", "f"),
     "last": ("f", "f", "f+", "f+", "n", "n"),
+    "fmi": ("any",),
 }
 
 
-class GearMeshRattle(RattleSlave):
+class GearMeshRattle(MeshInputReading, RattleSlave):
     """Helical gear mesh with backlash: Hertzian impacts of every tooth pair on both flanks and
     mixed boundary/viscous flank friction; pinion kinematics in, wheel motion and torques out."""
 
@@ -27,7 +29,7 @@ class GearMeshRattle(RattleSlave):
         "Transmission drive rattle: gear-mesh impact (Hertz, every tooth pair, both flanks) and "
         "flank friction of a helical pair with backlash; kinematic pinion, wheel integrated "
         "inside (Theodossiades, Rahnejat, De la Cruz, Kelly, ENOC 2008)")
-    PARAMETERS = MeshParameters
+    PARAMETERS = MeshUnitParameters
     INPUTS = MESH_INPUTS
     OUTPUTS = MESH_OUTPUTS
 
@@ -49,12 +51,10 @@ class GearMeshRattle(RattleSlave):
         args = (params, inputs["pinion.phi"], inputs["pinion.w"], inputs["wheel.tau_load"])
         lib = self._kernel(params)
         if lib is not None:
-            return CompiledWheelStepper(*args, library=lib)
-        return WheelStepper(*args)
+            return self._started(CompiledWheelStepper(*args, library=lib), inputs)
+        return self._started(WheelStepper(*args), inputs)
 
-    def _step(self, t, h, inputs):
-        self._model.step(h, inputs["pinion.phi"], inputs["pinion.w"], inputs["pinion.a"],
-                         inputs["wheel.tau_load"])
+    # _step: MeshInputReading (drive_rattle_fmi.boundary)
 
     def _outputs(self, model):
         if isinstance(model, CompiledWheelStepper):
@@ -75,6 +75,7 @@ class GearMeshRattle(RattleSlave):
             "pinion": list(model.pinion),
             "last": [last.tau_wheel_mean, last.tau_pinion_mean, last.W_peak, last.delta_peak,
                      last.onsets_drive, last.onsets_coast],
+            "fmi": self._boundary_state(model),
         }
 
     def _model_from_snapshot(self, params, start_time, snapshot):
@@ -83,5 +84,8 @@ class GearMeshRattle(RattleSlave):
                 StepResult(*s["last"]))
         lib = self._kernel(params)
         if lib is not None:
-            return CompiledWheelStepper.from_snapshot(*args, library=lib)
-        return WheelStepper.from_snapshot(*args)
+            model = CompiledWheelStepper.from_snapshot(*args, library=lib)
+        else:
+            model = WheelStepper.from_snapshot(*args)
+        self._restore_boundary(model, s["fmi"])
+        return model

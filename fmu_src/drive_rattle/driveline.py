@@ -108,8 +108,10 @@ class DrivelineParameters(ParameterSet):
         "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
         minimum=1e-8, maximum=1.0)
     h_comm_max: float = declare(
-        "solver.h_comm_max", 1e-2, "s",
-        "largest communication step accepted (the wheel is extrapolated linearly over a step)",
+        "solver.h_comm_max", 1.0, "s",
+        "largest communication step accepted: a guard against absurd steps (a step costs "
+        "h/solver.h_max substeps), not an accuracy limit; the wheel is extrapolated linearly "
+        "over a step, accuracy against the step in docs/tools.md",
         minimum=1e-7, maximum=1.0)
 
     def order_terms(self) -> list[tuple[float, float, float]]:
@@ -502,11 +504,7 @@ class Driveline:
         # Tuples: kept in every FMU state, which deep-copies lists item by item.
         self.table = (tuple(table[0]), tuple(table[1])) if p.speed_table else None
         self.kinematics = input_kinematics(p, t_start, resources, self.table)
-        # The wheel's mean line: the pinion's, scaled by the speed ratio the wheel starts at.
-        _, w_p, _ = self.kinematics(t_start)
-        scale = w_w / w_p if w_p != 0.0 else 0.0
-        d_phi, d_w = self.kinematics.mean_offset(t_start)
-        self.shaft = OutputShaft(p, phi_w, w_w, (scale * d_phi, scale * d_w))
+        self.shaft = self.shaft_behind(t_start, phi_w, w_w)
         self.time = t_start
         self.last_step = 0.0  # the last communication step [s]; 0 before the first
 
@@ -532,6 +530,15 @@ class Driveline:
         drive.time = time
         drive.last_step = last_step
         return drive
+
+    def shaft_behind(self, t: float, phi_w: float, w_w: float) -> OutputShaft:
+        """The output shaft started in steady state behind the wheel (``phi_w``, ``w_w``) at
+        time ``t``: behind its mean line, the pinion's scaled by the speed ratio the wheel
+        runs at (OutputShaft)."""
+        _, w_p, _ = self.kinematics(t)
+        scale = w_w / w_p if w_p != 0.0 else 0.0
+        d_phi, d_w = self.kinematics.mean_offset(t)
+        return OutputShaft(self.params, phi_w, w_w, (scale * d_phi, scale * d_w))
 
     def step(self, t: float, h: float, phi_w: float, w_w: float) -> None:
         """Advance from the communication point t by h with the wheel's angle and speed at t."""

@@ -9,11 +9,12 @@ names are public API: they change only on purpose.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from . import lubrication
+from .driveline import Driveline, DrivelineParameters
 from .geometry import DRIVE
-from .parameters import MAX_PAIR_SLOTS
+from .parameters import MAX_PAIR_SLOTS, MeshParameters
 from .stepper import WheelStepper
 
 
@@ -26,7 +27,7 @@ class SignalSpec:
     description: str
     kind: str = "Real"  # FMI type: Real or Integer
     display_unit: str | None = None
-    start: float = 0.0  # start value of inputs
+    start: float = 0.0  # start value of inputs (see coupled_start_inputs)
     minimum: float | None = None  # accepted range of inputs (beyond it doStep refuses)
     maximum: float | None = None
 
@@ -178,3 +179,49 @@ def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
     for k, f in enumerate(mesh.pair_forces(loads)):
         out[f"pair[{k}].W"] = f
     return out
+
+
+# ---------------------------------------------------------------------- input start values
+#: Rounds of the start-value exchange before it must have reached its fixed point.
+START_EXCHANGE_ROUNDS = 8
+
+
+def coupled_start_inputs(mesh_params: MeshParameters | None = None,
+                         driveline_params: DrivelineParameters | None = None,
+                         start_time: float = 0.0) -> tuple[dict[str, float], dict[str, float]]:
+    """``(mesh inputs, driveline inputs)`` at ``start_time`` [s] of the coupled system: what
+    each unit's partner outputs there once both are initialized (SI units).
+
+    The initialization the co-simulation harness performs, run to its fixed point: the
+    Driveline's input-shaft kinematics and load torque (which do not depend on the wheel
+    beyond rounding), the mesh's wheel state for them (static flank equilibrium with
+    ``init.in_contact``), the Driveline built behind that wheel, until nothing changes.  At
+    the fixed point a unit initialized with its inputs at these values outputs exactly its
+    partner's values, so masters that exchange nothing during initialization start the pair
+    consistent.  These are the inputs' start values of the FMUs for the default parameters."""
+    mp = mesh_params or MeshParameters()
+    dp = driveline_params or DrivelineParameters()
+    wheel = {"wheel.phi": 0.0, "wheel.w": 0.0}
+    for _ in range(START_EXCHANGE_ROUNDS):
+        drive = Driveline(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"]).outputs()
+        mesh_inputs = {s.name: drive[s.name] for s in MESH_INPUTS}
+        state = WheelStepper(mp, mesh_inputs["pinion.phi"], mesh_inputs["pinion.w"],
+                             mesh_inputs["wheel.tau_load"]).state
+        new_wheel = {"wheel.phi": state.phi, "wheel.w": state.w}
+        if new_wheel == wheel:
+            return mesh_inputs, wheel
+        wheel = new_wheel
+    raise ValueError(
+        f"the start values of the coupled inputs do not settle within "
+        f"{START_EXCHANGE_ROUNDS} exchanges (last wheel state {wheel}); check the parameters")
+
+
+def _with_starts(signals: tuple[SignalSpec, ...], starts: dict[str, float]):
+    return tuple(replace(s, start=starts[s.name]) for s in signals)
+
+
+# Every input starts at what its partner outputs at t = 0 in the default scenario (computed
+# from the core's defaults, never copied: they follow any change of the physics defaults).
+_MESH_STARTS, _DRIVELINE_STARTS = coupled_start_inputs()
+MESH_INPUTS = _with_starts(MESH_INPUTS, _MESH_STARTS)
+DRIVELINE_INPUTS = _with_starts(DRIVELINE_INPUTS, _DRIVELINE_STARTS)

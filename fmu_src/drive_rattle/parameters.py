@@ -320,9 +320,10 @@ class MeshParameters(ParameterSet):
         "run the compiled kernel (C, bit-identical to the Python core, ~50x faster per step) when "
         "it is available; false = the pure-Python core")
     h_comm_max: float = declare(
-        "solver.h_comm_max", 1e-2, "s",
-        "largest communication step accepted (the pinion's Taylor polynomial and the held "
-        "load torque stop being meaningful beyond a fraction of an engine-order period)",
+        "solver.h_comm_max", 1.0, "s",
+        "largest communication step accepted: a guard against absurd steps (a step costs "
+        "h/solver.h_max substeps in contact), not an accuracy limit; the coupling's accuracy "
+        "against the step is in docs/tools.md",
         minimum=1e-7, maximum=1.0)
 
     def _check_combination(self) -> None:

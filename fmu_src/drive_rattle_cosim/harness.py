@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import itertools
 import shutil
 import sys
 from ctypes import c_double, c_int, c_uint
@@ -104,6 +105,15 @@ class Variable:
     unit: str
 
 
+def raw_function(slave: FMU2Slave, name: str):
+    """The ctypes function ``name`` of the FMU's library, argument types set by fmpy.
+
+    fmpy >= 0.3.20 keeps them in ``slave._functions``; 0.3.19 (the newest that gemseo-fmu
+    accepts) only in the library object, where both versions set them."""
+    functions = getattr(slave, "_functions", None)
+    return functions[name] if functions is not None else getattr(slave.dll, name)
+
+
 class _Raw:
     """getX/setX of a fixed list of value references on preallocated ctypes arrays."""
 
@@ -114,8 +124,8 @@ class _Raw:
         self.unit, self.kind, self.n = unit, kind, n
         self.vrs = (c_uint * n)(*vrs)
         self.values = (self._CTYPES[kind] * n)()
-        self._get = unit.slave._functions[f"fmi2Get{kind}"]
-        self._set = unit.slave._functions[f"fmi2Set{kind}"]
+        self._get = raw_function(unit.slave, f"fmi2Get{kind}")
+        self._set = raw_function(unit.slave, f"fmi2Set{kind}")
         self.component = unit.slave.component
 
     def fetch(self):
@@ -296,9 +306,15 @@ class CoSimulation:
             dst.call("setReal", dst.slave.setReal, ins,
                      src.call("getReal", src.slave.getReal, outs))
 
-    def run(self, stop_time: float, outputs=None, progress: bool = False) -> Result:
+    def run(self, stop_time: float, outputs=None, progress: bool = False,
+            grid: str | tuple[list[float], list[float]] = "nanoseconds") -> Result:
         """Step to ``stop_time`` [s], recording ``outputs`` (``"<Unit>.<output>"``; default:
-        every output of both units) at every communication point, the current one first."""
+        every output of both units) at every communication point, the current one first.
+
+        ``grid`` places the communication points as a master does: a name of ``time_grid``
+        (the default integer nanoseconds of libcosim, or the time sums of other masters) or
+        explicit ``(points, step sizes)`` from the current time, so that a master's run can be
+        compared with this one bit for bit."""
         if outputs is None:
             outputs = [f"{u.name}.{v.name}" for u in self.units.values()
                        for v in u.variables.values() if v.causality == "output"]
@@ -312,7 +328,13 @@ class CoSimulation:
         result = Result(units={o: self._split(o)[0].var(self._split(o)[1]).unit or "1"
                                for o in outputs})
         result.columns = {o: [] for o in outputs}
-        points = communication_points(self.time, self.step, stop_time)
+        if isinstance(grid, str):
+            points, sizes = time_grid(self.time, self.step, stop_time, grid)
+        else:
+            points, sizes = (list(x) for x in grid)
+            if not (points and points[0] == self.time and len(sizes) == len(points) - 1):
+                raise ValueError("grid: expected (points from the current time, one step size "
+                                 "fewer)")
         steps = range(len(points))
         if progress and len(points) > PROGRESS_MIN_STEPS:
             from tqdm import tqdm
@@ -323,7 +345,7 @@ class CoSimulation:
         raw_rec = [(_Raw(u, kind, vrs), names) for u, kind, vrs, names in rec]
         raw_plan = [(_Raw(src, "Real", outs), _Raw(dst, "Real", ins))
                     for src, outs, dst, ins in self._plan]
-        steppers = [(u, u.slave._functions["fmi2DoStep"], u.slave.component)
+        steppers = [(u, raw_function(u.slave, "fmi2DoStep"), u.slave.component)
                     for u in self.units.values()]
         columns = result.columns
         last = len(points) - 1
@@ -337,13 +359,59 @@ class CoSimulation:
                 break
             for src, dst in raw_plan:
                 dst.put(src.fetch())
-            h = points[k + 1] - t
+            h = sizes[k]
             for u, do_step, component in steppers:
                 status = do_step(component, t, h, 1)
                 if status > 1:
                     u.fail(f"doStep at t = {t!r} s", status)
             self.time = points[k + 1]
         return result
+
+
+#: How masters place communication points (``time_grid``).
+GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied")
+
+
+def time_grid(start: float, step: float, stop: float,
+              grid: str = "nanoseconds") -> tuple[list[float], list[float]]:
+    """``(points, sizes)``: the communication points from ``start`` to ``stop`` [s] and the
+    step size passed at each (one fewer), as a master computes them:
+
+    * ``"nanoseconds"``: ``t_k = (t0_ns + k step_ns)/1e9``, each step ``t_{k+1} - t_k``
+      (libcosim, this harness, ``drive_rattle.system.simulate``);
+    * ``"accumulated"``: ``t_{k+1} = t_k + step`` while ``t_k < stop``, every step ``step``
+      (fmpy's SSP runner);
+    * ``"accumulated-clipped"``: ``t_{k+1} = t_k + min(step, stop - t_k)`` while
+      ``t_k < stop``, each step ``min(step, t_{k+1} - t_k)`` (gemseo-fmu's
+      ``TimeSteppingSystem``; its last step can be a rounding residue of 1e-14 s);
+    * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` but a last one that
+      ends at ``stop`` (fmpy's ``simulate_fmu`` from a zero start; fmu-manipulation-toolbox's
+      container inside).
+
+    The sums end at the first point at or past ``stop``."""
+    if grid == "nanoseconds":
+        points = communication_points(start, step, stop)
+        return points, [b - a for a, b in itertools.pairwise(points)]
+    if grid not in GRIDS:
+        raise ValueError(f"grid = {grid!r}; allowed: {', '.join(GRIDS)}")
+    if not (step > 0.0 and stop - start < 1e9 * step):
+        raise ValueError(f"communication step {step!r} s is invalid for {start!r}..{stop!r} s")
+    points, sizes = [start], []
+    while (t := points[-1]) < stop:
+        if grid == "accumulated":
+            points.append(t + step)
+            sizes.append(step)
+        elif grid == "multiplied":
+            if t + step <= stop:
+                points.append(start + len(points) * step)
+                sizes.append(step)
+            else:  # the last step ends at stop
+                points.append(stop)
+                sizes.append(stop - t)
+        else:
+            points.append(t + min(step, stop - t))
+            sizes.append(min(step, points[-1] - t))
+    return points, sizes
 
 
 def _parse_value(text: str):

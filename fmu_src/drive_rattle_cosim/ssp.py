@@ -1,10 +1,12 @@
 """The mesh + driveline system as an SSP 1.0 system structure, and its run in libcosim.
 
 ``write_ssp`` writes a directory (``SystemStructure.ssd`` + ``resources/*.fmu``) or a zipped
-``.ssp`` with both FMUs, the connections of ``harness.CONNECTIONS``, parameter bindings and the
-OSP fixed-step annotation libcosim needs.  ``run_libcosim`` loads it with libcosimpy (a native
-C++ master: Jacobi fixed-step, like the harness) and records outputs at every communication
-point.
+``.ssp`` with both FMUs, the connections of ``harness.CONNECTIONS``, parameter bindings, bindings
+of the inputs' start values and the OSP fixed-step annotation libcosim needs.  The input starts
+are what each unit's partner outputs at the start time (``consistent_input_starts``), so that
+masters which exchange no values during initialization still start the pair consistent.
+``run_libcosim`` loads it with libcosimpy (a native C++ master: Jacobi fixed-step, like the
+harness) and records outputs at every communication point.
 
 libcosim parses the SSD without namespace awareness: the prefixes must be literally ``ssd:``,
 ``ssc:`` and ``ssv:``.  It only warns about a parameter binding naming an unknown variable, so
@@ -40,31 +42,72 @@ def _value(v) -> str:
     return repr(v) if isinstance(v, float) else str(v)
 
 
-def check_bindings(fmus: dict[str, Path], parameters: dict) -> None:
-    """Raise ValueError unless every ``"<Unit>.<name>"`` is a parameter of that unit's FMU with
-    a matching type."""
+def check_bindings(fmus: dict[str, Path], parameters: dict, causality: str = "parameter") -> None:
+    """Raise ValueError unless every ``"<Unit>.<name>"`` is a variable of that unit's FMU with
+    the given ``causality`` ("parameter" or "input") and a matching type."""
     variables = {unit: {v.name: v for v in read_model_description(str(path)).modelVariables}
                  for unit, path in fmus.items()}
+    what = "parameter" if causality == "parameter" else "input-start"
     for qualified, value in parameters.items():
         unit, _, name = qualified.partition(".")
         v = variables.get(unit, {}).get(name)
-        if v is None or v.causality != "parameter":
-            raise ValueError(f"SSP parameter binding '{qualified}': no such parameter")
-        expected = _SSV_TYPE[type(value)]
+        if v is None or v.causality != causality:
+            raise ValueError(f"SSP {what} binding '{qualified}': no such {causality}")
+        expected = _SSV_TYPE.get(type(value))
         if v.type != expected and not (v.type == "Real" and expected == "Integer"):
             raise ValueError(
-                f"SSP parameter binding '{qualified}' = {value!r} is {expected}; the FMU "
-                f"declares {v.type}")
+                f"SSP {what} binding '{qualified}' = {value!r} is {expected or type(value)}; "
+                f"the FMU declares {v.type}")
+
+
+def default_parameters(fmus: dict[str, Path]) -> dict:
+    """Every parameter of the FMUs at its start value, ``{"<Unit>.<name>": value}``."""
+    convert = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true", "String": str}
+    return {f"{unit}.{v.name}": convert[v.type](v.start)
+            for unit, path in fmus.items()
+            for v in read_model_description(str(path)).modelVariables
+            if v.causality == "parameter"}
+
+
+def consistent_input_starts(parameters: dict | None = None, start_time: float = 0.0) -> dict:
+    """``{"<Unit>.<input>": value}``: each input at what its partner outputs at ``start_time``
+    [s] once the system with these parameters is initialized
+    (``drive_rattle.interface.coupled_start_inputs``).  Parameters that only steer how a unit
+    reads its inputs (``init.settle_first_step``, ``inputs.continue_when_held``) are ignored."""
+    from drive_rattle.driveline import DrivelineParameters
+    from drive_rattle.interface import coupled_start_inputs
+    from drive_rattle.parameters import MeshParameters, specs
+
+    per_unit = {MESH: {}, DRIVELINE: {}}
+    for qualified, value in (parameters or {}).items():
+        unit, _, name = qualified.partition(".")
+        if unit not in per_unit:
+            raise ValueError(f"parameter '{qualified}': unknown unit '{unit}'")
+        per_unit[unit][name] = value
+    physics = []
+    for unit, cls in ((MESH, MeshParameters), (DRIVELINE, DrivelineParameters)):
+        known = {spec.name for _, spec in specs(cls)}
+        physics.append(cls.from_public({k: v for k, v in per_unit[unit].items() if k in known}))
+    mesh_inputs, driveline_inputs = coupled_start_inputs(*physics, start_time=start_time)
+    return {**{f"{MESH}.{k}": v for k, v in mesh_inputs.items()},
+            **{f"{DRIVELINE}.{k}": v for k, v in driveline_inputs.items()}}
 
 
 def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
-                     start_time: float = 0.0, stop_time: float = 2.0) -> str:
-    """The SSD text; ``fmu_names`` maps unit to its file name under resources/."""
+                     start_time: float = 0.0, stop_time: float = 2.0,
+                     input_starts: dict | None = None) -> str:
+    """The SSD text; ``fmu_names`` maps unit to its file name under resources/.  The input
+    starts are bound like parameters (in a second parameter set of the component)."""
+    input_starts = input_starts or {}
     fmus_md = {}
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssd:SystemStructureDescription name="DriveRattle" version="1.0" {NAMESPACES}>',
              '  <ssd:System name="drive_rattle">', "    <ssd:Elements>"]
-    for unit in (MESH, DRIVELINE):
+    # The Driveline first: its outputs (prescribed engine kinematics, the shaft torque in
+    # steady state) do not depend on its inputs at the start, so masters that initialize the
+    # units in document order and cut the mesh-driveline loop before its first unit
+    # (fmu-manipulation-toolbox's container) give the mesh the Driveline's true outputs.
+    for unit in (DRIVELINE, MESH):
         fmus_md[unit] = unit
         lines.append(f'      <ssd:Component name="{unit}" source="resources/{fmu_names[unit]}" '
                      'type="application/x-fmu-sharedlibrary">')
@@ -77,20 +120,24 @@ def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
                 lines.append(f'          <ssd:Connector name="{out}" kind="output"><ssc:Real/>'
                              "</ssd:Connector>")
         lines.append("        </ssd:Connectors>")
-        bound = {k.partition(".")[2]: v for k, v in parameters.items()
-                 if k.partition(".")[0] == unit}
-        if bound:
-            lines += ["        <ssd:ParameterBindings><ssd:ParameterBinding>"
-                      "<ssd:ParameterValues>",
-                      f'          <ssv:ParameterSet version="1.0" name="{unit}_parameters">'
+        sets = [(f"{unit}_{label}", {k.partition(".")[2]: v for k, v in values.items()
+                                     if k.partition(".")[0] == unit})
+                for label, values in (("parameters", parameters), ("input_starts", input_starts))]
+        sets = [(name, bound) for name, bound in sets if bound]
+        if sets:
+            lines.append("        <ssd:ParameterBindings>")
+        for set_name, bound in sets:
+            lines += ["          <ssd:ParameterBinding><ssd:ParameterValues>",
+                      f'          <ssv:ParameterSet version="1.0" name="{set_name}">'
                       "<ssv:Parameters>"]
             for name, value in bound.items():
                 kind = _SSV_TYPE[type(value)]
                 lines.append(f"            <ssv:Parameter name={quoteattr(name)}><ssv:{kind} "
                              f"value={quoteattr(_value(value))}/></ssv:Parameter>")
             lines += ["          </ssv:Parameters></ssv:ParameterSet>",
-                      "        </ssd:ParameterValues></ssd:ParameterBinding>"
-                      "</ssd:ParameterBindings>"]
+                      "          </ssd:ParameterValues></ssd:ParameterBinding>"]
+        if sets:
+            lines.append("        </ssd:ParameterBindings>")
         lines.append("      </ssd:Component>")
     lines += ["    </ssd:Elements>", "    <ssd:Connections>"]
     for src, out, dst, inp in CONNECTIONS:
@@ -108,13 +155,24 @@ def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
 
 
 def write_ssp(target: Path, mesh_fmu: Path, driveline_fmu: Path, parameters: dict | None = None,
-              step: float = 1e-4, start_time: float = 0.0, stop_time: float = 2.0) -> Path:
-    """Write the system as a directory, or as a zipped SSP when ``target`` ends in ``.ssp``."""
+              step: float = 1e-4, start_time: float = 0.0, stop_time: float = 2.0,
+              input_starts: dict | str | None = None) -> Path:
+    """Write the system as a directory, or as a zipped SSP when ``target`` ends in ``.ssp``.
+
+    ``parameters`` and ``input_starts`` map ``"<Unit>.<name>"`` to values bound in the SSD;
+    ``input_starts="consistent"`` binds every input at what its partner outputs at the start
+    time for these parameters (``consistent_input_starts``)."""
     parameters = parameters or {}
+    if input_starts == "consistent":
+        input_starts = consistent_input_starts(parameters, start_time)
+    elif isinstance(input_starts, str):
+        raise ValueError(f"input_starts = {input_starts!r}; allowed: a dict, 'consistent' or None")
+    input_starts = input_starts or {}
     fmus = {MESH: Path(mesh_fmu), DRIVELINE: Path(driveline_fmu)}
     check_bindings(fmus, parameters)
+    check_bindings(fmus, input_starts, causality="input")
     ssd = system_structure({u: p.name for u, p in fmus.items()}, parameters, step, start_time,
-                           stop_time)
+                           stop_time, input_starts)
     target = Path(target)
     if target.suffix == ".ssp":
         target.parent.mkdir(parents=True, exist_ok=True)

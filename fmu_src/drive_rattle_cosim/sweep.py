@@ -5,6 +5,10 @@ case is a full co-simulation (the fmpy harness) run in a dask worker process.  R
 appended to a CSV file case by case, as they finish, so that an interrupted sweep resumes
 without redoing finished cases; a failed case is recorded with its error and the sweep goes on.
 
+The FMUs travel with the work: the client reads their bytes once and scatters them to every
+worker (``FmuBundle``), and each worker process unpacks them once into its own local folder,
+so workers on other machines need no copy of ``dist/`` -- only this package installed.
+
     python -m drive_rattle_cosim.sweep \\
         --param GearMeshRattle.gear.backlash=0.05e-3:0.2e-3 \\
         --param Driveline.vehicle.drag=0.1:0.3 --grid 4 --stop-time 4 \\
@@ -23,12 +27,15 @@ transient and are means over equal windows, each with its window-to-window stand
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import hashlib
 import itertools
 import json
 import math
+import shutil
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -143,10 +150,62 @@ def rattle_metrics(time_s, signals: dict, normal_mass: float, transient: float =
     return out
 
 
-def run_case(case: Case, fmu_dir: str, stop_time: float, step: float, transient: float = 0.0,
-             window: float | None = None) -> dict:
+#: The FMUs a case needs.
+FMU_FILES = ("GearMeshRattle.fmu", "Driveline.fmu")
+#: Unpacked bundles of this process: digest -> folder.
+_UNPACKED: dict[str, Path] = {}
+
+
+@dataclass(frozen=True)
+class FmuBundle:
+    """The FMUs' bytes (file name -> content), shipped to the workers with the work instead of
+    a path that only exists on the client's machine."""
+
+    files: dict
+    digest: str
+
+    @staticmethod
+    def from_dir(folder: Path) -> FmuBundle:
+        """The FMUs of ``folder`` (FileNotFoundError naming the missing one)."""
+        files = {}
+        for name in FMU_FILES:
+            path = Path(folder) / name
+            if not path.is_file():
+                raise FileNotFoundError(f"{path} does not exist (build it: python build_fmu.py)")
+            files[name] = path.read_bytes()
+        digest = hashlib.sha256(b"".join(hashlib.sha256(files[n]).digest()
+                                         for n in FMU_FILES)).hexdigest()[:16]
+        return FmuBundle(files, digest)
+
+    def folder(self) -> Path:
+        """A folder holding the FMUs in this process: written once per process and content,
+        inside the dask worker's local directory (removed with the worker) when there is one."""
+        folder = _UNPACKED.get(self.digest)
+        if folder is not None and folder.is_dir():
+            return folder
+        base = Path(tempfile.gettempdir())
+        with contextlib.suppress(ImportError, ValueError):
+            from distributed import get_worker
+
+            base = Path(get_worker().local_directory)
+        folder = base / f"drive_rattle_fmus_{self.digest}"
+        if not folder.is_dir():
+            staging = Path(tempfile.mkdtemp(prefix=".fmus_", dir=base))
+            for name, data in self.files.items():
+                (staging / name).write_bytes(data)
+            try:
+                staging.rename(folder)
+            except OSError:  # another process of this machine was first
+                shutil.rmtree(staging, ignore_errors=True)
+        _UNPACKED[self.digest] = folder
+        return folder
+
+
+def run_case(case: Case, fmus: FmuBundle | str | Path, stop_time: float, step: float,
+             transient: float = 0.0, window: float | None = None) -> dict:
     """One co-simulation (runs in a worker process): the case's parameters, then metrics
-    after ``transient`` seconds in windows of ``window`` seconds.  Never raises: an error
+    after ``transient`` seconds in windows of ``window`` seconds.  ``fmus`` is the FMUs'
+    bundle (or a local folder holding them).  Never raises: an error
     becomes the row's ``error`` field."""
     row = {"case_id": case.case_id, **case.parameters, "error": ""}
     start = time.perf_counter()
@@ -155,7 +214,7 @@ def run_case(case: Case, fmu_dir: str, stop_time: float, step: float, transient:
         from drive_rattle.parameters import MeshParameters
         from drive_rattle_cosim.harness import CoSimulation
 
-        folder = Path(fmu_dir)
+        folder = fmus.folder() if isinstance(fmus, FmuBundle) else Path(fmus)
         with CoSimulation(folder / "GearMeshRattle.fmu", folder / "Driveline.fmu",
                           case.parameters, step=step) as sim:
             res = sim.run(stop_time, RECORDED)
@@ -220,6 +279,7 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
     from dask.distributed import Client, LocalCluster, as_completed
 
     out = Path(out)
+    bundle = FmuBundle.from_dir(fmu_dir)
     names = sorted({n for c in cases for n in c.parameters})
     done = finished_case_ids(out, retry_failed)
     todo = [c for c in cases if c.case_id not in done]
@@ -234,7 +294,9 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
                                    dashboard_address=None)
             client = Client(cluster)
         with client:
-            futures = [client.submit(run_case, c, str(fmu_dir), stop_time, step, transient, window,
+            # One copy of the FMUs per worker, not per task (and none read from a path).
+            [fmus] = client.scatter([bundle], broadcast=True) if todo else [None]
+            futures = [client.submit(run_case, c, fmus, stop_time, step, transient, window,
                                      pure=False)
                        for c in todo]
             stream = as_completed(futures)
@@ -294,7 +356,8 @@ def main(argv=None) -> int:
                     help="start transient left out of the metrics [s]")
     ap.add_argument("--window", type=float, default=None,
                     help="window of the statistics [s] (default: all after the transient)")
-    ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist")
+    ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist",
+                    help="folder of the FMUs on this machine (they are sent to the workers)")
     ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")
     ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
     ap.add_argument("--scheduler", default=None, help="address of an existing dask scheduler")
@@ -303,9 +366,13 @@ def main(argv=None) -> int:
     params = dict(args.param)
     cases = (grid_design(params, args.grid) if args.grid
              else latin_hypercube_design(params, args.lhs, args.seed))
-    counts = run_sweep(cases, args.out, args.fmu_dir, args.stop_time, args.step, args.workers,
-                       args.scheduler, retry_failed=args.retry_failed,
-                       transient=args.transient, window=args.window)
+    try:
+        counts = run_sweep(cases, args.out, args.fmu_dir, args.stop_time, args.step,
+                           args.workers, args.scheduler, retry_failed=args.retry_failed,
+                           transient=args.transient, window=args.window)
+    except (FileNotFoundError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
     print(f"{counts['done']} cases run ({counts['failed']} failed), {counts['skipped']} "
           f"already done, {counts['total']} in the design -> {args.out}")
     return 0

@@ -149,12 +149,12 @@ def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:
 
 
 def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int,
-                 vr_last_successful_time: int | None = None) -> None:
+                 vr_last_successful_time: int | None = None, cc: str = "gcc") -> None:
     """Put the status shim into the FMU at ``fmu_path`` (rewritten in place).
 
     ``binaries/linux64/<modelIdentifier>.so`` (pythonfmu's library) becomes
-    ``binaries/linux64/<modelIdentifier>_pythonfmu.so`` and the shim, compiled with gcc for the
-    given value references, takes its place.  Every other member is copied byte for byte.
+    ``binaries/linux64/<modelIdentifier>_pythonfmu.so`` and the shim, compiled with ``cc`` for
+    the given value references, takes its place.  Every other member is copied byte for byte.
     Only linux64 is handled: other platforms (e.g. ``binaries/win64``) keep pythonfmu's plain
     binary, without the status protocol.  Raises ValueError if the FMU has no linux64 binary
     or already contains the shim.
@@ -172,7 +172,7 @@ def install_shim(fmu_path: Path, vr_status_address: int, vr_message: int,
 
         with tempfile.TemporaryDirectory(prefix="rattle_shim_") as tmp:
             shim = compile_shim(Path(tmp) / f"{model_identifier}.so", Path(inner).name,
-                                vr_status_address, vr_message, guid=guid,
+                                vr_status_address, vr_message, cc=cc, guid=guid,
                                 model_identifier=model_identifier,
                                 vr_last_successful_time=vr_last_successful_time)
             fd, tmp_fmu = tempfile.mkstemp(suffix=".fmu", dir=fmu_path.parent)

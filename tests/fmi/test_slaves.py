@@ -91,7 +91,7 @@ def test_non_finite_input_rejected_and_state_kept(name, bad):
 
 @pytest.mark.parametrize("t, h, fragment", [
     (0.0, 0.0, "step size 0.0"), (0.0, -1e-4, "step size -0.0001"),
-    (0.0, float("nan"), "step size nan"), (0.0, 1.0, "exceeds solver.h_comm_max"),
+    (0.0, float("nan"), "step size nan"), (0.0, 2.0, "exceeds solver.h_comm_max"),
     (5e-4, 1e-4, "does not continue"), (-1e-4, 1e-4, "does not continue"),
     (float("inf"), 1e-4, "communication point inf s is not finite"),
 ])

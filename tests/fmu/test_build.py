@@ -9,14 +9,15 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from drive_rattle.driveline import DrivelineParameters
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS
-from drive_rattle.parameters import MeshParameters, specs
+from drive_rattle.parameters import specs
+
+from ..fmi.slave_driver import SLAVES
 
 ROOT = Path(__file__).resolve().parents[2]
-INTERFACE = {
-    "GearMeshRattle": (MeshParameters, MESH_INPUTS, MESH_OUTPUTS),
-    "Driveline": (DrivelineParameters, DRIVELINE_INPUTS, DRIVELINE_OUTPUTS),
+INTERFACE = {  # the slaves' parameters: the physics' and how the unit reads its inputs
+    "GearMeshRattle": (SLAVES["GearMeshRattle"].PARAMETERS, MESH_INPUTS, MESH_OUTPUTS),
+    "Driveline": (SLAVES["Driveline"].PARAMETERS, DRIVELINE_INPUTS, DRIVELINE_OUTPUTS),
 }
 
 

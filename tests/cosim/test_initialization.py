@@ -1,0 +1,162 @@
+"""How the units start and read their inputs in masters other than the harness: consistent
+input start values, the first step after an initialization without exchange, held inputs.
+The slave classes are driven directly (drive_rattle_fmi.boundary, docs/tools.md)."""
+
+import pytest
+
+from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
+from drive_rattle.geometry import DRIVE
+from drive_rattle.interface import DRIVELINE_INPUTS, MESH_INPUTS
+from drive_rattle_cosim.ssp import consistent_input_starts
+
+from ..fmi.slave_driver import Driveline, Driven, GearMeshRattle
+
+OK, WARNING, ERROR = 0, 1, 3
+MESH_STARTS = {s.name: s.start for s in MESH_INPUTS}
+DRIVELINE_STARTS = {s.name: s.start for s in DRIVELINE_INPUTS}
+
+
+def started(cls, parameters=None, inputs=None):
+    """A slave through initialization: parameters, and only the given inputs set."""
+    unit = Driven(cls)
+    unit.set_named(parameters or {})
+    unit.slave.setup_experiment(0.0)
+    unit.slave.enter_initialization_mode()
+    unit.set_named(inputs or {})
+    unit.slave.exit_initialization_mode()
+    assert unit.status() == (OK, "")
+    return unit
+
+
+def outputs(unit, names):
+    return {n: unit.get(n) for n in names}
+
+
+@pytest.mark.parametrize("parameters", [
+    {},
+    {"GearMeshRattle.gear.backlash": 2e-4, "GearMeshRattle.wheel.J": 2e-3,
+     "Driveline.engine.w_mean": 120.0, "Driveline.engine.phase[1]": 0.7,
+     "Driveline.vehicle.drag": 0.3, "Driveline.vehicle.drag_viscous": 1e-3},
+])
+def test_each_unit_started_on_its_input_starts_outputs_its_partners(parameters):
+    """The fixed point: initialized on these start values alone (no exchange), each unit
+    outputs exactly the other's start values."""
+    starts = consistent_input_starts(parameters)
+    units = {"GearMeshRattle": GearMeshRattle, "Driveline": Driveline}
+    started_units = {}
+    for name, cls in units.items():
+        own = {k.split(".", 1)[1]: v for k, v in parameters.items() if k.startswith(name + ".")}
+        inputs = {k.split(".", 1)[1]: v for k, v in starts.items() if k.startswith(name + ".")}
+        started_units[name] = started(cls, own, inputs)
+    mesh, drive = started_units["GearMeshRattle"], started_units["Driveline"]
+    # The scenario at speed and under load, not the zeros that put the wheel at rest.
+    assert starts["GearMeshRattle.pinion.w"] > 10.0 and starts["Driveline.wheel.w"] > 10.0
+    for name in MESH_STARTS:
+        assert drive.get(name) == starts[f"GearMeshRattle.{name}"], name
+    for name in DRIVELINE_STARTS:
+        assert mesh.get(name) == starts[f"Driveline.{name}"], name
+
+
+def test_mesh_settles_against_the_first_steps_inputs():
+    """A master that set zeros during initialization (fmu-manipulation-toolbox's container)
+    and the true inputs only for the first step: the wheel is settled for them first, and the
+    step is exactly that of a mesh initialized on them."""
+    reference = started(GearMeshRattle, inputs=MESH_STARTS)
+    reference.set_named(MESH_STARTS)
+    assert reference.step(0.0, 1e-4) == (OK, "")
+    zeros = {name: 0.0 for name in MESH_STARTS}
+    mesh = started(GearMeshRattle, inputs=zeros)
+    assert mesh.get("wheel.w") == 0.0  # at rest, as the zeros say
+    mesh.set_named(MESH_STARTS)
+    code, message = mesh.step(0.0, 1e-4)
+    assert code == WARNING and "settled" in message and "init.settle_first_step" in message
+    names = ["wheel.phi", "wheel.w", "wheel.tau_mesh", "mesh.W", "mesh.delta_peak"]
+    assert outputs(mesh, names) == outputs(reference, names)
+    # Only the first step settles: later ones take the inputs as they come.
+    mesh.set_named(zeros)
+    assert mesh.step(1e-4, 1e-4) == (OK, "")
+    assert mesh.get("mesh.impacts_coast") == 1  # the wheel ran into a pinion set back to 0
+
+
+def test_without_settling_the_first_step_is_refused():
+    zeros = {name: 0.0 for name in MESH_STARTS}
+    mesh = started(GearMeshRattle, {"init.settle_first_step": False}, zeros)
+    mesh.set_named(MESH_STARTS)
+    code, message = mesh.step(0.0, 1e-4)
+    assert code == ERROR and "penetrate" in message
+    assert mesh.get("wheel.w") == 0.0  # refused: nothing changed
+
+
+def test_driveline_starts_its_shaft_anew_behind_the_first_steps_wheel():
+    reference = started(Driveline, inputs=DRIVELINE_STARTS)
+    reference.set_named(DRIVELINE_STARTS)
+    assert reference.step(0.0, 1e-4) == (OK, "")
+    names = ["wheel.tau_load", "vehicle.w", "pinion.w"]
+    for settle, expected in ((True, WARNING), (False, OK)):
+        drive = started(Driveline, {"init.settle_first_step": settle},
+                        {"wheel.phi": 0.0, "wheel.w": 0.0})
+        drive.set_named(DRIVELINE_STARTS)
+        assert drive.step(0.0, 1e-4)[0] == expected
+        same = outputs(drive, names) == outputs(reference, names)
+        assert same == settle  # without settling, the shaft starts behind a resting wheel
+
+
+def test_held_pinion_runs_on_at_constant_speed():
+    """fmpy simulate of the mesh alone sets no input: the pinion turns at the held speed, as
+    if driven at that constant speed, and the wheel follows loaded (no impact)."""
+    h, n = 1e-2, 20
+    held = started(GearMeshRattle)  # no input ever set
+    driven = started(GearMeshRattle, inputs=MESH_STARTS)
+    phi, w = MESH_STARTS["pinion.phi"], MESH_STARTS["pinion.w"]
+    names = ["wheel.phi", "wheel.w", "wheel.tau_mesh", "mesh.W", "mesh.impacts_drive",
+             "mesh.impacts_coast"]
+    for k in range(n):
+        assert held.step(k * h, h) == (OK, "")
+        driven.set_named({**MESH_STARTS, "pinion.phi": phi, "pinion.a": 0.0})
+        assert driven.step(k * h, h) == (OK, "")
+        phi += w * h  # the constant-speed pinion, as the stepper advances it
+        assert outputs(held, names) == outputs(driven, names), k
+    ratio = DRIVELINE_STARTS["wheel.w"] / w
+    assert held.get("wheel.w") == pytest.approx(ratio * w, rel=1e-4)
+    assert held.get("wheel.tau_mesh") == pytest.approx(MESH_STARTS["wheel.tau_load"], rel=0.01)
+    assert held.get("mesh.impacts_drive") == held.get("mesh.impacts_coast") == 0
+    assert held.slave._model.state.flank == DRIVE
+
+
+def test_held_inputs_taken_literally_drive_the_teeth_into_each_other():
+    mesh = started(GearMeshRattle, {"inputs.continue_when_held": False})
+    assert mesh.step(0.0, 1e-2) == (OK, "")
+    code, message = mesh.step(1e-2, 1e-2)  # the pinion jumps back to the held angle
+    assert code == ERROR and "penetrate" in message and "use 0.0001 s" in message
+
+
+def test_the_same_values_set_again_keep_the_hold_new_values_end_it():
+    h, w, a = 1e-4, MESH_STARTS["pinion.w"], MESH_STARTS["pinion.a"]
+    mesh = started(GearMeshRattle)
+    assert mesh.step(0.0, h) == (OK, "")  # nothing set: held, the pinion runs on
+    mesh.set_named(MESH_STARTS)  # the values of the last step again: still held
+    assert mesh.step(h, h) == (OK, "")
+    phi = MESH_STARTS["pinion.phi"] + w * h + 0.0 * h * h
+    phi = phi + w * h + 0.0 * h * h
+    assert mesh.slave._model.pinion == (phi, w)  # two steps at constant speed
+    mesh.set_named({"pinion.phi": phi, "pinion.w": w + 1.0})  # new values: taken as given
+    assert mesh.step(2 * h, h) == (OK, "")
+    assert mesh.slave._model.pinion == (phi + (w + 1.0) * h + 0.5 * a * h * h, w + 1.0 + a * h)
+
+
+def test_held_wheel_drives_the_vehicle_steadily():
+    """fmpy simulate of the Driveline alone: the wheel runs on at its start speed, the shaft
+    stays in steady state (its torque is the drag), the engine turns as prescribed."""
+    p = DrivelineParameters()
+    drive = started(Driveline)
+    w = DRIVELINE_STARTS["wheel.w"]
+    h, n = 0.5, 20
+    for k in range(n):
+        assert drive.step(k * h, h) == (OK, "")
+        # (taken literally, the held angle holds the wheel back while the vehicle runs on:
+        # the shaft torque falls to -42 N.m after the second 0.5 s step)
+        assert drive.get("wheel.tau_load") == pytest.approx(p.drag + p.drag_viscous * w,
+                                                            rel=1e-6)
+        assert drive.get("vehicle.w") == pytest.approx(w, rel=1e-9)
+    phi, w_p, _ = EngineOrderKinematics(p)(n * h)
+    assert drive.get("pinion.phi") == phi and drive.get("pinion.w") == w_p

@@ -1,0 +1,239 @@
+"""The default system (dist/DriveRattle.ssp, 0.5 s) in other FMI 2.0 masters, against the harness.
+
+Every master here is Jacobi at a fixed step, like the harness, and places its communication
+points with its own arithmetic; the harness run on the same points (``harness.time_grid``) is
+the reference, and the comparison is bit for bit: the same computation gives the same numbers,
+and rattle is chaotic, so any other difference (a first step fed other inputs, a step size
+off by one ulp) grows to whole rad/s within the 0.5 s (docs/tools.md has the measured spread).
+Each master runs in its own process (run_master.py).  Workarounds of the masters' own defects
+are in drive_rattle_cosim.masters.
+"""
+
+import json
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+from fmpy import read_model_description
+
+from drive_rattle.driveline import Driveline, DrivelineParameters
+from drive_rattle.interface import DRIVELINE_INPUTS, MESH_INPUTS, coupled_start_inputs
+from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
+from drive_rattle.parameters import MeshParameters, specs
+from drive_rattle_cosim.harness import CONNECTIONS, CoSimulation, CoSimulationError, time_grid
+from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
+from drive_rattle_cosim.ssp import SSD_NAME, consistent_input_starts, validate_ssd
+
+STOP, STEP = 0.5, 1e-4
+RUNNER = Path(__file__).with_name("run_master.py")
+
+
+def start_master(kind: str, **args) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, str(RUNNER), kind, json.dumps(args)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+
+
+def finish(process: subprocess.Popen) -> tuple[dict, str]:
+    """(result, everything the master printed)."""
+    out, _ = process.communicate(timeout=600)
+    assert process.returncode == 0, out
+    return json.loads(out.strip().splitlines()[-1]), out
+
+
+def run_master(kind: str, **args) -> tuple[dict, str]:
+    return finish(start_master(kind, **args))
+
+
+@pytest.fixture(scope="module")
+def system_ssp(fmus, build_script):
+    """dist/DriveRattle.ssp as `python build_fmu.py` writes it, next to this session's FMUs."""
+    return build_script.write_system(list(fmus.values()), fmus["GearMeshRattle"].parent)
+
+
+@pytest.fixture(scope="module")
+def gemseo_run(fmus):
+    """gemseo-fmu, the slowest master (about 35 s with its import), on the second core while
+    the other tests run."""
+    process = start_master("gemseo", mesh=str(fmus["GearMeshRattle"]),
+                           driveline=str(fmus["Driveline"]), stop=STOP, step=STEP)
+    yield process
+    if process.poll() is None:
+        process.kill()
+        process.communicate()
+
+
+_REFERENCES: dict = {}
+
+
+def harness(fmus, grid: str) -> dict:
+    """The harness on a master's grid: ``{"time": [...], "columns": {...}}`` from t = 0."""
+    if grid not in _REFERENCES:
+        with CoSimulation(fmus["GearMeshRattle"], fmus["Driveline"], {}, step=STEP) as sim:
+            r = sim.run(STOP, COUPLING, grid=grid)
+        _REFERENCES[grid] = {"time": r.time, "columns": r.columns}
+    return _REFERENCES[grid]
+
+
+def assert_identical(result: dict, reference: dict, first: int) -> None:
+    """The master's points are the reference's from index ``first``; every coupling signal
+    equal bit for bit (the first differing point is named)."""
+    assert "error" not in result, result["error"]
+    n = len(result["time"])
+    assert n >= int(STOP / STEP) - 1
+    assert result["time"] == reference["time"][first:first + n]
+    for name in COUPLING:
+        got, want = result["columns"][name], reference["columns"][name][first:first + n]
+        diff = next((k for k, (a, b) in enumerate(zip(got, want, strict=True)) if a != b), None)
+        assert diff is None, (f"{name} differs from t = {result['time'][diff]} s: "
+                              f"{got[diff]!r} != {want[diff]!r}")
+
+
+# ------------------------------------------------------------------ the shipped system
+def test_input_start_values_are_what_the_partner_outputs_at_start(fmus):
+    """In the built FMUs, every input starts at its partner's output at t = 0 in the harness
+    (which exchanges during initialization), computed from the core's defaults."""
+    starts = {}
+    for unit, path in fmus.items():
+        for v in read_model_description(str(path)).modelVariables:
+            if v.causality == "input":
+                starts[f"{unit}.{v.name}"] = float(v.start)
+    mesh_inputs, driveline_inputs = coupled_start_inputs()
+    assert starts == {**{f"GearMeshRattle.{k}": v for k, v in mesh_inputs.items()},
+                      **{f"Driveline.{k}": v for k, v in driveline_inputs.items()}}
+    at_start = harness(fmus, "nanoseconds")["columns"]
+    for src, out, dst, inp in CONNECTIONS:
+        assert at_start[f"{src}.{out}"][0] == starts[f"{dst}.{inp}"], (src, out)
+
+
+def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ssp, tmp_path):
+    assert system_ssp.name == "DriveRattle.ssp"
+    with zipfile.ZipFile(system_ssp) as z:
+        assert set(z.namelist()) == {SSD_NAME, "resources/GearMeshRattle.fmu",
+                                     "resources/Driveline.fmu"}
+        z.extract(SSD_NAME, tmp_path)
+    validate_ssd(tmp_path / SSD_NAME)
+    from fmpy.ssp.ssd import read_ssd
+
+    ssd = read_ssd(str(system_ssp), validate=True)
+    assert [c.name for c in ssd.system.elements] == ["Driveline", "GearMeshRattle"]
+    assert len(ssd.system.connections) == 6
+    text = (tmp_path / SSD_NAME).read_text()
+    n_parameters = len(list(specs(MeshParameters))) + len(list(specs(DrivelineParameters)))
+    # every parameter (the physics' and the two input-handling ones per unit), every input
+    assert text.count("<ssv:Parameter ") == n_parameters + 2 * 2 + 6
+    for qualified, value in consistent_input_starts().items():
+        assert f'<ssv:Parameter name="{qualified.split(".", 1)[1]}"><ssv:Real value="{value!r}"' \
+            in text
+
+
+# ------------------------------------------------------------------ masters
+def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
+    """libcosim (native C++, OSP): exchanges during initialization, integer-nanosecond grid;
+    records from the first point after the start."""
+    result, _ = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
+    assert MASTER_GRIDS["libcosim"] == "nanoseconds"
+    assert_identical(result, harness(fmus, "nanoseconds"), first=1)
+
+
+def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
+    """fmpy.ssp feeds 0 to every input at the first step; with the workaround (the first step
+    keeps the start values) it computes the harness's run on its accumulated time."""
+    result, _ = run_master("fmpy.ssp", ssp=str(system_ssp), stop=STOP, step=STEP,
+                           workaround=True)
+    assert_identical(result, harness(fmus, MASTER_GRIDS["fmpy.ssp"]), first=1)
+
+
+def test_fmpy_ssp_runner_without_the_workaround_fails_loudly(system_ssp):
+    """Without it: the units settle against the zeros of the first step (and say so), then the
+    next step drives the teeth into each other and is refused with the reason."""
+    result, printed = run_master("fmpy.ssp", ssp=str(system_ssp), stop=0.01, step=STEP,
+                                 workaround=False)
+    assert "fmi2DoStep failed" in result["error"]
+    assert "pinion.w = 0.0 rad/s" in printed and "init.settle_first_step" in printed
+    assert "the flanks would penetrate" in printed
+
+
+def test_fmucontainer_container_in_fmpy(fmus, system_ssp, tmp_path):
+    """fmu-manipulation-toolbox's container built from the shipped SSP, run in fmpy: it
+    initializes the Driveline first (first in the SSD) on zero links, so the Driveline settles
+    its shaft at the first step (fmi2Warning) and the run is the harness's from t = 0."""
+    result, printed = run_master("container", ssp=str(system_ssp), dir=str(tmp_path),
+                                 stop=STOP, step=STEP)
+    assert_identical(result, harness(fmus, MASTER_GRIDS["container"]), first=0)
+    assert "Driveline.fmu: doStep at the first step" in printed
+
+
+def test_gemseo_fmu_time_stepping_system(fmus, gemseo_run):
+    """gemseo-fmu (inputs and outputs limited to the Real coupling signals): no exchange during
+    initialization, the start values serve the first step."""
+    result, _ = finish(gemseo_run)
+    assert_identical(result, harness(fmus, MASTER_GRIDS["gemseo"]), first=1)
+
+
+# ------------------------------------------------------------------ one FMU alone
+def fmpy_default_step(stop: float) -> float:
+    """fmpy's simulate_fmu: the default experiment's step, doubled to at most 1000 steps."""
+    step = 1e-4
+    while stop / step > 1000:
+        step *= 2
+    return step
+
+
+def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
+    """`fmpy simulate GearMeshRattle.fmu --stop-time 10`: fmpy takes a 12.8 ms step and sets no
+    input; the pinion runs at its held start speed and the run is that of the core stepped
+    with a constant-speed pinion, bit for bit."""
+    stop = 10.0
+    result, _ = run_master("alone", fmu=str(fmus["GearMeshRattle"]), stop=stop)
+    assert "error" not in result, result["error"]
+    step = fmpy_default_step(stop)
+    assert result["step"] == step == 0.0128
+    starts = {s.name: s.start for s in MESH_INPUTS}
+    with zipfile.ZipFile(fmus["GearMeshRattle"]) as z:
+        z.extract(f"resources/drive_rattle/{LIBRARY_NAME}", tmp_path)
+    lib = load_kernel(tmp_path / "resources" / "drive_rattle" / LIBRARY_NAME)
+    core = CompiledWheelStepper(MeshParameters(), starts["pinion.phi"], starts["pinion.w"],
+                                starts["wheel.tau_load"], library=lib)
+    times, sizes = time_grid(0.0, step, stop, "multiplied")
+    assert result["time"] == times
+    columns = result["columns"]
+    for k in range(len(times)):
+        if k:
+            phi, w = core.pinion
+            core.step(sizes[k - 1], phi, w, 0.0, starts["wheel.tau_load"])
+        for name, value in core.outputs().items():
+            assert columns[name][k] == value, (name, times[k])
+    w_wheel = columns["wheel.w"]
+    assert max(w_wheel) - min(w_wheel) < 1e-4 * w_wheel[0]
+    assert columns["mesh.impacts_drive"][-1] == columns["mesh.impacts_coast"][-1] == 0
+
+
+def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
+    stop = 10.0
+    result, _ = run_master("alone", fmu=str(fmus["Driveline"]), stop=stop)
+    assert "error" not in result, result["error"]
+    step = result["step"]
+    starts = {s.name: s.start for s in DRIVELINE_INPUTS}
+    phi_w, w_w = starts["wheel.phi"], starts["wheel.w"]
+    core = Driveline(DrivelineParameters(), 0.0, phi_w, w_w)
+    times, _ = time_grid(0.0, step, stop, "multiplied")
+    assert result["time"] == times
+    _, sizes = time_grid(0.0, step, stop, "multiplied")
+    for k, t in enumerate(times):
+        if k:
+            core.step(times[k - 1], sizes[k - 1], phi_w, w_w)
+            phi_w += w_w * sizes[k - 1]  # the held wheel runs on at constant speed
+        for name, value in core.outputs().items():
+            assert result["columns"][name][k] == value, (name, t)
+    # steady: the shaft torque stays at the drag (taken literally, the held wheel angle would
+    # swing it by tens of N.m, see test_initialization.py)
+    tau = result["columns"]["wheel.tau_load"]
+    assert max(tau) - min(tau) < 1e-6 * DrivelineParameters().drag
+
+
+def test_a_step_the_coupled_system_cannot_take_names_the_step_to_use(fmus):
+    with CoSimulation(fmus["GearMeshRattle"], fmus["Driveline"], {}, step=1e-2) as sim, \
+            pytest.raises(CoSimulationError, match=r"use 0\.0001 s"):
+        sim.run(STOP)
