@@ -140,15 +140,6 @@ class EngineOrderKinematics:
         self.t_start = t_start
         self.terms = [(A, k * p.w_mean, ph) for k, A, ph in p.order_terms()]
 
-    def mean_offset(self, t: float) -> tuple[float, float]:
-        """``(dphi [rad], dw [rad/s])`` from the motion at time t to its mean line
-        phi_0 + w_mean (t - t_start) + sum_k A_k / W_k^2 cos p_k (the fluctuation's mean)."""
-        phi, w, _ = self(t)
-        mean = self.phi_0 + self.w_mean * (t - self.t_start)
-        for A, W, ph in self.terms:
-            mean += A / (W * W) * math.cos(ph)
-        return mean - phi, self.w_mean - w
-
     def __call__(self, t: float) -> tuple[float, float, float]:
         """``(phi [rad], w [rad/s], a [rad/s^2])`` at time t [s]."""
         tau = t - self.t_start
@@ -188,10 +179,6 @@ class SpeedTableKinematics:
         for i in range(1, len(times)):
             dt = times[i] - times[i - 1]
             self.angles.append(self.angles[-1] + 0.5 * dt * (speeds[i] + speeds[i - 1]))
-
-    def mean_offset(self, t: float) -> tuple[float, float]:
-        """A measured table has no known mean line: no offset."""
-        return 0.0, 0.0
 
     def __call__(self, t: float) -> tuple[float, float, float]:
         ts, ws = self.times, self.speeds
@@ -345,18 +332,11 @@ class OutputShaft:
     every legal parameter set integrates stably.
     """
 
-    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float,
-                 mean_offset: tuple[float, float] = (0.0, 0.0)):
+    def __init__(self, p: DrivelineParameters, phi_w: float, w_w: float):
         self.p = p
-        # Start in steady state: the vehicle at the wheel's mean speed, the shaft wound up by
-        # the drag behind the wheel's mean line (its angle and speed plus ``mean_offset``).
-        # Started from the instantaneous wheel angle instead, the shaft carries the engine
-        # orders' mean angle offset (12 mrad on the default pinion) as a torque step that
-        # excites the nearly undamped vehicle mode (0.1 Hz): the wheel's load then swings
-        # by +-0.012 N.m for as long as the run lasts.
-        phi_mean, w_mean = phi_w + mean_offset[0], w_w + mean_offset[1]
-        steady = p.drag + p.drag_viscous * w_mean
-        self.state = ShaftState(phi_mean - steady / p.k_shaft, w_mean)
+        # Start in steady state: vehicle at the wheel speed, shaft wound up by the drag.
+        steady = p.drag + p.drag_viscous * w_w
+        self.state = ShaftState(phi_w - steady / p.k_shaft, w_w)
         self.tau_load = self.torque(phi_w, w_w, self.state)
 
     @classmethod
@@ -504,7 +484,7 @@ class Driveline:
         # Tuples: kept in every FMU state, which deep-copies lists item by item.
         self.table = (tuple(table[0]), tuple(table[1])) if p.speed_table else None
         self.kinematics = input_kinematics(p, t_start, resources, self.table)
-        self.shaft = self.shaft_behind(t_start, phi_w, w_w)
+        self.shaft = OutputShaft(p, phi_w, w_w)
         self.time = t_start
         self.last_step = 0.0  # the last communication step [s]; 0 before the first
 
@@ -530,15 +510,6 @@ class Driveline:
         drive.time = time
         drive.last_step = last_step
         return drive
-
-    def shaft_behind(self, t: float, phi_w: float, w_w: float) -> OutputShaft:
-        """The output shaft started in steady state behind the wheel (``phi_w``, ``w_w``) at
-        time ``t``: behind its mean line, the pinion's scaled by the speed ratio the wheel
-        runs at (OutputShaft)."""
-        _, w_p, _ = self.kinematics(t)
-        scale = w_w / w_p if w_p != 0.0 else 0.0
-        d_phi, d_w = self.kinematics.mean_offset(t)
-        return OutputShaft(self.params, phi_w, w_w, (scale * d_phi, scale * d_w))
 
     def step(self, t: float, h: float, phi_w: float, w_w: float) -> None:
         """Advance from the communication point t by h with the wheel's angle and speed at t."""

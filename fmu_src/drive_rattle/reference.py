@@ -20,8 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .driveline import Driveline, DrivelineParameters, EngineOrderKinematics, OutputShaft
+from .driveline import Driveline, DrivelineParameters, EngineOrderKinematics
 from .geometry import COAST, DRIVE
+from .interface import coupled_start_inputs
 from .parameters import MeshParameters
 from .stepper import WheelStepper
 from .system import communication_points
@@ -49,11 +50,13 @@ def solve(mesh_params: MeshParameters | None = None,
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     kin = EngineOrderKinematics(dp, 0.0)
-    phi_p0, w_p0, _ = kin(0.0)
-    # The co-simulation's initial state (system.simulate): the mesh in equilibrium under the
-    # driveline's initial load, the shaft wound up behind the wheel.
-    wheel = WheelStepper(mp, phi_p0, w_p0, OutputShaft(dp, 0.0, 0.0).tau_load)
-    shaft = Driveline(dp, 0.0, wheel.state.phi, wheel.state.w).shaft
+    # The co-simulation's initial state (system.simulate): the units' initialization at its
+    # fixed point, the mesh in equilibrium under the driveline's initial load, the shaft
+    # behind the wheel's mean line.
+    mesh_in, start = coupled_start_inputs(mp, dp, 0.0)
+    wheel = WheelStepper(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"],
+                         mesh_in["wheel.tau_load"])
+    shaft = Driveline(dp, 0.0, start["wheel.phi"], start["wheel.w"]).shaft
     mesh = wheel.mesh
     J, Jv = mp.J_wheel, dp.J_vehicle
     k, c = dp.k_shaft, dp.c_shaft

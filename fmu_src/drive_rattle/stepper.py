@@ -475,10 +475,7 @@ class _StepRun:
             h = dt_event
             t_end = t + h
             phi_b, w_b, q = self._rk4(t, h, st.phi, st.w, k1)
-        if released:
-            delta_b = 0.0
-        else:
-            delta_b = m.penetration(flank, self.phi_p(t_end), phi_b)
+        delta_b = 0.0 if released else m.penetration(flank, self.phi_p(t_end), phi_b)
         self._track_peak(t, h, flank, delta_a, st.phi, st.w, delta_b, phi_b, w_b)
         st.phi, st.w = phi_b, w_b
         self.int_tau_pinion += q

@@ -10,7 +10,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .driveline import Driveline, DrivelineParameters
-from .interface import DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS, mesh_outputs
+from .interface import (
+    DRIVELINE_OUTPUTS,
+    MESH_INPUTS,
+    MESH_OUTPUTS,
+    coupled_start_inputs,
+    mesh_outputs,
+)
 from .parameters import MeshParameters
 from .stepper import WheelStepper
 
@@ -59,12 +65,11 @@ def simulate(mesh_params: MeshParameters | None = None,
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
-    # Initialisation in the order the co-simulation master uses: the driveline's initial
-    # outputs (its wheel inputs still at their start values 0), the mesh's equilibrium under
-    # its load torque, then the driveline built behind the mesh's initial wheel state.
-    first = Driveline(dp, start_time, 0.0, 0.0).outputs()
-    mesh = stepper(mp, first["pinion.phi"], first["pinion.w"], first["wheel.tau_load"])
-    drive = Driveline(dp, start_time, mesh.state.phi, mesh.state.w)
+    # Initialisation as the co-simulation masters reach it: the exchange of the units' initial
+    # outputs run to its fixed point (the FMUs' input start values for the default system).
+    mesh_in, wheel = coupled_start_inputs(mp, dp, start_time)
+    mesh = stepper(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"])
+    drive = Driveline(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"])
     rec = Record(signals={n: [] for n in names})
     points = communication_points(start_time, step, stop_time)
     for k, t in enumerate(points):

@@ -29,8 +29,9 @@ tests/adversarial/test_endurance.py), while this module is imported once per pro
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
-from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.driveline import DrivelineParameters, OutputShaft
 from drive_rattle.parameters import MeshParameters, declare
 from drive_rattle.stepper import WheelState
 
@@ -130,7 +131,7 @@ class _InputReading(HeldInputTracking):
     #: Inputs whose values at the end of initialization the first step compares with.
     START_INPUTS: tuple[str, ...] = ()
     #: check_snapshot_fields layout of a subclass' own entries in ``_boundary_state``.
-    _EXTRA_BOUNDARY_LAYOUT: dict = {}
+    _EXTRA_BOUNDARY_LAYOUT: ClassVar[dict] = {}
 
     def _started(self, model, inputs: dict):
         model.fmi_initial_inputs = tuple(inputs[name] for name in self.START_INPUTS)
@@ -232,7 +233,7 @@ class DrivelineInputReading(_InputReading):
     def _boundary_state(model) -> dict:
         return {**_InputReading._boundary_state(model), "wheel_end": list(model.fmi_wheel_end)}
 
-    _EXTRA_BOUNDARY_LAYOUT = {"wheel_end": ("f", "f")}
+    _EXTRA_BOUNDARY_LAYOUT: ClassVar[dict] = {"wheel_end": ("f", "f")}
 
     @classmethod
     def _restore_boundary(cls, model, state) -> None:
@@ -247,7 +248,7 @@ class DrivelineInputReading(_InputReading):
             phi_w, w_w = model.fmi_wheel_end
         settled = None
         if self._first_step_differs(model, (phi_w, w_w)):
-            settled, model.shaft = model.shaft, model.shaft_behind(t, phi_w, w_w)
+            settled, model.shaft = model.shaft, OutputShaft(p, phi_w, w_w)
         try:
             model.step(t, h, phi_w, w_w)
         except Exception:

@@ -38,8 +38,8 @@ def test_contact_duration_factor_is_the_integral():
 def test_elliptic_integrals_match_scipy(q):
     K, S = hertz.elliptic_integrals(q)
     # ellipkm1 takes the complementary parameter q^2 = 1 - m exactly (m itself would round).
-    assert K == pytest.approx(special.ellipkm1(q * q), rel=1e-14)
-    assert K * (1.0 - S) == pytest.approx(special.ellipe(1.0 - q * q), rel=1e-13)
+    assert pytest.approx(special.ellipkm1(q * q), rel=1e-14) == K
+    assert pytest.approx(special.ellipe(1.0 - q * q), rel=1e-13) == K * (1.0 - S)
 
 
 @pytest.mark.parametrize("rho", [1.0, 1.5, 10.0, 1100.0, 1e5])
@@ -69,7 +69,7 @@ def test_exact_ellipse_satisfies_the_hertz_potential_integrals(rho):
     assert c * quad(lambda w: 1.0 / ((a * a + w) * root(w))) == pytest.approx(1 / (2 * R), rel=1e-8)
     assert c * quad(lambda w: 1.0 / ((b * b + w) * root(w))) == pytest.approx(1 / (2 * r), rel=1e-8)
     delta = c * quad(lambda w: 1.0 / root(w))
-    assert W == pytest.approx(Es * math.sqrt(R) * ell.kappa * delta**1.5, rel=1e-8)
+    assert pytest.approx(Es * math.sqrt(R) * ell.kappa * delta**1.5, rel=1e-8) == W
 
 
 def test_exact_law_against_the_equivalent_sphere():
@@ -90,15 +90,15 @@ def test_contact_law_tabulation_is_exact_to_rounding(law):
     contact = hertz.ContactLaw(law, E, r_y, x_range)
     for r_x in np.linspace(r_lo, r_hi, 37):
         K, R, ka, kz = contact.shape(r_x)
-        assert R == r_y
+        assert r_y == R
         if law == hertz.LAW_EXACT:
             ell = hertz.exact_ellipse(r_y / r_x)
-            assert K == pytest.approx(E * math.sqrt(r_y) * ell.kappa, rel=1e-12)
+            assert pytest.approx(E * math.sqrt(r_y) * ell.kappa, rel=1e-12) == K
             assert ka == pytest.approx((r_y / E) ** (1 / 3) * ell.alpha, rel=1e-12)
             assert kz == pytest.approx((r_y / E) ** (2 / 3) * ell.zeta, rel=1e-12)
         else:
             W = 10.0
-            assert K == pytest.approx(hertz.sphere_stiffness(E, r_x, r_y))
+            assert pytest.approx(hertz.sphere_stiffness(E, r_x, r_y)) == K
             a, area = ka * W ** (1 / 3), kz * W ** (2 / 3)
             b = area / (math.pi * a)
             assert math.sqrt(a * b) == pytest.approx(

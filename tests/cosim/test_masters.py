@@ -205,9 +205,14 @@ def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
             core.step(sizes[k - 1], phi, w, 0.0, starts["wheel.tau_load"])
         for name, value in core.outputs().items():
             assert columns[name][k] == value, (name, times[k])
+    # Steady loaded drive: the wheel follows the constant-speed pinion, rippled only by the
+    # load passing between the crowned pairs at the mesh frequency (dynamic transmission
+    # error of ~0.05 um; measured 1.6e-4 of the speed peak to peak), without an impact.
     w_wheel = columns["wheel.w"]
-    assert max(w_wheel) - min(w_wheel) < 1e-4 * w_wheel[0]
+    assert max(w_wheel) - min(w_wheel) < 4e-4 * w_wheel[0]
+    assert sum(w_wheel) / len(w_wheel) == pytest.approx(w_wheel[0], rel=2e-5)
     assert columns["mesh.impacts_drive"][-1] == columns["mesh.impacts_coast"][-1] == 0
+    assert min(columns["mesh.n_contact"][1:]) >= 1
 
 
 def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):

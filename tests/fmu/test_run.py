@@ -42,6 +42,7 @@ def test_driveline_alone_with_wheel_input_table(fmus):
     assert np.allclose(r["vehicle.w"], w, rtol=1e-12)
     # A wheel at rest, then turned by 0.01 rad at t = 0.02 s: the shaft torque rises by
     # k * 0.01 and the vehicle starts to follow.
+    k = DrivelineParameters().k_shaft
     jump = np.array([(0.0, 0.0, 0.0), (0.02, 0.0, 0.0), (0.02, 0.01, 0.0), (1.0, 0.01, 0.0)],
                     dtype=table.dtype)
     r = simulate_fmu(str(fmus["Driveline"]), stop_time=0.05, output_interval=1e-4,
@@ -49,7 +50,7 @@ def test_driveline_alone_with_wheel_input_table(fmus):
     before, after = r["time"] < 0.0199, (r["time"] > 0.0201) & (r["time"] < 0.0205)
     assert np.allclose(r["wheel.tau_load"][before], 1.0, rtol=1e-12)
     assert np.allclose(r["vehicle.w"][before], 0.0, atol=1e-15)
-    assert np.allclose(r["wheel.tau_load"][after], 1.0 + 2.0 * 0.01, rtol=1e-4)
+    assert np.allclose(r["wheel.tau_load"][after], 1.0 + k * 0.01, rtol=1e-4)
     assert r["vehicle.w"][-1] > 0.0
 
 
@@ -69,12 +70,13 @@ def test_mesh_alone_under_simulate_fmu_with_input_table(fmus):
         assert r["wheel.w"][k] == pytest.approx(core.state.w, rel=1e-9)
         core.step(r["time"][k + 1] - t, W_P * t, W_P, 0.0, load)
     assert np.mean(r["wheel.w"]) == pytest.approx(W_P * 20 / 39, rel=1e-4)
-    assert np.all(r["mesh.n_contact"] >= 3)
+    # crowned pairs: the one or two whose face centre is in the path of contact carry the load
+    assert set(r["mesh.n_contact"]) <= {1, 2}
     assert np.all(r["mesh.impacts_coast"] == 0)
 
 
 def test_harness_reproduces_in_process_system_bit_for_bit(fmus):
-    n, h = 300, 1e-4
+    n, h = 600, 1e-4
     ref = simulate(MeshParameters(), DrivelineParameters(), stop_time=n * h, step=h)
     names = ["GearMeshRattle.wheel.w", "GearMeshRattle.mesh.W", "GearMeshRattle.mesh.delta_peak",
              "GearMeshRattle.mesh.impacts_drive", "Driveline.wheel.tau_load",
