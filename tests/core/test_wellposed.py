@@ -125,9 +125,10 @@ def test_separation_threshold_is_the_quasi_static_one(friction):
 def _impact_statistics(times, speeds, flanks, t_from, t_to, normal_mass, threshold=5e-4):
     """Onsets faster than ``threshold`` per flank, their mean speed and the impact energy
     rate [W] between t_from and t_to.  (Not the median: the speeds cluster at two values, and
-    one impact moving across a window edge flips it between them.)  Slower onsets (micro-bounces right after an impact)
-    are left out of the counts: an adaptive solver steps over a separation of a few
-    microseconds without seeing it, so they are not a property both solvers resolve."""
+    one impact moving across a window edge flips it between them.)  Slower onsets
+    (micro-bounces right after an impact) are left out of the counts: an adaptive solver steps
+    over a separation of a few microseconds without seeing it, so they are not a property both
+    solvers resolve."""
     t, v, f = (np.asarray(x, dtype=float) for x in (times, speeds, flanks))
     window = (t > t_from) & (t <= t_to)
     fast = window & (v > threshold)
