@@ -31,7 +31,12 @@ from raw_fmi import (
     with_payload,
 )
 
+from drive_rattle.driveline import DrivelineParameters
+from drive_rattle_fmi.slave import STATE_FORMAT
+
 H = 1e-4
+#: The default drag, which the Driveline hands to the wheel in steady state.
+DRIVELINE_DRAG = DrivelineParameters().drag
 MESH_INPUTS = {"pinion.phi": 0.0, "pinion.w": 86.92, "pinion.a": 0.0, "wheel.tau_load": 0.15}
 DRIVE_INPUTS = {"wheel.phi": 0.0, "wheel.w": 44.57}
 
@@ -396,7 +401,7 @@ def row_10(fmus, work):
                     "shaft.k": 1e9},
                    {"shaft.k": 1e9, "shaft.c": 0.0, "vehicle.J": 1e-6}):
         inst = started(model, DRIVE_INPUTS, params)
-        drag = 0.15 + params.get("vehicle.drag_viscous", 0.0) * w
+        drag = DRIVELINE_DRAG + params.get("vehicle.drag_viscous", 0.0) * w
         for k in range(20):
             inst.set_named({"wheel.phi": w * k * H})
             assert inst.step(k * H, H) == OK, inst.log[-2:]
@@ -450,7 +455,7 @@ def row_12(fmus, work):
     inst = started(mesh, MESH_INPUTS, steps=4)
     blob = inst.serialized()
     payload = state_payload(blob)
-    assert payload["format"] == 2 and blob[32:70].rstrip(b"\0").decode() == mesh.guid
+    assert payload["format"] == STATE_FORMAT and blob[32:70].rstrip(b"\0").decode() == mesh.guid
 
     def edited(fn):
         p = json.loads(json.dumps(payload))

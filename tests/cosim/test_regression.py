@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.parameters import MeshParameters
 from drive_rattle_cosim.regression import REFERENCE_ROOT, check, read_opt, reference_files
 
 MODELS = ["GearMeshRattle", "Driveline"]
@@ -35,8 +36,9 @@ def test_built_fmus_pass_their_references(fmus, model):
 @pytest.mark.parametrize("model, parameter, value", [
     ("GearMeshRattle", "gear.backlash", 0.10e-3 * 1.01),
     ("GearMeshRattle", "wheel.J", 1.3e-3 * 1.01),
-    ("GearMeshRattle", "contact.r_y", 7.8125 * 1.01),
-    ("Driveline", "shaft.k", 2.0 * 1.01),
+    ("GearMeshRattle", "contact.crowning", MeshParameters().crowning * 1.01),
+    ("GearMeshRattle", "contact.restitution", MeshParameters().restitution * 1.01),
+    ("Driveline", "shaft.k", DrivelineParameters().k_shaft * 1.01),
     ("Driveline", "vehicle.drag", DrivelineParameters().drag * 1.01),
 ])
 def test_one_percent_parameter_change_fails_the_check(fmus, model, parameter, value):
