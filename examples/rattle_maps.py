@@ -33,7 +33,8 @@ RPM = 2 * math.pi / 60
 MAPS = (
     ("backlash_drag",
      "GearMeshRattle.gear.backlash", (0.05e-3, 0.25e-3), 1e3, "normal backlash [mm]",
-     "Driveline.vehicle.drag", (0.10, 0.30), 1.0, "drag torque [N·m]"),
+     # 0.2-1.2 M* of the default wheel and orders (M* = 0.1667 N.m, docs/model.md 6.1)
+     "Driveline.vehicle.drag", (0.0333, 0.2), 1.0, "drag torque [N·m]"),
     ("amplitude_speed",
      "Driveline.engine.amplitude[1]", (100.0, 600.0), 1.0, "order-2 amplitude [rad/s²]",
      "Driveline.engine.w_mean", (700 * RPM, 1500 * RPM), 1 / RPM, "engine speed [rpm]"),

@@ -71,8 +71,12 @@ class HelicalPairGeometry:
         self.eps_alpha = (self.s_end - self.s_start) / self.base_pitch
         self.eps_beta = p.b * math.sin(p.beta) / (math.pi * p.m_n)
         self.eps_gamma = self.eps_alpha + self.eps_beta
-        # Transverse extent of one contact line across the face (= eps_beta * p_bt).
+        # Transverse extent of one contact line across the face (= eps_beta * p_bt).  A span
+        # below the roll resolution is a spur pair's contact line (and its square would
+        # underflow in the crown offset below).
         self.line_span = p.b * math.tan(self.beta_b)
+        if self.line_span < BREAKPOINT_TOLERANCE:
+            self.line_span = 0.0
         # Lead crowning: gap g = crown_factor * d^2 at roll distance d from the face centre
         # (C_b at d = w/2), and the flank radius along the contact line it implies (eq. 6 read
         # as crowning): a distance l along the line is l sin(beta_b) of roll, and the axial face
