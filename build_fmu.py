@@ -2,7 +2,7 @@
 them, and write the system dist/DriveRattle.ssp (both FMUs, their connections, every parameter
 and every input's start value bound).
 
-    python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
+    python build_fmu.py [--out dist] [--update-templates] [--no-fmutool] [--no-native]
     python build_fmu.py --update-docs     # regenerate the interface tables of docs/fmi.md
     python build_fmu.py --update-kernel-header  # regenerate fmu_src/native/rattle_kernel_layout.h
 
@@ -15,6 +15,10 @@ modelDescription_templates/: an interface change fails the build until the templ
 updated (--update-templates) and the diff committed.  Every FMU is checked with fmpy's
 validate_fmu and, when installed, fmu-manipulation-toolbox's `fmutool -check`; any problem
 fails the build.
+
+The same two units implemented entirely in C (no Python at run time; linux64 and win64
+binaries and the C sources) are built into ``<out>/native/`` with their own system
+``DriveRattle.ssp`` (``drive_rattle_fmi.native_fmu``; ``--no-native`` skips them).
 """
 
 from __future__ import annotations
@@ -271,6 +275,28 @@ def write_system(fmus: list[Path], out_dir: Path) -> Path:
     return path
 
 
+#: Where the native (C only) FMUs go, below the output folder.
+NATIVE_SUBDIR = "native"
+
+
+def build_native(out_dir: Path = ROOT / "dist" / NATIVE_SUBDIR, use_fmutool: bool = True,
+                 platforms=("linux64", "win64")) -> list[Path]:
+    """Build and validate the native FMUs (drive_rattle_fmi.native_fmu) into ``out_dir``."""
+    from drive_rattle_cosim.regression import reference_files
+    from drive_rattle_fmi.native_fmu import build_native as build
+
+    def references(name: str) -> list[Path]:
+        files = reference_files(name)
+        return files if all(f.is_file() for f in files) else []
+
+    try:
+        return build(Path(out_dir), cc=c_compiler(), templates=TEMPLATES,
+                     validate=lambda fmu: validate(fmu, use_fmutool), references=references,
+                     platforms=platforms)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
+
+
 DOCS = ROOT / "docs" / "fmi.md"
 
 
@@ -299,6 +325,8 @@ def main(argv=None) -> int:
                     help="regenerate the interface tables in docs/fmi.md and exit")
     ap.add_argument("--update-kernel-header", action="store_true",
                     help="regenerate the compiled kernel's layout header and exit")
+    ap.add_argument("--no-native", action="store_true",
+                    help="skip the native (C only) FMUs of <out>/native/")
     args = ap.parse_args(argv)
     if args.update_kernel_header:
         update_kernel_header()
@@ -312,6 +340,11 @@ def main(argv=None) -> int:
         for fmu in fmus:
             print(f"built and validated {fmu}")
         print(f"wrote the system {write_system(fmus, args.out)}")
+        if not args.no_native:
+            native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool)
+            for fmu in native:
+                print(f"built and validated {fmu} (native: C only, linux64 and win64)")
+            print(f"wrote the system {write_system(native, args.out / NATIVE_SUBDIR)}")
     except BuildError as err:
         print(f"build_fmu.py: {err}", file=sys.stderr)
         return 1

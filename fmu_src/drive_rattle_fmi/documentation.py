@@ -37,8 +37,9 @@ def markdown_interface(slave_cls) -> str:
     return head + body
 
 
-def html_page(slave_cls, how_to_run: str) -> str:
-    """documentation/index.html of the FMU."""
+def html_page(slave_cls, how_to_run: str,
+              build_note: str = "built with pythonfmu and a native status shim (linux64)") -> str:
+    """documentation/index.html of the FMU (``build_note``: how this flavour is built)."""
     rows = "\n".join(
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
         for r in interface_rows(slave_cls))
@@ -50,7 +51,7 @@ vertical-align:top}}table{{border-collapse:collapse}}code{{background:#f4f4f4}}<
 <body>
 <h1>{slave_cls.__name__}</h1>
 <p>{html.escape(slave_cls.description)}</p>
-<p>FMI 2.0 co-simulation, built with pythonfmu and a native status shim (linux64). Default
+<p>FMI 2.0 co-simulation, {build_note}. Default
 experiment: start {exp['startTime']} s, stop {exp['stopTime']} s, communication step
 {exp['stepSize']} s. All values are SI; display units are declared in the modelDescription.</p>
 <h2>How to run</h2>

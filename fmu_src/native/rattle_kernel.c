@@ -1577,3 +1577,33 @@ EXPORT int rk_outputs(const double* model, const double* state, const double* la
         out[O_PAIR_0_W + k] = L.forces[k];
     return RK_ERR_OK;
 }
+
+/*
+ * MeshModel.torques(flank, phi_p, w_p, phi_w, w_w, v_impact) with the friction directions of
+ * the sliding speeds (no substep's signs): out[0] the torque on the wheel, out[1] on the
+ * pinion, out[2] the total normal force.  The static start equilibrium of the native FMUs
+ * (rattle_model.c, WheelStepper.equilibrium_state) solves on it.  Returns RK_ERR_OK, or the
+ * code of the error Python would raise with its message in err.
+ */
+EXPORT int rk_mesh_torques(const double* model, double flank, double phi_p, double w_p,
+                           double phi_w, double w_w, double v_impact, double* out, char* err,
+                           int errlen)
+{
+    Model M;
+    if (!unpack_model(model, &M, err, errlen))
+        return RK_ERR_LAYOUT;
+    Fail f;
+    f.err = err;
+    f.errlen = errlen;
+    f.code = RK_ERR_OK;
+    PairCache cache;
+    cache.n_used = cache.next = 0;
+    if (setjmp(f.jb) != 0)
+        return f.code;
+    Loads L;
+    mesh_loads(&M, &f, &cache, (int64_t)flank, phi_p, w_p, phi_w, w_w, v_impact, NULL, 0, &L);
+    out[0] = L.tau_w;
+    out[1] = L.tau_p;
+    out[2] = L.W;
+    return RK_ERR_OK;
+}
