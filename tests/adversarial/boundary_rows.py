@@ -136,7 +136,7 @@ def row_2(fmus, work):
             b"": "empty",
             b"file:///tmp/a%00b": "%00",
             os.fsencode(foreign / "resources"): f"the resources of FMU '{other}'",
-            os.fsencode(work): "no slavemodule.txt",
+            os.fsencode(work): "not the resources folder of this FMU",
         }
         for location, fragment in cases.items():
             assert model.instantiate(location=location) is None, location
@@ -144,10 +144,12 @@ def row_2(fmus, work):
             assert "fmuResourceLocation" in text and fragment in text, (location, text)
         assert model.instantiate(location=None, default_location=False) is None
         assert "is NULL" in model.pending_log[-1][2]
-        (model.root / "resources" / f"{name}.py").rename(model.root / "resources" / "moved.py")
-        assert model.instantiate() is None
-        assert "lacks the slave module" in model.pending_log[-1][2]
-        (model.root / "resources" / "moved.py").rename(model.root / "resources" / f"{name}.py")
+        if not model.native:  # pythonfmu imports the slave module from its resources
+            resources = model.root / "resources"
+            (resources / f"{name}.py").rename(resources / "moved.py")
+            assert model.instantiate() is None
+            assert "lacks the slave module" in model.pending_log[-1][2]
+            (resources / "moved.py").rename(resources / f"{name}.py")
         healthy(model, MESH_INPUTS if name == "GearMeshRattle" else DRIVE_INPUTS)
 
 
@@ -545,7 +547,8 @@ def row_14(fmus, work):
         model = Model(unpack(fmu, folder))
         inst = model.instantiate(logging_on=1)
         assert inst is not None, model.pending_log
-        assert any("/proc/self/fd/" in m for _, _, m in inst.log), inst.log
+        if not model.native:  # pythonfmu, which would misread the path, gets the descriptor
+            assert any("/proc/self/fd/" in m for _, _, m in inst.log), inst.log
         assert inst.setup() == OK and inst.enter() == OK
         assert inst.set_named(MESH_INPUTS if name == "GearMeshRattle" else DRIVE_INPUTS) == OK
         assert inst.exit() == OK, inst.log

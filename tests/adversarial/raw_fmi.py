@@ -53,6 +53,8 @@ class Model:
         md = ElementTree.parse(self.root / "modelDescription.xml").getroot()
         self.guid = md.get("guid")
         self.identifier = md.find("CoSimulation").get("modelIdentifier")
+        #: the native (C only) flavour: no Python needed where it runs
+        self.native = md.find("CoSimulation").get("needsExecutionTool") == "false"
         self.variables = {}
         self.starts = {}  # start values, as the setters take them
         for sv in md.find("ModelVariables"):

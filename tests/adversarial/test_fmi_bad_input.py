@@ -1,6 +1,8 @@
-"""Bad input through the FMI interface of the built FMUs (the battery runs in a subprocess:
-a crash of the host would be a failed test, not a dead session)."""
+"""Bad input through the FMI interface of the built FMUs of both flavours, pythonfmu and native
+(the battery runs in a subprocess: a crash of the host would be a failed test, not a dead
+session)."""
 
+import functools
 import json
 import subprocess
 import sys
@@ -12,12 +14,38 @@ BATTERY = Path(__file__).with_name("fmi_battery.py")
 ERROR = 3
 
 
-@pytest.fixture(scope="module", params=["GearMeshRattle", "Driveline"])
-def battery(request, fmus):
-    run = subprocess.run([sys.executable, str(BATTERY), str(fmus[request.param])],
+MODELS = ("GearMeshRattle", "Driveline")
+CASES = [(flavour, model) for flavour in ("pythonfmu", "native") for model in MODELS]
+
+
+@functools.cache
+def run_battery(fmu: Path) -> list[dict]:
+    """The battery's results for one built FMU (once per session)."""
+    run = subprocess.run([sys.executable, str(BATTERY), str(fmu)],
                          capture_output=True, text=True, timeout=900)
     assert run.returncode == 0, f"the host process died: rc {run.returncode}\n{run.stderr[-3000:]}"
-    return request.param, json.loads(run.stdout.strip().splitlines()[-1])
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def _fmus(request, flavour: str) -> dict:
+    return request.getfixturevalue("fmus" if flavour == "pythonfmu" else "native_fmus")
+
+
+@pytest.fixture(scope="module", params=CASES, ids=[f"{f}-{m}" for f, m in CASES])
+def battery(request):
+    flavour, model = request.param
+    return model, run_battery(_fmus(request, flavour)[model])
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_both_flavours_answer_every_case_alike(request, model):
+    """The native FMUs give every case of the battery the pythonfmu FMUs' status, message and
+    outcome (state kept, continuation, limits accepted or refused)."""
+    python = run_battery(_fmus(request, "pythonfmu")[model])
+    native = run_battery(_fmus(request, "native")[model])
+    assert [r["case"] for r in native] == [r["case"] for r in python]
+    for p, n in zip(python, native, strict=True):
+        assert n == p
 
 
 def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):

@@ -1,8 +1,9 @@
 """Issue 12: no host crash, leak or half-applied call at the FMI boundary.
 
 Every row of the issue's table is a function of boundary_rows.py and the randomized boundary
-fuzzer is boundary_fuzz.py; both drive the built FMUs through raw ctypes in a child process,
-so that a crash of the host is a failed test (its exit code), not a dead test session.
+fuzzer is boundary_fuzz.py; both drive the built FMUs of both flavours (pythonfmu and native)
+through raw ctypes in a child process, so that a crash of the host is a failed test (its exit
+code), not a dead test session.
 """
 
 from __future__ import annotations
@@ -47,7 +48,8 @@ def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("row", list(ROWS), ids=[f"row{k}-{v}" for k, v in ROWS.items()])
-def test_issue12_row(row, fmus, tmp_path):
+def test_issue12_row(row, flavour_fmus, tmp_path):
+    fmus = flavour_fmus
     run = _child([ROWS_SCRIPT, row, fmus["GearMeshRattle"], fmus["Driveline"], tmp_path], 300)
     assert run.returncode == 0, (
         f"row {row} ({ROWS[row]}) failed: exit code {run.returncode}"
@@ -57,11 +59,11 @@ def test_issue12_row(row, fmus, tmp_path):
 
 
 @pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
-def test_boundary_fuzzer(name, fmus, tmp_path):
-    """Random call sequences against each FMU (a new seed every run, printed; set
-    RATTLE_FUZZ_SEED to replay one)."""
+def test_boundary_fuzzer(name, flavour_fmus, tmp_path):
+    """Random call sequences against each FMU of each flavour (a new seed every run, printed;
+    set RATTLE_FUZZ_SEED to replay one)."""
     seed = int(os.environ.get("RATTLE_FUZZ_SEED", random.randrange(2**32)))
-    run = _child([FUZZ_SCRIPT, fmus[name], FUZZ_EXAMPLES, seed, tmp_path], 600)
+    run = _child([FUZZ_SCRIPT, flavour_fmus[name], FUZZ_EXAMPLES, seed, tmp_path], 600)
     calls = [line for line in run.stderr.splitlines() if line.startswith("CALL ")]
     report = [line for line in run.stderr.splitlines() if not line.startswith("CALL ")]
     assert run.returncode == 0, (

@@ -1,0 +1,433 @@
+/*
+ * fmu_host.c - a minimal native FMI 2.0 co-simulation host, as system-simulation tools are, for
+ * Linux and Windows: it loads an FMU's binary (dlopen / LoadLibraryW), drives it with inputs
+ * read from a CSV file and writes its outputs to another CSV file.  C99 with the FMI 2.0
+ * headers (fmi2FunctionTypes.h, shipped with fmpy and inside every native FMU's sources/).
+ * No Python anywhere: on Linux it fails (exit code 3) if a libpython is mapped into the
+ * process at the end of the run.  Used by tests/native (docs/tools.md, "Native (C/C++)
+ * hosts").
+ *
+ * Usage:
+ *   fmu_host BINARY RESOURCES GUID INPUTS_CSV OUTPUTS_CSV INPUT_VRS OUTPUT...
+ *
+ *   BINARY      the FMU binary, e.g. <unpacked>/binaries/linux64/GearMeshRattle.so or
+ *               <unpacked>\binaries\win64\GearMeshRattle.dll (UTF-8)
+ *   RESOURCES   fmuResourceLocation: a file:// URI of <unpacked>/resources (percent-encoded)
+ *               or its absolute path
+ *   GUID        the guid attribute of modelDescription.xml
+ *   INPUTS_CSV  "time,<input names...>", then one row per communication point t_0 < ... <
+ *               t_N: the time and the input values to hold over the step from t_k to t_{k+1}
+ *               (full-precision decimals, e.g. Python repr()); the last row only defines t_N
+ *   OUTPUTS_CSV written: "time,<output names...>", one row per communication point t_0 (after
+ *               initialization) to t_N; Reals "%.17g" (exact round trip), Integers "%d"
+ *   INPUT_VRS   comma-separated value references of the Real inputs, in column order
+ *   OUTPUT      R:<vr>:<name> (fmi2GetReal) or I:<vr>:<name> (fmi2GetInteger), per column
+ *
+ * Call sequence: fmi2Instantiate(fmi2CoSimulation, visible = false, loggingOn = false),
+ * fmi2SetupExperiment(start t_0), fmi2EnterInitializationMode, fmi2SetReal(row 0),
+ * fmi2ExitInitializationMode, record t_0; for k = 0 .. N-1: fmi2SetReal(row k),
+ * fmi2DoStep(t_k, t_{k+1} - t_k, true), record t_{k+1}; fmi2Terminate, fmi2FreeInstance.
+ * Anything but fmi2OK ends the run with a message on stderr and exit code 1 (2 for a usage or
+ * input-file error).  The FMU's log messages go to stderr as "[<status>] <category>: <text>".
+ */
+#if !defined(_WIN32)
+#define _POSIX_C_SOURCE 200809L
+#endif
+#if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
+#define __USE_MINGW_ANSI_STDIO 1
+#endif
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(_WIN32)
+#include <windows.h>
+#else
+#include <dlfcn.h>
+#endif
+
+#include "fmi2FunctionTypes.h"
+
+#define API(X)                                                                                 \
+    X(fmi2GetVersion) X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment)            \
+    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate)              \
+    X(fmi2GetReal) X(fmi2GetInteger) X(fmi2SetReal) X(fmi2DoStep)
+
+typedef struct {
+#define MEMBER(name) name##TYPE* name;
+    API(MEMBER)
+#undef MEMBER
+} Api;
+
+static const char* status_name(int status)
+{
+    static const char* names[] = {"OK", "Warning", "Discard", "Error", "Fatal", "Pending"};
+    return status >= 0 && status <= 5 ? names[status] : "unknown status";
+}
+
+static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
+                   fmi2String category, fmi2String message, ...)
+{
+    va_list ap;
+    (void)env;
+    (void)instance;
+    fprintf(stderr, "[%s] %s: ", status_name(status), category ? category : "");
+    va_start(ap, message);
+    vfprintf(stderr, message ? message : "", ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    fflush(stderr);
+}
+
+static void* xrealloc(void* p, size_t size)
+{
+    void* q = realloc(p, size ? size : 1);
+    if (q == NULL) {
+        fprintf(stderr, "fmu_host: out of memory\n");
+        exit(2);
+    }
+    return q;
+}
+
+static int parse_double(const char* text, double* out)
+{
+    char* end;
+    errno = 0;
+    *out = strtod(text, &end);
+    return end == text || *end != '\0' || (errno == ERANGE && isinf(*out));
+}
+
+static int parse_vr(const char* text, char** end, fmi2ValueReference* out)
+{
+    unsigned long v;
+    if (*text < '0' || *text > '9') return 1;
+    errno = 0;
+    v = strtoul(text, end, 10);
+    if (errno != 0 || v > 0xFFFFFFFFUL) return 1;
+    *out = (fmi2ValueReference)v;
+    return 0;
+}
+
+static size_t split(char* line, char** fields, size_t max_fields)
+{
+    size_t n = 0;
+    char* p = line;
+    for (;;) {
+        char* comma = strchr(p, ',');
+        if (n <= max_fields) fields[n] = p;
+        n++;
+        if (comma == NULL) break;
+        *comma = '\0';
+        p = comma + 1;
+    }
+    return n;
+}
+
+static int read_line(FILE* f, char** buf, size_t* cap)
+{
+    size_t len = 0;
+    int c;
+    while ((c = fgetc(f)) != EOF && c != '\n') {
+        if (len + 2 > *cap) {
+            *cap = *cap ? 2 * *cap : 256;
+            *buf = xrealloc(*buf, *cap);
+        }
+        (*buf)[len++] = (char)c;
+    }
+    if (c == EOF && len == 0) return 0;
+    if (*buf == NULL) *buf = xrealloc(NULL, *cap = 256);
+    if (len > 0 && (*buf)[len - 1] == '\r') len--;
+    (*buf)[len] = '\0';
+    return 1;
+}
+
+typedef struct {
+    size_t n_rows, n_inputs;
+    double* time;
+    double* values;
+} Inputs;
+
+static int read_inputs(const char* path, size_t n_inputs, Inputs* in)
+{
+    FILE* f = fopen(path, "r");
+    char* line = NULL;
+    size_t cap = 0, lineno = 1, rows_cap = 0;
+    char** fields = xrealloc(NULL, (n_inputs + 2) * sizeof *fields);
+    int err = 1;
+    memset(in, 0, sizeof *in);
+    in->n_inputs = n_inputs;
+    if (f == NULL) {
+        fprintf(stderr, "fmu_host: cannot open %s: %s\n", path, strerror(errno));
+        goto done;
+    }
+    if (!read_line(f, &line, &cap) || split(line, fields, n_inputs + 1) != n_inputs + 1
+        || strcmp(fields[0], "time") != 0) {
+        fprintf(stderr, "fmu_host: %s:1: header must be 'time' and %zu input names\n", path,
+                n_inputs);
+        goto done;
+    }
+    while (read_line(f, &line, &cap)) {
+        lineno++;
+        if (line[0] == '\0') continue;
+        if (split(line, fields, n_inputs + 1) != n_inputs + 1) {
+            fprintf(stderr, "fmu_host: %s:%zu: expected %zu fields\n", path, lineno, n_inputs + 1);
+            goto done;
+        }
+        if (in->n_rows == rows_cap) {
+            rows_cap = rows_cap ? 2 * rows_cap : 1024;
+            in->time = xrealloc(in->time, rows_cap * sizeof *in->time);
+            in->values = xrealloc(in->values, rows_cap * n_inputs * sizeof *in->values);
+        }
+        for (size_t j = 0; j <= n_inputs; j++) {
+            double v;
+            if (parse_double(fields[j], &v)) {
+                fprintf(stderr, "fmu_host: %s:%zu: field %zu '%s' is not a number\n", path,
+                        lineno, j + 1, fields[j]);
+                goto done;
+            }
+            if (j == 0)
+                in->time[in->n_rows] = v;
+            else
+                in->values[in->n_rows * n_inputs + j - 1] = v;
+        }
+        if (!isfinite(in->time[in->n_rows])
+            || (in->n_rows > 0 && !(in->time[in->n_rows] > in->time[in->n_rows - 1]))) {
+            fprintf(stderr, "fmu_host: %s:%zu: times must be finite and increasing\n", path,
+                    lineno);
+            goto done;
+        }
+        in->n_rows++;
+    }
+    err = in->n_rows == 0;
+    if (err) fprintf(stderr, "fmu_host: %s has no data rows\n", path);
+done:
+    if (f != NULL) fclose(f);
+    free(line);
+    free(fields);
+    return err;
+}
+
+typedef struct {
+    size_t n, n_real, n_int;
+    char* kind;
+    const char** name;
+    fmi2ValueReference *real_vr, *int_vr;
+    double* real;
+    fmi2Integer* integer;
+} Outputs;
+
+static int parse_outputs(int argc, char** argv, Outputs* out)
+{
+    out->n = (size_t)argc;
+    out->n_real = out->n_int = 0;
+    out->kind = xrealloc(NULL, out->n);
+    out->name = xrealloc(NULL, out->n * sizeof *out->name);
+    out->real_vr = xrealloc(NULL, out->n * sizeof *out->real_vr);
+    out->int_vr = xrealloc(NULL, out->n * sizeof *out->int_vr);
+    out->real = xrealloc(NULL, out->n * sizeof *out->real);
+    out->integer = xrealloc(NULL, out->n * sizeof *out->integer);
+    for (int i = 0; i < argc; i++) {
+        const char* a = argv[i];
+        char* end;
+        fmi2ValueReference vr;
+        if ((a[0] != 'R' && a[0] != 'I') || a[1] != ':' || parse_vr(a + 2, &end, &vr)
+            || *end != ':' || end[1] == '\0') {
+            fprintf(stderr, "fmu_host: output '%s' must be R:<vr>:<name> or I:<vr>:<name>\n", a);
+            return 1;
+        }
+        out->kind[i] = a[0];
+        out->name[i] = end + 1;
+        if (a[0] == 'R')
+            out->real_vr[out->n_real++] = vr;
+        else
+            out->int_vr[out->n_int++] = vr;
+    }
+    return 0;
+}
+
+typedef struct {
+    const Api* api;
+    fmi2Component c;
+    const Outputs* out;
+    FILE* csv;
+} Run;
+
+static int failed(fmi2Status status, const char* call, double t)
+{
+    if (status == fmi2OK) return 0;
+    if (isnan(t))
+        fprintf(stderr, "fmu_host: %s returned %s\n", call, status_name(status));
+    else
+        fprintf(stderr, "fmu_host: %s at t = %.17g s returned %s\n", call, t, status_name(status));
+    return 1;
+}
+
+static int record(Run* r, double t)
+{
+    const Outputs* o = r->out;
+    size_t ir = 0, ii = 0;
+    if (o->n_real
+        && failed(r->api->fmi2GetReal(r->c, o->real_vr, o->n_real, o->real), "fmi2GetReal", t))
+        return 1;
+    if (o->n_int
+        && failed(r->api->fmi2GetInteger(r->c, o->int_vr, o->n_int, o->integer),
+                  "fmi2GetInteger", t))
+        return 1;
+    fprintf(r->csv, "%.17g", t);
+    for (size_t i = 0; i < o->n; i++) {
+        if (o->kind[i] == 'R')
+            fprintf(r->csv, ",%.17g", o->real[ir++]);
+        else
+            fprintf(r->csv, ",%d", (int)o->integer[ii++]);
+    }
+    fputc('\n', r->csv);
+    return ferror(r->csv) != 0;
+}
+
+static int simulate(Run* r, const Inputs* in, const fmi2ValueReference* input_vr)
+{
+    const Api* api = r->api;
+    size_t m = in->n_inputs;
+    double t0 = in->time[0];
+    if (failed(api->fmi2SetupExperiment(r->c, 0, 0.0, t0, 0, 0.0), "fmi2SetupExperiment", NAN)
+        || failed(api->fmi2EnterInitializationMode(r->c), "fmi2EnterInitializationMode", NAN)
+        || failed(api->fmi2SetReal(r->c, input_vr, m, in->values), "fmi2SetReal", t0)
+        || failed(api->fmi2ExitInitializationMode(r->c), "fmi2ExitInitializationMode", NAN)
+        || record(r, t0))
+        return 1;
+    for (size_t k = 0; k + 1 < in->n_rows; k++) {
+        double t = in->time[k], h = in->time[k + 1] - in->time[k];
+        if (failed(api->fmi2SetReal(r->c, input_vr, m, in->values + k * m), "fmi2SetReal", t)
+            || failed(api->fmi2DoStep(r->c, t, h, 1), "fmi2DoStep", t)
+            || record(r, in->time[k + 1]))
+            return 1;
+    }
+    return failed(api->fmi2Terminate(r->c), "fmi2Terminate", NAN);
+}
+
+/* ------------------------------------------------------------------ the library */
+#if defined(_WIN32)
+typedef HMODULE Library;
+static Library open_library(const char* path)
+{
+    wchar_t wide[4096];
+    if (MultiByteToWideChar(CP_UTF8, 0, path, -1, wide, 4096) == 0) return NULL;
+    return LoadLibraryW(wide);
+}
+static void* symbol(Library lib, const char* name)
+{
+    FARPROC f = GetProcAddress(lib, name);
+    void* p;
+    memcpy(&p, &f, sizeof p);
+    return p;
+}
+static void library_error(const char* path)
+{
+    fprintf(stderr, "fmu_host: cannot load %s: error %lu\n", path, (unsigned long)GetLastError());
+}
+#else
+typedef void* Library;
+static Library open_library(const char* path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void* symbol(Library lib, const char* name) { return dlsym(lib, name); }
+static void library_error(const char* path)
+{
+    fprintf(stderr, "fmu_host: cannot load %s: %s\n", path, dlerror());
+}
+#endif
+
+/* Linux: 1 if a libpython is mapped into this process. */
+static int python_loaded(void)
+{
+#if defined(__linux__)
+    FILE* maps = fopen("/proc/self/maps", "r");
+    char line[4096];
+    int found = 0;
+    if (maps == NULL) return 0;
+    while (fgets(line, sizeof line, maps) != NULL)
+        if (strstr(line, "libpython") != NULL) found = 1;
+    fclose(maps);
+    return found;
+#else
+    return 0;
+#endif
+}
+
+int main(int argc, char** argv)
+{
+    Api api;
+    Inputs in;
+    Outputs out;
+    Run run;
+    fmi2ValueReference* input_vr;
+    size_t n_inputs = 0;
+    const char* p;
+    char* end;
+    Library lib;
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    int rc;
+    if (argc < 8) {
+        fprintf(stderr, "usage: %s BINARY RESOURCES GUID INPUTS_CSV OUTPUTS_CSV INPUT_VRS "
+                        "OUTPUT...\n  OUTPUT: R:<vr>:<name> | I:<vr>:<name>\n", argv[0]);
+        return 2;
+    }
+    input_vr = xrealloc(NULL, (strlen(argv[6]) / 2 + 1) * sizeof *input_vr);
+    for (p = argv[6];; p = end + 1) {
+        if (parse_vr(p, &end, &input_vr[n_inputs]) || (*end != ',' && *end != '\0')) {
+            fprintf(stderr, "fmu_host: INPUT_VRS '%s' must be comma-separated numbers\n",
+                    argv[6]);
+            return 2;
+        }
+        n_inputs++;
+        if (*end == '\0') break;
+    }
+    if (read_inputs(argv[4], n_inputs, &in) || parse_outputs(argc - 7, argv + 7, &out)) return 2;
+    lib = open_library(argv[1]);
+    if (lib == NULL) {
+        library_error(argv[1]);
+        return 1;
+    }
+#define LOAD(name)                                                                             \
+    {                                                                                          \
+        void* s = symbol(lib, #name);                                                          \
+        if (s == NULL) {                                                                       \
+            fprintf(stderr, "fmu_host: %s has no symbol %s\n", argv[1], #name);                \
+            return 1;                                                                          \
+        }                                                                                      \
+        memcpy(&api.name, &s, sizeof s);                                                       \
+    }
+    API(LOAD)
+#undef LOAD
+    if (strcmp(api.fmi2GetVersion(), "2.0") != 0) {
+        fprintf(stderr, "fmu_host: fmi2GetVersion() = '%s', not 2.0\n", api.fmi2GetVersion());
+        return 1;
+    }
+    run.api = &api;
+    run.out = &out;
+    run.c = api.fmi2Instantiate("fmu_host", fmi2CoSimulation, argv[3], argv[2], &callbacks,
+                                fmi2False, fmi2False);
+    if (run.c == NULL) {
+        fprintf(stderr, "fmu_host: fmi2Instantiate returned NULL\n");
+        return 1;
+    }
+    run.csv = fopen(argv[5], "w");
+    if (run.csv == NULL) {
+        fprintf(stderr, "fmu_host: cannot write %s: %s\n", argv[5], strerror(errno));
+        return 2;
+    }
+    fprintf(run.csv, "time");
+    for (size_t i = 0; i < out.n; i++) fprintf(run.csv, ",%s", out.name[i]);
+    fputc('\n', run.csv);
+    rc = simulate(&run, &in, input_vr);
+    api.fmi2FreeInstance(run.c);
+    if (fclose(run.csv) != 0) rc = 1;
+    if (rc == 0 && python_loaded()) {
+        fprintf(stderr, "fmu_host: a libpython is loaded in this process\n");
+        return 3;
+    }
+    return rc;
+}
