@@ -52,19 +52,6 @@ int rk_mesh_torques(const double* model, double flank, double phi_p, double w_p,
 
 /* ------------------------------------------------------------------ Python semantics */
 static double py_max(double a, double b) { return b > a ? b : a; } /* max(a, b) */
-static double py_min(double a, double b) { return b < a ? b : a; } /* min(a, b) */
-
-/* a % b of floats (CPython's float_rem) */
-static double py_mod(double v, double w)
-{
-    double mod = fmod(v, w);
-    if (mod != 0.0) {
-        if ((w < 0.0) != (mod < 0.0)) mod += w;
-    }
-    else
-        mod = copysign(0.0, w);
-    return mod;
-}
 
 static void put_tuple(RnText* t, const double* v, int n)
 {
@@ -74,95 +61,6 @@ static void put_tuple(RnText* t, const double* v, int n)
         rn_put_repr(t, v[k]);
     }
     rn_puts(t, n == 1 ? ",)" : ")");
-}
-
-/* roots.brent (bracketing root finder: bisection safeguarding secant and inverse quadratic
- * steps); fa/fb computed when not given.  0 with the ValueError in err if [a, b] does not
- * bracket a root. */
-typedef double (*RootFn)(void* ctx, double x);
-
-static int brent(RootFn f, void* ctx, double a, double b, const double* fa_given,
-                 const double* fb_given, double xtol, double rtol, double* root, RnError* err)
-{
-    double fa = fa_given == NULL ? f(ctx, a) : *fa_given;
-    double fb = fb_given == NULL ? f(ctx, b) : *fb_given;
-    if (fa == 0.0) {
-        *root = a;
-        return 1;
-    }
-    if (fb == 0.0) {
-        *root = b;
-        return 1;
-    }
-    if ((fa > 0.0) == (fb > 0.0)) {
-        RnText* t = rn_error_value(err);
-        rn_puts(t, "brent: f(");
-        rn_put_repr(t, a);
-        rn_puts(t, ") = ");
-        rn_put_repr(t, fa);
-        rn_puts(t, " and f(");
-        rn_put_repr(t, b);
-        rn_puts(t, ") = ");
-        rn_put_repr(t, fb);
-        rn_puts(t, " do not bracket a root");
-        return 0;
-    }
-    double c = a, fc = fa;
-    double d = b - a, e = b - a;
-    for (int it = 0; it < RN_ROOTS_MAX_ITERATIONS; it++) {
-        if ((fb > 0.0) == (fc > 0.0)) {
-            c = a;
-            fc = fa;
-            d = e = b - a;
-        }
-        if (fabs(fc) < fabs(fb)) {
-            double na = b, nfa = fb, nb = c, nfb = fc;
-            a = na;
-            fa = nfa;
-            b = nb;
-            fb = nfb;
-            c = na;
-            fc = nfa;
-        }
-        double tol = 2.0 * rtol * fabs(b) + 0.5 * xtol;
-        double m = 0.5 * (c - b);
-        if (fabs(m) <= tol || fb == 0.0) {
-            *root = b;
-            return 1;
-        }
-        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
-            double s = fb / fa;
-            double p, q;
-            if (a == c) {
-                p = 2.0 * m * s;
-                q = 1.0 - s;
-            }
-            else {
-                q = fa / fc;
-                double r = fb / fc;
-                p = s * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (s - 1.0);
-            }
-            if (p > 0.0)
-                q = -q;
-            else
-                p = -p;
-            if (2.0 * p < py_min(3.0 * m * q - fabs(tol * q), fabs(e * q))) {
-                e = d;
-                d = p / q;
-            }
-            else
-                d = e = m;
-        }
-        else
-            d = e = m;
-        a = b;
-        fa = fb;
-        b += fabs(d) > tol ? d : copysign(tol, m);
-        fb = f(ctx, b);
-    }
-    *root = b;
-    return 1;
 }
 
 /* The value of a Real / Integer / Boolean variable. */
@@ -455,6 +353,110 @@ static const char* const START_NAMES[3] = {"pinion.phi", "pinion.w", "wheel.tau_
 int rn_unit_is_motion_input(unsigned vr)
 {
     return vr == RN_VR_PINION_PHI || vr == RN_VR_PINION_W || vr == RN_VR_PINION_A;
+}
+
+/* ------------------------------------------------------------------ Python semantics */
+static double py_min(double a, double b) { return b < a ? b : a; } /* min(a, b) */
+
+/* a % b of floats (CPython's float_rem) */
+static double py_mod(double v, double w)
+{
+    double mod = fmod(v, w);
+    if (mod != 0.0) {
+        if ((w < 0.0) != (mod < 0.0)) mod += w;
+    }
+    else
+        mod = copysign(0.0, w);
+    return mod;
+}
+
+/* roots.brent (bracketing root finder: bisection safeguarding secant and inverse quadratic
+ * steps); fa/fb computed when not given.  0 with the ValueError in err if [a, b] does not
+ * bracket a root. */
+typedef double (*RootFn)(void* ctx, double x);
+
+static int brent(RootFn f, void* ctx, double a, double b, const double* fa_given,
+                 const double* fb_given, double xtol, double rtol, double* root, RnError* err)
+{
+    double fa = fa_given == NULL ? f(ctx, a) : *fa_given;
+    double fb = fb_given == NULL ? f(ctx, b) : *fb_given;
+    if (fa == 0.0) {
+        *root = a;
+        return 1;
+    }
+    if (fb == 0.0) {
+        *root = b;
+        return 1;
+    }
+    if ((fa > 0.0) == (fb > 0.0)) {
+        RnText* t = rn_error_value(err);
+        rn_puts(t, "brent: f(");
+        rn_put_repr(t, a);
+        rn_puts(t, ") = ");
+        rn_put_repr(t, fa);
+        rn_puts(t, " and f(");
+        rn_put_repr(t, b);
+        rn_puts(t, ") = ");
+        rn_put_repr(t, fb);
+        rn_puts(t, " do not bracket a root");
+        return 0;
+    }
+    double c = a, fc = fa;
+    double d = b - a, e = b - a;
+    for (int it = 0; it < RN_ROOTS_MAX_ITERATIONS; it++) {
+        if ((fb > 0.0) == (fc > 0.0)) {
+            c = a;
+            fc = fa;
+            d = e = b - a;
+        }
+        if (fabs(fc) < fabs(fb)) {
+            double na = b, nfa = fb, nb = c, nfb = fc;
+            a = na;
+            fa = nfa;
+            b = nb;
+            fb = nfb;
+            c = na;
+            fc = nfa;
+        }
+        double tol = 2.0 * rtol * fabs(b) + 0.5 * xtol;
+        double m = 0.5 * (c - b);
+        if (fabs(m) <= tol || fb == 0.0) {
+            *root = b;
+            return 1;
+        }
+        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
+            double s = fb / fa;
+            double p, q;
+            if (a == c) {
+                p = 2.0 * m * s;
+                q = 1.0 - s;
+            }
+            else {
+                q = fa / fc;
+                double r = fb / fc;
+                p = s * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
+                q = (q - 1.0) * (r - 1.0) * (s - 1.0);
+            }
+            if (p > 0.0)
+                q = -q;
+            else
+                p = -p;
+            if (2.0 * p < py_min(3.0 * m * q - fabs(tol * q), fabs(e * q))) {
+                e = d;
+                d = p / q;
+            }
+            else
+                d = e = m;
+        }
+        else
+            d = e = m;
+        a = b;
+        fa = fb;
+        b += fabs(d) > tol ? d : copysign(tol, m);
+        fb = f(ctx, b);
+    }
+    *root = b;
+    return 1;
 }
 
 /* ------------------------------------------------------------------ geometry.py */

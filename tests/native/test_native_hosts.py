@@ -1,0 +1,224 @@
+"""The native FMUs in native hosts, without Python: fmu_host.c (a minimal FMI 2.0 host in C)
+runs each FMU on its regression inputs
+
+* on linux64, compiled with gcc, in an empty environment (no PATH to a Python, no
+  LD_PRELOAD): its outputs equal fmpy's run of the same calls bit for bit, and no libpython
+  is in the process (the host checks /proc/self/maps);
+* on linux64 with the binary compiled here from the FMU's sources/ alone: the same outputs;
+* on win64 under wine, host and FMU cross-compiled: the outputs pass the committed regression
+  references (another C library, so not bit for bit).  Skipped with the reason where wine is
+  missing, unless RATTLE_REQUIRE_WINE=1 (CI sets it), which makes that a failure.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy import read_model_description
+
+from drive_rattle_cosim.harness import Unit
+from drive_rattle_cosim.regression import read_opt, reference_files
+from drive_rattle_fmi.native_fmu import C_SOURCES, fmi_headers_dir, zig_cc
+
+HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
+MODELS = ("GearMeshRattle", "Driveline")
+STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+
+
+def gcc() -> str:
+    path = shutil.which("gcc")
+    if path is None:
+        pytest.skip("gcc is not installed: the native host cannot be compiled")
+    return path
+
+
+def interface(fmu: Path) -> tuple[str, str, list[str], list[tuple[str, str, int]]]:
+    """(model identifier, GUID, Real input names, [(output name, type, vr)])."""
+    md = read_model_description(str(fmu))
+    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+    outputs = [(v.name, v.type, v.valueReference) for v in md.modelVariables
+               if v.causality == "output"]
+    return md.coSimulation.modelIdentifier, md.guid, inputs, outputs
+
+
+def host_arguments(fmu: Path, binary: str, resources: str, inputs: str, outputs: str):
+    _, guid, input_names, outs = interface(fmu)
+    md = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+    return [binary, resources, guid, inputs, outputs,
+            ",".join(str(md[n].valueReference) for n in input_names),
+            *(f"{kind[0]}:{vr}:{name}" for name, kind, vr in outs)]
+
+
+def read_table(path: Path, outputs) -> list[list]:
+    lines = path.read_text(encoding="utf-8").splitlines()
+    assert lines[0] == ",".join(["time", *(n for n, _, _ in outputs)])
+    return [[float(x) if k == 0 or outputs[k - 1][1] == "Real" else int(x)
+             for k, x in enumerate(line.split(","))] for line in lines[1:]]
+
+
+def bits(table) -> list[list[str]]:
+    return [[x.hex() if isinstance(x, float) else str(x) for x in row] for row in table]
+
+
+def input_rows(model: str) -> list[list[float]]:
+    lines = reference_files(model)[0].read_text(encoding="utf-8").splitlines()
+    return [[float(x) for x in line.split(",")] for line in lines[1:]]
+
+
+def run_fmpy(fmu: Path, rows) -> list[list]:
+    """fmu_host.c's call sequence through fmpy in this process."""
+    _, _, input_names, outputs = interface(fmu)
+    unit = Unit(fmu, "fmpy_reference")
+    try:
+        s = unit.slave
+        real = [vr for _, kind, vr in outputs if kind == "Real"]
+        ints = [vr for _, kind, vr in outputs if kind == "Integer"]
+
+        def record(t: float) -> list:
+            r, i = iter(s.getReal(real)), iter(s.getInteger(ints) if ints else [])
+            return [t] + [next(r) if kind == "Real" else next(i) for _, kind, _ in outputs]
+
+        s.setupExperiment(startTime=rows[0][0])
+        s.enterInitializationMode()
+        unit.set(dict(zip(input_names, rows[0][1:], strict=True)))
+        s.exitInitializationMode()
+        table = [record(rows[0][0])]
+        for row, following in zip(rows, rows[1:], strict=False):
+            unit.set(dict(zip(input_names, row[1:], strict=True)))
+            s.doStep(row[0], following[0] - row[0])
+            table.append(record(following[0]))
+        assert not unit.messages, unit.messages
+        return table
+    finally:
+        unit.close()
+
+
+@pytest.fixture(scope="module")
+def linux_host(tmp_path_factory) -> Path:
+    exe = tmp_path_factory.mktemp("fmu_host") / "fmu_host"
+    cc = subprocess.run([gcc(), *STRICT, "-I", str(fmi_headers_dir()), "-o", str(exe),
+                         str(HOST_SOURCE), "-ldl"], capture_output=True, text=True, timeout=120)
+    assert cc.returncode == 0, f"gcc failed:\n{cc.stderr}"
+    return exe
+
+
+def run_linux_host(host: Path, fmu: Path, unpacked: Path, work: Path) -> subprocess.CompletedProcess:
+    model = interface(fmu)[0]
+    args = host_arguments(fmu, str(unpacked / "binaries" / "linux64" / f"{model}.so"),
+                          (unpacked / "resources").as_uri(), str(reference_files(model)[0]),
+                          str(work / "outputs.csv"))
+    # what a system-simulation tool's process may have: nothing of Python at all
+    return subprocess.run([str(host), *args], env={"PATH": "/nonexistent"}, capture_output=True,
+                          text=True, timeout=300)
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_linux_host_without_python(linux_host, native_fmus, model, tmp_path):
+    fmu = native_fmus[model]
+    unpacked = tmp_path / "unpacked ä"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(unpacked)
+    run = run_linux_host(linux_host, fmu, unpacked, tmp_path)
+    assert run.returncode == 0, f"fmu_host failed (rc {run.returncode}):\n{run.stderr}"
+    assert not run.stderr, run.stderr  # nothing logged
+    table = read_table(tmp_path / "outputs.csv", interface(fmu)[3])
+    rows = input_rows(model)
+    assert len(table) == len(rows) == 501
+    assert bits(table) == bits(run_fmpy(fmu, rows))
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_sources_alone_compile_into_a_working_fmu(linux_host, native_fmus, model, tmp_path):
+    """The FMU's sources/ (what <SourceFiles> lists, with the headers beside them) compile
+    alone, warning-free, into a binary that gives the shipped binary's outputs bit for bit."""
+    fmu = native_fmus[model]
+    unpacked = tmp_path / "unpacked"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(unpacked)
+    sources = unpacked / "sources"
+    own = tmp_path / f"{model}.so"
+    cc = subprocess.run([gcc(), *STRICT, "-ffp-contract=off", "-fPIC", "-shared", "-o",
+                         str(own), *(str(sources / s) for s in C_SOURCES), "-lm"],
+                        capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert cc.returncode == 0, f"compiling the FMU's sources failed:\n{cc.stderr}"
+    shipped = tmp_path / "shipped"
+    shipped.mkdir()
+    assert run_linux_host(linux_host, fmu, unpacked, shipped).returncode == 0
+    (unpacked / "binaries" / "linux64" / f"{model}.so").write_bytes(own.read_bytes())
+    run = run_linux_host(linux_host, fmu, unpacked, tmp_path)
+    assert run.returncode == 0 and not run.stderr, run.stderr
+    outputs = interface(fmu)[3]
+    assert bits(read_table(tmp_path / "outputs.csv", outputs)) == bits(
+        read_table(shipped / "outputs.csv", outputs))
+
+
+# ------------------------------------------------------------------ win64 under wine
+def wine() -> str:
+    path = shutil.which("wine64") or shutil.which("wine")
+    if path is None:
+        reason = ("wine is not installed: the win64 binary is not run here (Debian/Ubuntu: "
+                  "`apt-get install wine64`; CI installs it)")
+        if os.environ.get("RATTLE_REQUIRE_WINE"):
+            pytest.fail(f"RATTLE_REQUIRE_WINE is set but {reason}")
+        pytest.skip(reason)
+    return path
+
+
+def windows_path(path: Path) -> str:
+    """The path under wine's drive Z: (the root of the Linux file system)."""
+    return "Z:" + str(path).replace("/", "\\")
+
+
+@pytest.fixture(scope="module")
+def wine_env(tmp_path_factory) -> dict:
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    return {**os.environ, "WINEPREFIX": str(prefix), "WINEDEBUG": "-all",
+            "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no .NET/Gecko installers in a new prefix
+
+
+@pytest.fixture(scope="module")
+def win64_host(tmp_path_factory) -> Path:
+    wine()
+    exe = tmp_path_factory.mktemp("fmu_host_win64") / "fmu_host.exe"
+    cc = subprocess.run([*zig_cc("x86_64-windows-gnu"), *STRICT, "-I", str(fmi_headers_dir()),
+                         "-o", str(exe), str(HOST_SOURCE)], capture_output=True, text=True,
+                        timeout=900, cwd=exe.parent)
+    assert cc.returncode == 0, f"cross-compiling fmu_host.c failed:\n{cc.stderr}"
+    return exe
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_win64_binary_under_wine(win64_host, wine_env, native_fmus, model, tmp_path):
+    fmu = native_fmus[model]
+    unpacked = tmp_path / "unpacked"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(unpacked)
+    resources = "file:///" + windows_path(unpacked / "resources").replace("\\", "/")
+    args = host_arguments(fmu, windows_path(unpacked / "binaries" / "win64" / f"{model}.dll"),
+                          resources, windows_path(reference_files(model)[0]),
+                          windows_path(tmp_path / "outputs.csv"))
+    run = subprocess.run([wine(), str(win64_host), *args], env=wine_env, capture_output=True,
+                         text=True, timeout=600, cwd=tmp_path)
+    logged = [line for line in run.stderr.splitlines() if line.startswith("[")]
+    assert run.returncode == 0, f"fmu_host.exe failed (rc {run.returncode}):\n{run.stderr[-3000:]}"
+    assert not logged, logged
+    outputs = interface(fmu)[3]
+    table = np.array(read_table(tmp_path / "outputs.csv", outputs), dtype=float)
+    _, ref_csv, opt_file = reference_files(model)
+    opt = read_opt(opt_file)
+    ref_lines = ref_csv.read_text(encoding="utf-8").splitlines()
+    names = ref_lines[0].split(",")
+    ref = np.array([[float(x) for x in line.split(",")] for line in ref_lines[1:]])
+    columns = ["time", *(n for n, _, _ in outputs)]
+    assert table.shape == ref.shape and sorted(names) == sorted(columns)
+    assert np.allclose(table[:, 0], ref[:, 0], rtol=1e-12, atol=0.0)  # fmpy sums its times
+    for k, name in enumerate(names[1:], start=1):  # the regression kit's check
+        r, y = ref[:, k], table[:, columns.index(name)]
+        tol = opt["RelTol"] * np.abs(r) + opt["AbsTol"] * (r.max() - r.min())
+        assert np.all(np.abs(y - r) <= tol), (name, float(np.max(np.abs(y - r) - tol)))
