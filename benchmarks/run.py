@@ -3,7 +3,11 @@
     python benchmarks/run.py [--quick] [--out out/benchmarks]
 
 * R1: wall time per simulated second of the GearMeshRattle + Driveline co-simulation under the
-  project's fmpy harness at a 1e-4 s communication step (the real-time factor);
+  project's fmpy harness at a 1e-4 s communication step (the real-time factor), for the
+  pythonfmu pair and for the native pair (C only, dist/native; target <= 0.2); the same pairs
+  in libcosim through the SSP; the native pair in a C master that makes the harness's calls
+  (benchmarks/native_floor.c, no Python at all); and the kernel-only floor (rattle_kernel.c's
+  rk_step, alone and with rk_outputs, on the paper scenario's pinion, in C);
 * R0: the same with the mesh replaced by NullMeshRattle (same interface, no physics): the FMI
   overhead floor; and R1/R0;
 * R3: the monolithic reference (drive_rattle.reference, scipy solve_ivp LSODA, rtol 1e-9,
@@ -12,7 +16,7 @@
   against the Hertz closed form;
 * how cost grows: against the communication step (with the accuracy at each), against the
   simulated time, and against the number of pairs in contact (face width);
-* sweep throughput: cases per minute with 1 and 2 dask workers.
+* sweep throughput: cases per minute with 1 and 2 dask workers, each flavour.
 
 Machines here are shared and noisy: each timing is the best of ``REPEATS`` runs.
 """
@@ -21,14 +25,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import shutil
+import struct
+import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
+from fmpy import read_model_description
 
 from drive_rattle import MeshModel, MeshParameters, hertz
+from drive_rattle import WheelStepper
 from drive_rattle.analysis import (
     LineSearch,
     catalogue_for,
@@ -36,11 +46,14 @@ from drive_rattle.analysis import (
     onsets_from_counters,
     rattle_statistics,
 )
-from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
+from drive_rattle.kernel_layout import MODEL_SIZE, OUTPUT_FIELDS, RESULT_FIELDS, pack_model
 from drive_rattle.reference import solve
 from drive_rattle_cosim.fmus import build_fmus, build_script
-from drive_rattle_cosim.harness import CoSimulation
+from drive_rattle_cosim.harness import CONNECTIONS, CoSimulation, Unit
+from drive_rattle_cosim.ssp import write_ssp
 from drive_rattle_cosim.sweep import grid_design, run_sweep
+from drive_rattle_fmi.native_fmu import fmi_headers_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 2
@@ -51,19 +64,23 @@ CATALOGUE = catalogue_for(MeshParameters(), DrivelineParameters())
 
 
 def _build(out: Path) -> dict[str, Path]:
+    """The pythonfmu FMUs, the null mesh, and the native FMUs (linux64) as "native <name>"."""
     build_fmu = build_script()
     paths = build_fmus(out)
     null = build_fmu.package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
     build_fmu.validate(null, use_fmutool=False)
     paths["NullMeshRattle"] = null
+    for p in build_fmu.build_native(out / "native", use_fmutool=False, platforms=("linux64",)):
+        paths[f"native {p.stem}"] = p
     return paths
 
 
-def cosim(fmus, mesh: str, stop: float, step: float = 1e-4, params=None):
+def cosim(fmus, mesh: str, stop: float, step: float = 1e-4, params=None,
+          driveline: str = "Driveline"):
     """(best wall time [s], result) of one co-simulation."""
     best, result = math.inf, None
     for _ in range(REPEATS):
-        with CoSimulation(fmus[mesh], fmus["Driveline"], params or {}, step=step) as sim:
+        with CoSimulation(fmus[mesh], fmus[driveline], params or {}, step=step) as sim:
             t0 = time.perf_counter()
             result = sim.run(stop, RECORD)
             best = min(best, time.perf_counter() - t0)
@@ -134,6 +151,112 @@ def single_impact_error() -> dict:
             "rebound speed": -off.speed / v - 1}
 
 
+LIBCOSIM_TIMING = """
+import sys, time
+from libcosimpy.CosimExecution import CosimExecution
+from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+log_output_level(CosimLogLevel.WARNING)
+ex = CosimExecution.from_ssp_file(sys.argv[1], round(float(sys.argv[3]) * 1e9))
+t0 = time.perf_counter()
+assert ex.simulate_until(round(float(sys.argv[2]) * 1e9))
+print(time.perf_counter() - t0)
+"""
+
+
+def libcosim_wall(mesh: Path, driveline: Path, stop: float, work: Path) -> float:
+    """Best wall time [s] of libcosim running the pair's SSP to ``stop`` (simulate_until, no
+    observer), each run in its own process (libcosim and Python FMUs share one)."""
+    ssp = write_ssp(work / f"{mesh.parent.name}-{mesh.stem}.ssp", mesh, driveline, {}, step=1e-4)
+    best = math.inf
+    for _ in range(REPEATS):
+        run = subprocess.run([sys.executable, "-c", LIBCOSIM_TIMING, str(ssp), repr(stop),
+                              "1e-4"], capture_output=True, text=True, timeout=3600)
+        if run.returncode != 0:
+            raise RuntimeError(f"libcosim failed: {run.stderr[-2000:]}")
+        best = min(best, float(run.stdout.strip().splitlines()[-1]))
+    return best
+
+
+def _floor_program(work: Path) -> Path | None:
+    """benchmarks/native_floor.c compiled with gcc (None without gcc)."""
+    cc = shutil.which("gcc")
+    if cc is None:
+        return None
+    exe = work / "native_floor"
+    subprocess.run([cc, "-std=c99", "-O2", "-I", str(fmi_headers_dir()), "-o", str(exe),
+                    str(ROOT / "benchmarks" / "native_floor.c"), "-ldl"], check=True)
+    return exe
+
+
+def _unpacked(fmu: Path, work: Path) -> Path:
+    folder = work / f"unpacked-{fmu.parent.name}-{fmu.stem}"
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    return folder
+
+
+def c_master_wall(exe: Path, mesh: Path, driveline: Path, stop: float, work: Path,
+                  reference) -> float:
+    """Best wall time [s] of the native pair in native_floor.c's C master, which makes the
+    harness's calls (recording RECORD); its last recorded values must be the harness's."""
+    units = {"GearMeshRattle": Unit(mesh, "probe-mesh"), "Driveline": Unit(driveline, "probe-d")}
+    vr = {name: {v: u.var(v).vr for v in u.variables} for name, u in units.items()}
+    guid = {name: read_model_description(str(u.fmu)).guid for name, u in units.items()}
+    for u in units.values():
+        u.close()
+    m2d = [(vr["GearMeshRattle"][o], vr["Driveline"][i]) for s, o, d, i in CONNECTIONS
+           if s == "GearMeshRattle"]
+    d2m = [(vr["Driveline"][o], vr["GearMeshRattle"][i]) for s, o, d, i in CONNECTIONS
+           if s == "Driveline"]
+    names = [r.split(".", 1)[1] for r in RECORD]
+    types = {v.name: v.type for v in read_model_description(str(mesh)).modelVariables}
+    real = [vr["GearMeshRattle"][n] for n in names if types[n] == "Real"]
+    ints = [vr["GearMeshRattle"][n] for n in names if types[n] == "Integer"]
+    dirs = {name: _unpacked(fmu, work) for name, fmu in (("GearMeshRattle", mesh),
+                                                          ("Driveline", driveline))}
+    args = [str(exe), "pair"]
+    for name in ("GearMeshRattle", "Driveline"):
+        args += [str(dirs[name] / "binaries" / "linux64" / f"{name}.so"),
+                 (dirs[name] / "resources").as_uri(), guid[name]]
+    args += [repr(stop), "1e-4", ",".join(str(o) for o, _ in m2d),
+             ",".join(str(i) for _, i in m2d), ",".join(str(o) for o, _ in d2m),
+             ",".join(str(i) for _, i in d2m), ",".join(map(str, real)),
+             ",".join(map(str, ints))]
+    best = math.inf
+    for _ in range(REPEATS):
+        out = subprocess.run(args, capture_output=True, text=True, check=True).stdout.split()
+        best = min(best, float(out[0]))
+        last = [float(x) for x in out[1:]]
+    expected = [reference[r][-1] for r in RECORD if types[r.split(".", 1)[1]] == "Real"]
+    if last != expected:
+        raise RuntimeError(f"the C master's last values {last} differ from the harness's "
+                           f"{expected}")
+    return best
+
+
+def kernel_floor(exe: Path, mesh: Path, stop: float, work: Path) -> tuple[float, float]:
+    """Best wall times [s] of rk_step alone and with rk_outputs over ``stop`` seconds of the
+    paper scenario's pinion (default engine orders) under the default drag, in C."""
+    params, drive = MeshParameters(), DrivelineParameters()
+    kinematics = EngineOrderKinematics(drive)
+    steps = round(stop / 1e-4)
+    stepper = WheelStepper(params, *kinematics(0.0)[:2], drive.drag)
+    data = work / "kernel_floor.bin"
+    model = pack_model(stepper)
+    inputs = [x for k in range(steps) for x in (1e-4, *kinematics(k * 1e-4), drive.drag)]
+    values = [MODEL_SIZE, len(stepper.state.as_tuple()), len(RESULT_FIELDS),
+              len(OUTPUT_FIELDS), steps, *model, *map(float, stepper.state.as_tuple()), *inputs]
+    data.write_bytes(struct.pack(f"{len(values)}d", *values))
+    library = _unpacked(mesh, work) / "binaries" / "linux64" / f"{mesh.stem}.so"
+    walls = []
+    for outputs in ("0", "1"):
+        walls.append(min(float(subprocess.run([str(exe), "kernel", str(library), str(data),
+                                                outputs], capture_output=True, text=True,
+                                               check=True).stdout.split()[0])
+                         for _ in range(REPEATS)))
+    return walls[0], walls[1]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="shorter horizons (a smoke run)")
@@ -149,16 +272,37 @@ def main(argv=None) -> int:
         report.append(text)
 
     with tempfile.TemporaryDirectory(prefix="bench_") as tmp:
-        fmus = _build(Path(tmp))
+        work = Path(tmp)
+        fmus = _build(work)
         w1, res1 = cosim(fmus, "GearMeshRattle", T)
+        w1n, res1n = cosim(fmus, "native GearMeshRattle", T, driveline="native Driveline")
+        if res1n.columns != res1.columns:
+            raise RuntimeError("the native pair's run differs from the pythonfmu pair's")
         w0, _ = cosim(fmus, "NullMeshRattle", T)
         w3, ref = timed_reference(T)
-        R1, R0, R3 = w1 / T, w0 / T, w3 / T
-        emit("Ratios (wall time per simulated second)", [
-            ("R1: co-simulation, fmpy harness, 1e-4 s", R1),
-            ("R0: same with the null mesh model (FMI overhead floor)", R0),
+        wl = libcosim_wall(fmus["GearMeshRattle"], fmus["Driveline"], T, work)
+        wln = libcosim_wall(fmus["native GearMeshRattle"], fmus["native Driveline"], T, work)
+        R1, R0, R3, R1n = w1 / T, w0 / T, w3 / T, w1n / T
+        rows = [
+            ("R1: pythonfmu pair, fmpy harness, 1e-4 s", R1),
+            ("R1 native: native pair, fmpy harness, 1e-4 s (target <= 0.2)", R1n),
+            ("pythonfmu pair in libcosim (SSP, 1e-4 s)", wl / T),
+            ("native pair in libcosim (SSP, 1e-4 s)", wln / T)]
+        exe = _floor_program(work)
+        if exe is not None:
+            wc = c_master_wall(exe, fmus["native GearMeshRattle"], fmus["native Driveline"], T,
+                               work, res1n)
+            k0, k1 = kernel_floor(exe, fmus["native GearMeshRattle"], T, work)
+            rows += [("native pair in a C master making the harness's calls (no Python)", wc / T),
+                     ("kernel-only floor: rk_step, mesh alone, in C", k0 / T),
+                     ("kernel-only floor: rk_step + rk_outputs, mesh alone, in C", k1 / T)]
+        rows += [
+            ("R0: pythonfmu pair with the null mesh model (FMI overhead floor)", R0),
             ("R3: monolithic reference, solve_ivp LSODA rtol 1e-9", R3),
-            ("R1 / R0", R1 / R0), ("R1 / R3", R1 / R3)], ("quantity", "value"))
+            ("R1 / R1 native", R1 / R1n), ("R1 / R0", R1 / R0), ("R1 / R3", R1 / R3),
+            ("R1 native / R3", R1n / R3)]
+        emit("Ratios (wall time per simulated second; the native pair's outputs equal the "
+             "pythonfmu pair's bit for bit)", rows, ("quantity", "value"))
 
         s_co, s_ref = cosim_statistics(res1), reference_statistics(ref)
         emit("Accuracy: co-simulation (1e-4 s) against the monolithic reference",
@@ -197,16 +341,20 @@ def main(argv=None) -> int:
         rows = []
         cases = grid_design({"GearMeshRattle.gear.backlash": (0.05e-3, 0.2e-3),
                              "Driveline.vehicle.drag": (0.12, 0.2)}, 3)
-        for workers in (1, 2):
-            with tempfile.TemporaryDirectory() as sweep_dir:
-                t0 = time.perf_counter()
-                run_sweep(cases, Path(sweep_dir) / "s.csv", fmus["GearMeshRattle"].parent,
-                          stop_time=0.2 * T, workers=workers, progress=False)
-                wall = time.perf_counter() - t0
-            rows.append((workers, len(cases), wall, 60 * len(cases) / wall))
-        rows.append(("ratio 2/1", "", "", rows[1][3] / rows[0][3]))
+        for flavour, folder in (("pythonfmu", fmus["GearMeshRattle"].parent),
+                                ("native", fmus["native GearMeshRattle"].parent)):
+            per = []
+            for workers in (1, 2):
+                with tempfile.TemporaryDirectory() as sweep_dir:
+                    t0 = time.perf_counter()
+                    run_sweep(cases, Path(sweep_dir) / "s.csv", folder, stop_time=0.2 * T,
+                              workers=workers, progress=False)
+                    wall = time.perf_counter() - t0
+                per.append(60 * len(cases) / wall)
+                rows.append((flavour, workers, len(cases), wall, per[-1]))
+            rows.append((flavour, "ratio 2/1", "", "", per[1] / per[0]))
         emit(f"Sweep throughput ({0.2 * T:g} s per case, LocalCluster incl. start-up)", rows,
-             ("workers", "cases", "wall [s]", "cases/min"))
+             ("flavour", "workers", "cases", "wall [s]", "cases/min"))
 
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "report.md").write_text("\n".join(report), encoding="utf-8")
