@@ -5,7 +5,7 @@
 * mesh alone: the default engine-order pinion (drive_rattle.driveline.EngineOrderKinematics)
   and a constant load of 0.15 N.m at a 1e-4 s step, ``step()`` alone and ``step()`` followed
   by the outputs (``interface.mesh_outputs`` for Python, ``outputs()`` for the kernel);
-* with the driveline: ``drive_rattle.system.simulate`` (mesh + driveline, recording every
+* with the driveline: ``drive_rattle_cosim.system.simulate`` (mesh + driveline, recording every
   signal at every point) with ``stepper=WheelStepper`` and ``stepper=kernel.new_stepper``.
 
 Each figure is the best of ``--repeats`` runs (the machines here are shared and noisy); both

@@ -6,7 +6,7 @@
   project's fmpy harness at a 1e-4 s communication step (the real-time factor);
 * R0: the same with the mesh replaced by NullMeshRattle (same interface, no physics): the FMI
   overhead floor; and R1/R0;
-* R3: the monolithic reference (drive_rattle.reference, scipy solve_ivp LSODA, rtol 1e-9,
+* R3: the monolithic reference (drive_rattle_cosim.reference, scipy solve_ivp LSODA, rtol 1e-9,
   contact events) per simulated second; and R1/R3;
 * accuracy: the co-simulation's statistics against the monolithic reference, and one impact
   against the Hertz closed form;
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from drive_rattle import MeshModel, MeshParameters, hertz
-from drive_rattle.analysis import (
+from drive_rattle_cosim.analysis import (
     LineSearch,
     catalogue_for,
     markdown_table,
@@ -37,8 +37,8 @@ from drive_rattle.analysis import (
     rattle_statistics,
 )
 from drive_rattle.driveline import DrivelineParameters
-from drive_rattle.reference import solve
-from drive_rattle_cosim.fmus import build_fmus, build_script
+from drive_rattle_cosim.reference import solve
+from drive_rattle_build import build_fmus, package, validate
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.sweep import grid_design, run_sweep
 
@@ -51,10 +51,9 @@ CATALOGUE = catalogue_for(MeshParameters(), DrivelineParameters())
 
 
 def _build(out: Path) -> dict[str, Path]:
-    build_fmu = build_script()
     paths = build_fmus(out)
-    null = build_fmu.package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
-    build_fmu.validate(null, use_fmutool=False)
+    null = package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
+    validate(null, use_fmutool=False)
     paths["NullMeshRattle"] = null
     return paths
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from drive_rattle import MAX_PAIR_SLOTS, MeshModel, MeshParameters
-from drive_rattle.analysis import (
+from drive_rattle_cosim.analysis import (
     catalogue_for,
     further_statistics,
     markdown_table,
@@ -29,8 +29,8 @@ from drive_rattle.analysis import (
     windowed_statistics,
 )
 from drive_rattle.driveline import DrivelineParameters
-from drive_rattle.spectral_lines import KINDS, UNEXPLAINED, LineSearch, detect_lines, welch_spectrum
-from drive_rattle_cosim.fmus import build_fmus
+from drive_rattle_cosim.spectral_lines import KINDS, UNEXPLAINED, LineSearch, detect_lines, welch_spectrum
+from drive_rattle_build import build_fmus
 from drive_rattle_cosim.harness import CoSimulation
 
 ROOT = Path(__file__).resolve().parents[1]

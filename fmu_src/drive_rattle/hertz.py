@@ -46,6 +46,10 @@ CIRCLE_RATIO = 1.0 + 1e-9
 #: Convergence of the arithmetic-geometric mean (relative difference of the two means).
 AGM_TOLERANCE = 1e-16
 AGM_MAX_ITERATIONS = 60
+#: Absolute tolerances of Brent's method on ln(q) of the exact ellipse and on the
+#: Hunt-Crossley factor d v (both dimensionless), and on the coefficient of restitution.
+ROOT_XTOL = 1e-15
+RESTITUTION_XTOL = 1e-16
 
 
 def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
@@ -126,7 +130,8 @@ def exact_ellipse(rho: float) -> ExactEllipse:
         if y_lo < -200.0:
             raise ValueError(f"radius ratio rho = {rho!r} too large for an elliptical contact")
     y_hi = -1e-9
-    y = roots.brent(residual, y_lo, y_hi, xtol=1e-15) if residual(y_hi) < 0.0 else y_hi
+    y = (roots.brent(residual, y_lo, y_hi, xtol=ROOT_XTOL, rtol=roots.BRENT_RTOL)
+         if residual(y_hi) < 0.0 else y_hi)
     q = math.exp(y)
     K, S = elliptic_integrals(q)
     e2 = (1.0 - q) * (1.0 + q)
@@ -292,7 +297,8 @@ def hunt_crossley_restitution(alpha: float) -> float:
     hi = min(1.0, 1.0 / alpha) * (1.0 - 1e-15)
     if _hunt_crossley_balance(alpha, hi) >= 0.0:
         return hi
-    return roots.brent(lambda e: _hunt_crossley_balance(alpha, e), 0.0, hi, xtol=1e-16)
+    return roots.brent(lambda e: _hunt_crossley_balance(alpha, e), 0.0, hi,
+                       xtol=RESTITUTION_XTOL, rtol=roots.BRENT_RTOL)
 
 
 def hunt_crossley_factor(e: float, v: float) -> float:
@@ -307,5 +313,6 @@ def hunt_crossley_factor(e: float, v: float) -> float:
     hi = 1.0
     while hunt_crossley_restitution(hi) > e:
         hi *= 2.0
-    alpha = roots.brent(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=1e-15)
+    alpha = roots.brent(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=ROOT_XTOL,
+                        rtol=roots.BRENT_RTOL)
     return alpha / v

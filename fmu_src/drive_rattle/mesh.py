@@ -26,8 +26,8 @@ import math
 from dataclasses import dataclass, field
 
 from . import hertz, lubrication
-from .geometry import HelicalPairGeometry
-from .parameters import MAX_PAIR_SLOTS, MeshParameters
+from .geometry import MAX_PAIR_SLOTS
+from .parameters import MeshParameters
 
 DISSIPATION_NONE = 0
 DISSIPATION_RESTITUTION = 1
@@ -79,9 +79,9 @@ def damping_factor(params: MeshParameters) -> float:
 class MeshModel:
     """Evaluates the mesh loads for given gear angles and speeds."""
 
-    def __init__(self, params: MeshParameters, geometry: HelicalPairGeometry | None = None):
+    def __init__(self, params: MeshParameters):
         self.params = params
-        self.geometry = g = geometry if geometry is not None else HelicalPairGeometry(params)
+        self.geometry = g = params.geometry
         self.E_star = hertz.effective_modulus(
             params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
         self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,

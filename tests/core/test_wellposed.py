@@ -143,8 +143,8 @@ def _impact_statistics(times, speeds, flanks, t_from, t_to, normal_mass, thresho
 def test_cosimulation_converges_to_the_monolithic_reference():
     # The default system against scipy's LSODA on the whole system with the exact engine-order
     # kinematics and the shaft torque acting continuously.
-    from drive_rattle import reference
-    from drive_rattle.system import simulate
+    from drive_rattle_cosim import reference
+    from drive_rattle_cosim.system import simulate
 
     arm = MeshModel(MeshParameters()).arm_wheel
     # (a) Trajectories over 20 ms converge with the communication step, at first order (the
