@@ -24,6 +24,7 @@ import math
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -117,8 +118,8 @@ def single_impact_error() -> dict:
     st = WheelStepper(p, 0.0, 0.0, 0.0)
     m = st.mesh
     v = 4e-3
-    st.state.phi = st._wheel_angle(1, 0.0, -20e-9)
-    st.state.w = -v / m.arm_wheel
+    st.restore(replace(st.snapshot(), state=replace(
+        st.state, phi=st._wheel_angle(1, 0.0, -20e-9), w=-v / m.arm_wheel)))
     ref = hertz.hertz_impact(m.normal_mass, m.stiffness_sum(1, 0.0), v)
     d_peak, events = 0.0, []
     for k in range(100):

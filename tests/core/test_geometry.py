@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from drive_rattle.geometry import COAST, DRIVE, HelicalPairGeometry
-from drive_rattle.parameters import DEG, MAX_PAIR_SLOTS, MeshParameters
+from drive_rattle.geometry import MAX_PAIR_SLOTS
+from drive_rattle.parameters import DEG, MeshParameters
 
 
 @pytest.fixture(scope="module")
