@@ -11,7 +11,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "fmu_src"))
 
-from drive_rattle_build.cli import main  # noqa: E402  (after the path: a clone without install)
+from drive_rattle_build.cli import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -30,6 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from drive_rattle import MeshModel, MeshParameters, hertz
+from drive_rattle.driveline import DrivelineParameters
+from drive_rattle_build import build_fmus, package, validate
 from drive_rattle_cosim.analysis import (
     LineSearch,
     catalogue_for,
@@ -37,10 +39,8 @@ from drive_rattle_cosim.analysis import (
     onsets_from_counters,
     rattle_statistics,
 )
-from drive_rattle.driveline import DrivelineParameters
-from drive_rattle_cosim.reference import solve
-from drive_rattle_build import build_fmus, package, validate
 from drive_rattle_cosim.harness import CoSimulation
+from drive_rattle_cosim.reference import solve
 from drive_rattle_cosim.sweep import grid_design, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]

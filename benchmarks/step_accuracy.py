@@ -19,8 +19,8 @@ from drive_rattle.driveline import DrivelineParameters
 from drive_rattle.kernel import new_stepper
 from drive_rattle.mesh import MeshModel
 from drive_rattle.parameters import MeshParameters
-from drive_rattle_cosim.system import simulate
 from drive_rattle_cosim.sweep import rattle_metrics
+from drive_rattle_cosim.system import simulate
 
 SIGNALS = ["wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak", "mesh.n_contact", "mesh.v_impact",
            "mesh.impacts_drive", "mesh.impacts_coast", "mesh.delta_peak"]

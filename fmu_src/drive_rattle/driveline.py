@@ -11,6 +11,7 @@ import os
 import stat
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 from .parameters import ParameterSet, declare
 from .snapshots import check_fields
@@ -481,8 +482,8 @@ class DrivelineSnapshot:
     table: tuple | None
 
     #: check_fields layout of ``to_json``.
-    LAYOUT = {"shaft": ("f", "f", "f"), "time": ("=f",), "last_step": ("=f+",),
-              "table": ("any",)}
+    LAYOUT: ClassVar[dict] = {"shaft": ("f", "f", "f"), "time": ("=f",),
+                              "last_step": ("=f+",), "table": ("any",)}
 
     def to_json(self) -> dict:
         """A JSON-able dict (floats round-trip exactly through repr-based JSON)."""

@@ -127,7 +127,8 @@ class HelicalPairGeometry:
             if z < z_min:
                 raise ValueError(
                     f"parameter '{name}' = {z} undercuts with gear.alpha_n = "
-                    f"{math.degrees(p.alpha_n):.4g} deg and gear.beta = {math.degrees(p.beta):.4g} deg; "
+                    f"{math.degrees(p.alpha_n):.4g} deg and gear.beta = "
+                    f"{math.degrees(p.beta):.4g} deg; "
                     f"allowed: {name} >= {math.ceil(z_min - 1e-9)} (2 cos(beta)/sin^2(alpha_t) "
                     f"* gear.h_a = {z_min:.4g})")
         if self.s_start <= 0.0 or self.s_end >= self.line_length:

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 from . import lubrication, roots
 from .geometry import COAST, DRIVE, MAX_PAIR_SLOTS
@@ -180,8 +180,8 @@ class WheelSnapshot:
     result: StepResult
 
     #: check_fields layout of ``to_json``.
-    LAYOUT = {"wheel": domains(WheelState), "pinion": ("f", "f"),
-              "last": domains(StepResult)}
+    LAYOUT: ClassVar[dict] = {"wheel": domains(WheelState), "pinion": ("f", "f"),
+                              "last": domains(StepResult)}
 
     def to_json(self) -> dict:
         """A JSON-able dict (floats round-trip exactly through repr-based JSON)."""

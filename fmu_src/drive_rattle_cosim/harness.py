@@ -2,9 +2,9 @@
 
 Fixed communication step, Jacobi coupling (both units step from the outputs of the last
 communication point) along ``drive_rattle.interface.CONNECTIONS``, the same as libcosim's
-fixed-step algorithm and as the in-process twin ``drive_rattle_cosim.system.simulate``.  Communication points are integer nanoseconds,
-``t_k = (t0_ns + k step_ns) / 1e9``, and each step is ``t_{k+1} - t_k``, as libcosim computes
-them, so the three agree bit for bit.
+fixed-step algorithm and as the in-process twin ``drive_rattle_cosim.system.simulate``.
+Communication points are integer nanoseconds, ``t_k = (t0_ns + k step_ns) / 1e9``, and each
+step is ``t_{k+1} - t_k``, as libcosim computes them, so the three agree bit for bit.
 
 Python::
 

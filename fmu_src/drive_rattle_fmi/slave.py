@@ -188,9 +188,10 @@ class RattleSlave(Fmi2Slave):
         """End of the last accepted communication step (the start time before the first):
         the native shim's answer to fmi2GetRealStatus(fmi2LastSuccessfulTime)."""
         if self._model is None:
-            self._report(Fmi2Status.error, "getRealStatus(fmi2LastSuccessfulTime): no communication step "
-                                f"is possible yet (mode '{self._mode}'); allowed after "
-                                "exitInitializationMode")
+            self._report(Fmi2Status.error,
+                         "getRealStatus(fmi2LastSuccessfulTime): no communication step is "
+                         f"possible yet (mode '{self._mode}'); allowed after "
+                         "exitInitializationMode")
             return math.nan
         return self._time
 

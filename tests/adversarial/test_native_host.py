@@ -17,8 +17,9 @@ import pytest
 from fmpy import read_model_description
 
 from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
-from drive_rattle_cosim.system import communication_points
+from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
+from drive_rattle_cosim.system import communication_points
 
 HOST_SOURCE = Path(__file__).with_name("native_host.c")
 STOP, STEP = 0.1, 1e-4

@@ -5,8 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from drive_rattle.geometry import COAST, DRIVE, HelicalPairGeometry
-from drive_rattle.geometry import MAX_PAIR_SLOTS
+from drive_rattle.geometry import COAST, DRIVE, MAX_PAIR_SLOTS, HelicalPairGeometry
 from drive_rattle.parameters import DEG, MeshParameters
 
 

@@ -24,7 +24,8 @@ def kernel_resources() -> str:
         import shutil
         import tempfile
 
-        from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
+        from drive_rattle.kernel import LIBRARY_NAME
+        from drive_rattle_build.kernel import compile_kernel
 
         folder = Path(tempfile.mkdtemp(prefix="slave_resources_"))
         atexit.register(shutil.rmtree, folder, ignore_errors=True)
