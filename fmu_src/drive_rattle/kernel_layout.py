@@ -154,6 +154,8 @@ MODEL_FIELDS: tuple[ModelField, ...] = (
                "roots.MAX_ITERATIONS"),
     ModelField("brent_rtol", lambda s: stepper.EVENT_RTOL, "stepper.EVENT_RTOL"),
     ModelField("event_xtol", lambda s: stepper.EVENT_XTOL, "stepper.EVENT_XTOL [s]"),
+    ModelField("engagement_min_fraction", lambda s: stepper.ENGAGEMENT_MIN_FRACTION,
+               "stepper.ENGAGEMENT_MIN_FRACTION"),
     ModelField("lambda_boundary", lambda s: lubrication.LAMBDA_BOUNDARY,
                "lubrication.LAMBDA_BOUNDARY"),
     ModelField("lambda_full_film", lambda s: lubrication.LAMBDA_FULL_FILM,

@@ -79,6 +79,12 @@ EVENT_RTOL = roots.BRENT_RTOL
 #: rounding, h/h_max = n (1 + a few ulps), gets n grid substeps, not n + 1.
 GRID_SLACK = 1e-12
 
+#: A crowned pair's engagement located in the first this fraction of a substep does not end
+#: the substep: RK4's error from a kink that close to its start is negligible (it scales with
+#: the kink's offset to the power 2.5), and splitting there would let a pair hovering at its
+#: offset end substep after substep a few femtoseconds long.
+ENGAGEMENT_MIN_FRACTION = 1e-3
+
 
 def _domain(kind: str, **options):
     """A dataclass field whose metadata holds the domain of its saved value
@@ -704,10 +710,10 @@ class _StepRun:
                 dt_event, reversal, released = dt, slot, False
         # A crowned pair starting or ending to carry load (its own penetration crossing zero)
         # makes the force a C1 kink; ending the substep there keeps RK4's order.  One located
-        # at the substep start to rounding needs no split.
+        # right at the substep start needs no split (ENGAGEMENT_MIN_FRACTION).
         engaged = None
         for slot, dt in self._engagement_times(t, h, phi_b, k1):
-            if dt < dt_event and t + dt > t:
+            if dt < dt_event and dt > ENGAGEMENT_MIN_FRACTION * h:
                 dt_event, engaged, reversal, released = dt, slot, None, False
         if dt_event < h:
             h = dt_event

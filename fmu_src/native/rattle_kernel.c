@@ -74,7 +74,7 @@ typedef struct {
     double J, tau_s, eta, sigma, gamma, density, h_max, h_comm_max, rattle_time;
     int friction_enabled;
     int64_t friction_form, shear_speed;
-    double pen_limit, bp_tol, brent_rtol, event_xtol;
+    double pen_limit, bp_tol, brent_rtol, event_xtol, engagement_min_fraction;
     int64_t grazing_samples, brent_max_iter, max_contact_substeps;
     double lambda_boundary, lambda_full_film, contact_rate_safety, grid_slack;
     double sqrt_gamma_sigma; /* math.sqrt(gamma / sigma), the same value every call */
@@ -233,6 +233,7 @@ static int unpack_model(const double* a, Model* m, double* err_values)
     m->brent_max_iter = (int64_t)a[M_BRENT_MAX_ITERATIONS];
     m->brent_rtol = a[M_BRENT_RTOL];
     m->event_xtol = a[M_EVENT_XTOL];
+    m->engagement_min_fraction = a[M_ENGAGEMENT_MIN_FRACTION];
     m->lambda_boundary = a[M_LAMBDA_BOUNDARY];
     m->lambda_full_film = a[M_LAMBDA_FULL_FILM];
     m->contact_rate_safety = a[M_CONTACT_RATE_SAFETY];
@@ -1292,13 +1293,13 @@ static double contact_substep(Run* r, double t)
             released = 0;
         }
     }
-    /* a crowned pair starting or ending to carry load: end the substep there (one located at
-     * the substep start to rounding needs no split) */
+    /* a crowned pair starting or ending to carry load: end the substep there (one located
+     * right at the substep start needs no split: ENGAGEMENT_MIN_FRACTION) */
     int64_t engaged = -1;
     Reversal eng[PAIR_MAX];
     int n_eng = engagement_times(r, t, h, phi_b, k1, eng);
     for (int i = 0; i < n_eng; i++) {
-        if (eng[i].dt < dt_event && t + eng[i].dt > t) {
+        if (eng[i].dt < dt_event && eng[i].dt > r->M->engagement_min_fraction * h) {
             dt_event = eng[i].dt;
             engaged = eng[i].slot;
             reversal = -1;
