@@ -168,6 +168,15 @@ def chebyshev_value(coeffs, t: float) -> float:
     return t * b1 - b2 + coeffs[0]
 
 
+class LawCoefficients(NamedTuple):
+    """The contact law at one contact radius (``ContactLaw.coefficients``)."""
+
+    K: float  # stiffness non-linearity of W = K delta^(3/2) [N/m^1.5]
+    R: float  # the larger principal radius [m]
+    ka: float  # semi-major axis a = ka W^(1/3) [m / N^(1/3)]
+    kz: float  # contact area A = kz W^(2/3) [m^2 / N^(2/3)]
+
+
 class ContactLaw:
     """Load-approach law, contact ellipse and energy-balance film term of one pair's crowned
     point contact, for radii r_x (varying along the path of contact) and a fixed r_y.
@@ -218,7 +227,7 @@ class ContactLaw:
             f"{CHEBYSHEV_TOLERANCE:g} (reached {worst:.3g}); use contact.hertz_law = 1")
 
     # ------------------------------------------------------------------ evaluation
-    def shape(self, r_x: float) -> tuple[float, float, float, float]:
+    def coefficients(self, r_x: float) -> LawCoefficients:
         """``(K, R, ka, kz)`` at the contact radius r_x: the stiffness non-linearity K
         [N/m^1.5], the larger radius R [m] and the coefficients of the semi-major axis
         a = ka W^(1/3) [m] and of the area A = kz W^(2/3) [m^2]."""
@@ -232,7 +241,8 @@ class ContactLaw:
             t = (math.log(rho) - self.t_mid) * self.t_scale
             K = E * math.sqrt(R) * chebyshev_value(self.kappa, t)
             c = (R / E) ** (1.0 / 3.0)
-            return K, R, c * chebyshev_value(self.alpha, t), c * c * chebyshev_value(self.zeta, t)
+            return LawCoefficients(K, R, c * chebyshev_value(self.alpha, t),
+                                   c * c * chebyshev_value(self.zeta, t))
         # Equivalent sphere (eq. 2) with Johnson's approximate ellipse: sqrt(ab) from Hertz,
         # a/b = (R/r)^(2/3) with a along the larger radius.
         K = (4.0 / 3.0) * E * math.sqrt(math.sqrt(r_x * r_y))
@@ -241,7 +251,7 @@ class ContactLaw:
             R, stretch = r_y, (r_y / r_x) ** (1.0 / 3.0)
         else:
             R, stretch = r_x, (r_x / r_y) ** (1.0 / 3.0)
-        return K, R, g * stretch, math.pi * g * g
+        return LawCoefficients(K, R, g * stretch, math.pi * g * g)
 
 
 def film_delta_max(v: float, K: float, r_x: float, ka: float, density: float) -> float:

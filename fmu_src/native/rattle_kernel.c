@@ -10,7 +10,7 @@
  *   drive_rattle/mesh.py        MeshModel._loads / torques / static_force / contact_rates /
  *                               energy_balance_delta_max / penetration / approach_rate ...
  *   drive_rattle/geometry.py    pairs_at_roll, next_breakpoint, normal_radii, flank_roll
- *   drive_rattle/hertz.py       ContactLaw.shape (Chebyshev series, Clenshaw), film_delta_max
+ *   drive_rattle/hertz.py       ContactLaw.coefficients (Chebyshev series, Clenshaw), film_delta_max
  *   drive_rattle/lubrication.py film_thickness, asperity_area, dry_fraction, friction_force
  *   drive_rattle/roots.py       brent, first_crossing
  * that reproduces the Python results BIT FOR BIT (docs/kernel.md).  The Python code is the
@@ -407,8 +407,8 @@ static inline double chebyshev_value(const double* c, int n, double t)
     return t * b1 - b2 + c[0];
 }
 
-/* ContactLaw.shape(r_x): K, ka, kz (R is not used by the stepper). */
-static void law_shape(const Model* M, Fail* f, double r_x, double* K, double* ka, double* kz)
+/* ContactLaw.coefficients(r_x): K, ka, kz (R is not used by the stepper). */
+static void law_coefficients(const Model* M, Fail* f, double r_x, double* K, double* ka, double* kz)
 {
     double r_y = M->r_y;
     double E = M->law_E_star;
@@ -516,7 +516,7 @@ static int next_breakpoint(const Model* M, Fail* f, double u_a, double u_b, doub
 }
 
 /* The tooth pairs in the zone of action at roll coordinate u (geometry.pairs_at_roll) with
- * the pure functions of them the stepper needs: the contact law's shape at the pair's radius
+ * the pure functions of them the stepper needs: the contact law's coefficients at the pair's radius
  * (computed on first use) and, per impact speed, the eq. 7 delta_max.  The integrator
  * evaluates the pairs twice at t + h/2 of each RK4 step and at the start of a substep for the
  * right-hand side, the substep length and the friction directions, so a step keeps a few of
@@ -528,7 +528,7 @@ typedef struct {
     int n;
     int64_t slot[PAIR_MAX];
     double s[PAIR_MAX], offset[PAIR_MAX], dg[PAIR_MAX];
-    int shape_ok[PAIR_MAX];
+    int coefficients_ok[PAIR_MAX];
     double r_x[PAIR_MAX], K[PAIR_MAX], ka[PAIR_MAX], kz[PAIR_MAX];
     double d_max_v;         /* impact speed of the d_max entries */
     int d_max_ok[PAIR_MAX]; /* d_max[i] computed for d_max_v */
@@ -545,7 +545,7 @@ static inline void pairset_add(Fail* f, PairSet* ps, double n, double s, double 
     ps->s[i] = s;
     ps->offset[i] = g;
     ps->dg[i] = dg;
-    ps->shape_ok[i] = 0;
+    ps->coefficients_ok[i] = 0;
     ps->d_max_ok[i] = 0;
 }
 
@@ -586,10 +586,10 @@ static void pairset_build(const Model* M, Fail* f, double u, PairSet* ps)
     }
 }
 
-/* normal_radii(s)[2] and law.shape(r_x) of pair i. */
-static inline void pairset_shape(const Model* M, Fail* f, PairSet* ps, int i)
+/* normal_radii(s)[2] and law.coefficients(r_x) of pair i. */
+static inline void pairset_coefficients(const Model* M, Fail* f, PairSet* ps, int i)
 {
-    if (ps->shape_ok[i])
+    if (ps->coefficients_ok[i])
         return;
     double s = ps->s[i];
     double c = M->normal_factor;
@@ -597,11 +597,11 @@ static inline void pairset_shape(const Model* M, Fail* f, PairSet* ps, int i)
     double rw = (M->line_length - s) / c;
     double r_x = rp * rw / (rp + rw);
     ps->r_x[i] = r_x;
-    law_shape(M, f, r_x, &ps->K[i], &ps->ka[i], &ps->kz[i]);
-    ps->shape_ok[i] = 1;
+    law_coefficients(M, f, r_x, &ps->K[i], &ps->ka[i], &ps->kz[i]);
+    ps->coefficients_ok[i] = 1;
 }
 
-/* hertz.film_delta_max(v, K, r_x, ka, density) of pair i (shape computed). */
+/* hertz.film_delta_max(v, K, r_x, ka, density) of pair i (coefficients computed). */
 static inline double pairset_d_max(const Model* M, Fail* f, PairSet* ps, int i, double v)
 {
     if (!(v == ps->d_max_v)) {
@@ -700,7 +700,7 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
                 out->forces[slot] = 0.0;
             continue;
         }
-        pairset_shape(M, f, ps, i);
+        pairset_coefficients(M, f, ps, i);
         double K = ps->K[i];
         double W = K * (pen * py_sqrt(f, pen));
         if (damping > 0.0) {
@@ -774,7 +774,7 @@ static double static_force(const Model* M, Fail* f, PairCache* cache, int64_t fl
     for (int i = 0; i < ps->n; i++) {
         double d = delta - ps->offset[i];
         if (d > 0.0) {
-            pairset_shape(M, f, ps, i);
+            pairset_coefficients(M, f, ps, i);
             total += ps->K[i] * (d * py_sqrt(f, d));
         }
     }
@@ -792,7 +792,7 @@ static void contact_rates(const Model* M, Fail* f, PairCache* cache, int64_t fla
     for (int i = 0; i < ps->n; i++) {
         double pen = delta - ps->offset[i];
         if (pen > 0.0) {
-            pairset_shape(M, f, ps, i);
+            pairset_coefficients(M, f, ps, i);
             double K = ps->K[i];
             double root = py_sqrt(f, pen);
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
@@ -812,7 +812,7 @@ static double energy_balance_delta_max(const Model* M, Fail* f, PairCache* cache
     PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
     double out = 0.0;
     for (int i = 0; i < ps->n; i++) {
-        pairset_shape(M, f, ps, i);
+        pairset_coefficients(M, f, ps, i);
         double d = film_delta_max(f, v_impact, ps->K[i], ps->r_x[i], ps->ka[i], M->density);
         if (d > out)
             out = d;

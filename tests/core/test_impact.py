@@ -42,7 +42,7 @@ def restitution(v, flank=DRIVE, H=1e-4, gap=20e-9, **changes):
 def test_single_impact_matches_hertz_closed_form(flank, v):
     # Spur pair, no dissipation: the pairs in mesh share one penetration, W = sum K_i delta^1.5.
     st = approach_stepper(v, flank, dissipation=0, **SPUR)
-    K = sum(st.mesh.law.shape(st.geometry.normal_radii(s)[2])[0]
+    K = sum(st.mesh.law.coefficients(st.geometry.normal_radii(s)[2])[0]
             for _, s, _, _ in st.geometry.pairs(flank, 0.0))
     assert K > 0.0
     ref = hertz.hertz_impact(st.mesh.normal_mass, K, v)
