@@ -174,8 +174,8 @@ class MeshModel:
             if pen <= 0.0:
                 if detail:
                     r_x = g.normal_radii(s)[2]
-                    out.pairs.append(PairLoad(slot, s, offset, r_x, law.coefficients(r_x)[0], pen, 0.0,
-                                              0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+                    out.pairs.append(PairLoad(slot, s, offset, r_x, law.coefficients(r_x).K,
+                                              pen, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             r_x = g.normal_radii(s)[2]
             K, _R, ka, kz = law.coefficients(r_x)
