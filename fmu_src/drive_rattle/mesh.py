@@ -135,7 +135,7 @@ class MeshModel:
         for _slot, s, g, _dg in self.geometry.pairs(flank, phi_p):
             d = delta - g
             if d > 0.0:
-                K = law.coefficients(self.geometry.normal_radii(s)[2])[0]
+                K = law.coefficients(self.geometry.normal_radii(s)[2]).K
                 total += K * (d * math.sqrt(d))
         return total
 
@@ -149,7 +149,7 @@ class MeshModel:
         for _slot, s, g, dg in self.geometry.pairs(flank, phi_p):
             pen = delta - g
             if pen > 0.0:
-                K = law.coefficients(self.geometry.normal_radii(s)[2])[0]
+                K = law.coefficients(self.geometry.normal_radii(s)[2]).K
                 root = math.sqrt(pen)
                 factor = 1.0 + d * (delta_dot - self.pair_rate(flank, w_p, dg))
                 if factor > 0.0:
