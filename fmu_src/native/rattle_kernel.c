@@ -907,10 +907,10 @@ static double free_flight(Run* r, double t)
     double v0 = M->arm_pinion * run_w_p(r, t) - M->arm_wheel * st->w;
     double half_acc = 0.5 * (M->arm_pinion * r->a_p - M->arm_wheel * a_w);
     double span = r->H - t;
-    double c = M->half_backlash;
+    double half_backlash = M->half_backlash;
     double hit_d = 0.0, hit_c = 0.0;
-    int has_d = first_crossing(x0 - c, v0, half_acc, span, 1, &hit_d);
-    int has_c = first_crossing(-x0 - c, -v0, -half_acc, span, 1, &hit_c);
+    int has_d = first_crossing(x0 - half_backlash, v0, half_acc, span, 1, &hit_d);
+    int has_c = first_crossing(-x0 - half_backlash, -v0, -half_acc, span, 1, &hit_c);
     double dt;
     int64_t flank;
     if (!has_d && !has_c) {
