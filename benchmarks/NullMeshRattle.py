@@ -29,7 +29,7 @@ class NullMeshRattle(RattleSlave):
         m.w = m.ratio * (inputs["pinion.w"] + h * inputs["pinion.a"])
 
     def _outputs(self, model):
-        out = {s.name: (0.0 if s.kind == "Real" else 0) for s in MESH_OUTPUTS}
+        out = {s.name: (0.0 if s.fmi_type == "Real" else 0) for s in MESH_OUTPUTS}
         out["wheel.phi"], out["wheel.w"] = model.phi, model.w
         return out
 

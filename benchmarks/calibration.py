@@ -17,6 +17,7 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -49,9 +50,7 @@ def run(load_fraction: float, changes: dict, kick: float, seconds: float) -> lis
     load = load_fraction * M_STAR
     phi, w, _ = kin(0.0)
     st = kernel.new_stepper(MeshParameters(**changes), phi, w, load)
-    st.state.w += kick
-    names = kernel.OUTPUT_NAMES
-    i_pairs = names.index("mesh.n_contact")
+    st.restore(replace(st.snapshot(), state=replace(st.state, w=st.state.w + kick)))
     per_window = round(1.0 / PERIOD) * PERIOD  # whole forcing periods, ~1 s
     windows, n = [], round(seconds / H)
     t_start = 1.0
@@ -73,7 +72,7 @@ def run(load_fraction: float, changes: dict, kick: float, seconds: float) -> lis
         if r.onsets_drive + r.onsets_coast:
             cur["speeds"].append(s.v_impact_last)
         cur["d_peak"] = max(cur["d_peak"], r.delta_peak)
-        pairs = st.output_values()[i_pairs]
+        pairs = st.outputs()["mesh.n_contact"]
         if pairs:
             cur["pairs"].append(pairs)
         cur["steps"] += 1

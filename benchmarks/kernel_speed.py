@@ -4,8 +4,8 @@
 
 * mesh alone: the default engine-order pinion (drive_rattle.driveline.EngineOrderKinematics)
   and a constant load of 0.15 N.m at a 1e-4 s step, ``step()`` alone and ``step()`` followed
-  by the outputs (``interface.mesh_outputs`` for Python, ``outputs()`` for the kernel);
-* with the driveline: ``drive_rattle.system.simulate`` (mesh + driveline, recording every
+  by ``outputs()`` (the stepper contract: the same call for both);
+* with the driveline: ``drive_rattle_cosim.system.simulate`` (mesh + driveline, recording every
   signal at every point) with ``stepper=WheelStepper`` and ``stepper=kernel.new_stepper``.
 
 Each figure is the best of ``--repeats`` runs (the machines here are shared and noisy); both
@@ -19,8 +19,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from drive_rattle import MeshParameters, WheelStepper, interface, kernel, system
+from drive_rattle import MeshParameters, WheelStepper, kernel
 from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
+from drive_rattle_build.kernel import compile_kernel
+from drive_rattle_cosim import system
 
 H = 1e-4
 LOAD = 0.15  # N.m
@@ -30,9 +32,7 @@ def _mesh_alone(make, steps: int, outputs: bool) -> tuple[float, tuple]:
     kin = EngineOrderKinematics(DrivelineParameters())
     inputs = [(H, *kin(k * H), LOAD) for k in range(steps)]
     s = make(MeshParameters(), *kin(0.0)[:2], LOAD)
-    out = s.outputs if isinstance(s, kernel.CompiledWheelStepper) else (
-        lambda: interface.mesh_outputs(s))
-    step = s.step
+    out, step = s.outputs, s.step
     t0 = time.perf_counter()
     if outputs:
         for args in inputs:
@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        lib = kernel.load_kernel(kernel.compile_kernel(Path(tmp) / kernel.LIBRARY_NAME))
+        lib = kernel.load_kernel(compile_kernel(Path(tmp) / kernel.LIBRARY_NAME))
 
         def compiled(*a):
             return kernel.CompiledWheelStepper(*a, library=lib)

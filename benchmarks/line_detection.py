@@ -1,4 +1,4 @@
-"""Error rates of the spectral line search (drive_rattle.spectral_lines), measured on seeded
+"""Error rates of the spectral line search (drive_rattle_cosim.spectral_lines), measured on seeded
 synthetic signals: the figures quoted in docs/analysis.md.
 
     python benchmarks/line_detection.py [--trials 1000]
@@ -23,8 +23,8 @@ import time
 import numpy as np
 from scipy import signal
 
-from drive_rattle.analysis import markdown_table
-from drive_rattle.spectral_lines import LineSearch, detect_lines, welch_spectrum
+from drive_rattle_cosim.analysis import markdown_table
+from drive_rattle_cosim.spectral_lines import LineSearch, detect_lines, welch_spectrum
 
 FS, T = 10_000.0, 2.0
 TIME = np.arange(int(FS * T)) / FS

@@ -10,7 +10,7 @@
   rk_step, alone and with rk_outputs, on the paper scenario's pinion, in C);
 * R0: the same with the mesh replaced by NullMeshRattle (same interface, no physics): the FMI
   overhead floor; and R1/R0;
-* R3: the monolithic reference (drive_rattle.reference, scipy solve_ivp LSODA, rtol 1e-9,
+* R3: the monolithic reference (drive_rattle_cosim.reference, scipy solve_ivp LSODA, rtol 1e-9,
   contact events) per simulated second; and R1/R3;
 * accuracy: the co-simulation's statistics against the monolithic reference, and one impact
   against the Hertz closed form;
@@ -32,28 +32,30 @@ import sys
 import tempfile
 import time
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from fmpy import read_model_description
 
-from drive_rattle import MeshModel, MeshParameters, hertz
-from drive_rattle import WheelStepper
-from drive_rattle.analysis import (
+from drive_rattle import MeshModel, MeshParameters, WheelStepper, hertz
+from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
+from drive_rattle.interface import CONNECTIONS
+from drive_rattle.kernel_layout import MODEL_SIZE, OUTPUT_FIELDS, RESULT_FIELDS, pack_model
+from drive_rattle_build import build_fmus, package, validate
+from drive_rattle_build.native import build_native
+from drive_rattle_build.shim import fmi2_headers
+from drive_rattle_cosim.analysis import (
     LineSearch,
     catalogue_for,
     markdown_table,
     onsets_from_counters,
     rattle_statistics,
 )
-from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
-from drive_rattle.kernel_layout import MODEL_SIZE, OUTPUT_FIELDS, RESULT_FIELDS, pack_model
-from drive_rattle.reference import solve
-from drive_rattle_cosim.fmus import build_fmus, build_script
-from drive_rattle_cosim.harness import CONNECTIONS, CoSimulation, Unit
+from drive_rattle_cosim.harness import CoSimulation, Unit
+from drive_rattle_cosim.reference import solve
 from drive_rattle_cosim.ssp import write_ssp
 from drive_rattle_cosim.sweep import grid_design, run_sweep
-from drive_rattle_fmi.native_fmu import fmi_headers_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 2
@@ -65,12 +67,11 @@ CATALOGUE = catalogue_for(MeshParameters(), DrivelineParameters())
 
 def _build(out: Path) -> dict[str, Path]:
     """The pythonfmu FMUs, the null mesh, and the native FMUs (linux64) as "native <name>"."""
-    build_fmu = build_script()
     paths = build_fmus(out)
-    null = build_fmu.package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
-    build_fmu.validate(null, use_fmutool=False)
+    null = package(ROOT / "benchmarks" / "NullMeshRattle.py", out, references=False)
+    validate(null, use_fmutool=False)
     paths["NullMeshRattle"] = null
-    for p in build_fmu.build_native(out / "native", use_fmutool=False, platforms=("linux64",)):
+    for p in build_native(out / "native", use_fmutool=False, platforms=("linux64",)):
         paths[f"native {p.stem}"] = p
     return paths
 
@@ -135,8 +136,8 @@ def single_impact_error() -> dict:
     st = WheelStepper(p, 0.0, 0.0, 0.0)
     m = st.mesh
     v = 4e-3
-    st.state.phi = st._wheel_angle(1, 0.0, -20e-9)
-    st.state.w = -v / m.arm_wheel
+    st.restore(replace(st.snapshot(), state=replace(
+        st.state, phi=st._wheel_angle(1, 0.0, -20e-9), w=-v / m.arm_wheel)))
     ref = hertz.hertz_impact(m.normal_mass, m.stiffness_sum(1, 0.0), v)
     d_peak, events = 0.0, []
     for k in range(100):
@@ -183,7 +184,7 @@ def _floor_program(work: Path) -> Path | None:
     if cc is None:
         return None
     exe = work / "native_floor"
-    subprocess.run([cc, "-std=c99", "-O2", "-I", str(fmi_headers_dir()), "-o", str(exe),
+    subprocess.run([cc, "-std=c99", "-O2", "-I", str(fmi2_headers()), "-o", str(exe),
                     str(ROOT / "benchmarks" / "native_floor.c"), "-ldl"], check=True)
     return exe
 

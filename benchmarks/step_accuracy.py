@@ -3,7 +3,7 @@
     python benchmarks/step_accuracy.py [--stop-time 2] [--steps 1e-5 2e-5 ... 1e-2]
 
 Runs the default system with the in-process twin of the co-simulation
-(``drive_rattle.system.simulate``, the compiled kernel; the FMUs in any Jacobi master compute
+(``drive_rattle_cosim.system.simulate``, the compiled kernel; the FMUs in any Jacobi master compute
 the same numbers) at each communication step, three times with the phase of engine order 1
 moved by 0, 1e-6 and 2e-6 rad: rattle is chaotic, so the spread of these three runs is the
 scatter a statistic has at a step anyway.  Prints, per step, the mean and the range of the rattle
@@ -19,8 +19,8 @@ from drive_rattle.driveline import DrivelineParameters
 from drive_rattle.kernel import new_stepper
 from drive_rattle.mesh import MeshModel
 from drive_rattle.parameters import MeshParameters
-from drive_rattle.system import simulate
 from drive_rattle_cosim.sweep import rattle_metrics
+from drive_rattle_cosim.system import simulate
 
 SIGNALS = ["wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak", "mesh.n_contact", "mesh.v_impact",
            "mesh.impacts_drive", "mesh.impacts_coast", "mesh.delta_peak"]

@@ -20,7 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from drive_rattle import MAX_PAIR_SLOTS, MeshModel, MeshParameters
-from drive_rattle.analysis import (
+from drive_rattle.driveline import DrivelineParameters
+from drive_rattle_build import build_fmus
+from drive_rattle_cosim.analysis import (
     catalogue_for,
     further_statistics,
     markdown_table,
@@ -28,10 +30,14 @@ from drive_rattle.analysis import (
     paper_comparison,
     windowed_statistics,
 )
-from drive_rattle.driveline import DrivelineParameters
-from drive_rattle.spectral_lines import KINDS, UNEXPLAINED, LineSearch, detect_lines, welch_spectrum
-from drive_rattle_cosim.fmus import build_fmus
 from drive_rattle_cosim.harness import CoSimulation
+from drive_rattle_cosim.spectral_lines import (
+    KINDS,
+    UNEXPLAINED,
+    LineSearch,
+    detect_lines,
+    welch_spectrum,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 MESH_OUTPUTS = ["wheel.phi", "wheel.w", "mesh.W", "mesh.W_peak", "mesh.delta_peak",

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drive_rattle_cosim.fmus import build_fmus
+from drive_rattle_build import build_fmus
 from drive_rattle_cosim.sweep import grid_design, read_results, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -4,23 +4,15 @@ the reflected vehicle inertia.  Thin: physics in drive_rattle, FMI glue in drive
 
 from pathlib import Path
 
-from drive_rattle.driveline import Driveline as DrivelineModel
-from drive_rattle.driveline import ShaftState, read_speed_table, resolve_speed_table
+from drive_rattle.driveline import (
+    DrivelineModel,
+    DrivelineSnapshot,
+    read_speed_table,
+    resolve_speed_table,
+)
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS
 from drive_rattle_fmi.boundary import DrivelineInputReading, DrivelineUnitParameters
-from drive_rattle_fmi.slave import RattleSlave, check_snapshot_fields
-
-#: The model snapshot of an FMU state (check_snapshot_fields layout): the shaft's vehicle-side
-#: angle and speed and its torque, the time, the last step, the speed table read at
-#: initialization ([times, speeds], or None for engine orders; checked when rebuilt), and how
-#: the unit reads its inputs (drive_rattle_fmi.boundary, checked there).
-SNAPSHOT_LAYOUT = {
-    "shaft": ("f", "f", "f"),
-    "time": ("=f",),
-    "last_step": ("=f+",),
-    "table": ("any",),
-    "fmi": ("any",),
-}
+from drive_rattle_fmi.slave import RattleSlave
 
 
 class Driveline(DrivelineInputReading, RattleSlave):
@@ -34,11 +26,15 @@ class Driveline(DrivelineInputReading, RattleSlave):
     PARAMETERS = DrivelineUnitParameters
     INPUTS = DRIVELINE_INPUTS
     OUTPUTS = DRIVELINE_OUTPUTS
+    SNAPSHOT = DrivelineSnapshot
 
     def _build(self, params, inputs):
         model = DrivelineModel(params, self._start_time, inputs["wheel.phi"], inputs["wheel.w"],
                                table=self._speed_table(params))
         return self._started(model, inputs)
+
+    def _restored_model(self, params, start_time, snapshot):
+        return DrivelineModel.from_snapshot(params, start_time, snapshot)
 
     def _speed_table(self, params):
         """The speed table the parameters name, read once per file name (initialization mode
@@ -58,21 +54,3 @@ class Driveline(DrivelineInputReading, RattleSlave):
         return model.outputs()
 
     _quick_outputs = _outputs  # all cheap, and all read by the mesh every step
-
-    def _model_state(self, model):
-        return {"shaft": [model.shaft.state.phi, model.shaft.state.w, model.shaft.tau_load],
-                "time": model.time, "last_step": model.last_step,
-                "table": None if model.table is None else [model.table[0], model.table[1]],
-                "fmi": self._boundary_state(model)}
-
-    def _model_from_snapshot(self, params, start_time, snapshot):
-        s = check_snapshot_fields(snapshot, SNAPSHOT_LAYOUT)
-        table = s["table"]
-        if table is not None and not (isinstance(table, list) and len(table) == 2):
-            raise ValueError(f"model snapshot 'table' = {str(table)[:60]!r}: expected "
-                             "[times, speeds] or null")
-        phi, w, tau = s["shaft"]
-        model = DrivelineModel.from_snapshot(params, start_time, ShaftState(phi, w), tau,
-                                             s["time"], s["last_step"], table)
-        self._restore_boundary(model, s["fmi"])
-        return model

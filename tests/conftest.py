@@ -1,29 +1,51 @@
-"""Session fixtures: the FMUs are built once per test session, into a temporary folder."""
+"""Session fixtures and the test layers.
+
+Every test carries the marker of its layer, from its folder (registered in pyproject.toml;
+``pytest -m core`` runs one layer, ``pytest -m "not slow"`` leaves the long ones out):
+
+* ``core``: tests/core -- the physics core, its compiled twin and the package structure;
+* ``analysis``: tests/analysis -- the statistics and spectral lines of the studies;
+* ``fmi``: tests/fmi -- the slave classes instantiated directly and the native shim;
+* ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native -- the built FMUs (both
+  flavours) in fmpy, the other masters and native hosts;
+* ``examples``: tests/test_*.py -- the README's commands and the examples.
+
+``slow`` (tests that take more than about 10 s) is set on the tests themselves.
+"""
+
+from pathlib import Path
 
 import pytest
 
-from drive_rattle_cosim.fmus import build_script as _build_script
+from drive_rattle_build import build
+from drive_rattle_build.native import build_native
+
+TESTS = Path(__file__).resolve().parent
+#: Layer marker of each test folder (tests directly in tests/: "examples").
+LAYERS = {"core": "core", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
+          "adversarial": "fmu", "native": "fmu"}
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
+        item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
 
 
 @pytest.fixture(scope="session")
-def build_script():
-    return _build_script()
-
-
-@pytest.fixture(scope="session")
-def fmus(tmp_path_factory, build_script):
+def fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}, built and validated for this session."""
     out = tmp_path_factory.mktemp("dist")
-    paths = build_script.build(out)
+    paths = build(out)
     return {p.stem: p for p in paths}
 
 
 @pytest.fixture(scope="session")
-def native_fmus(tmp_path_factory, build_script):
+def native_fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, linux64 and win64
-    binaries and sources, built and validated for this session (build_fmu.build_native)."""
+    binaries and sources, built and validated for this session."""
     out = tmp_path_factory.mktemp("dist_native")
-    paths = build_script.build_native(out)
+    paths = build_native(out)
     return {p.stem: p for p in paths}
 
 

@@ -11,9 +11,11 @@ import os
 import stat
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 from .parameters import ParameterSet, declare
-from .stepper import check_step_size
+from .snapshots import check_fields
+from .stepper import GRID_SLACK, check_step_size
 
 RPM = 2.0 * math.pi / 60.0
 #: Number of engine-order slots of the input-shaft kinematics.
@@ -363,7 +365,7 @@ class OutputShaft:
         """Advance by h [s] with the wheel's step-start angle and speed; returns tau_load at
         the end of the step.  State is committed only on success."""
         p = self.p
-        n = max(1, math.ceil(h / p.h_max * (1.0 - 1e-12)))
+        n = max(1, math.ceil(h / p.h_max * (1.0 - GRID_SLACK)))
         dt = h / n
         if dt * self.spectral_radius_bound() > RK4_MAX_STEP_SCALE:
             phi, w = self._exact(h, phi_w, w_w)
@@ -467,12 +469,51 @@ def input_kinematics(p: DrivelineParameters, t_start: float = 0.0,
     return EngineOrderKinematics(p, t_start)
 
 
-class Driveline:
+@dataclass(frozen=True)
+class DrivelineSnapshot:
+    """Everything the driveline needs to continue exactly where it was: the output shaft's
+    vehicle-side state and torque, the time, the last communication step and the speed table
+    read at the start (``(times, speeds)``, or None for engine orders)."""
+
+    shaft: ShaftState
+    tau_load: float
+    time: float
+    last_step: float
+    table: tuple | None
+
+    #: check_fields layout of ``to_json``.
+    LAYOUT: ClassVar[dict] = {"shaft": ("f", "f", "f"), "time": ("=f",),
+                              "last_step": ("=f+",), "table": ("any",)}
+
+    def to_json(self) -> dict:
+        """A JSON-able dict (floats round-trip exactly through repr-based JSON)."""
+        table = None if self.table is None else [list(self.table[0]), list(self.table[1])]
+        return {"shaft": [self.shaft.phi, self.shaft.w, self.tau_load], "time": self.time,
+                "last_step": self.last_step, "table": table}
+
+    @classmethod
+    def from_json(cls, data) -> DrivelineSnapshot:
+        """The snapshot of a ``to_json`` dict; ValueError naming the first invalid entry (the
+        dict may come from a forged or corrupted FMU state; the table is checked when it is
+        used, ``DrivelineModel.restore``)."""
+        s = check_fields(data, cls.LAYOUT)
+        table = s["table"]
+        if table is not None and not (isinstance(table, list) and len(table) == 2):
+            raise ValueError(f"model snapshot 'table' = {str(table)[:60]!r}: expected "
+                             "[times, speeds] or null")
+        phi, w, tau = s["shaft"]
+        return cls(ShaftState(phi, w), tau, s["time"], s["last_step"],
+                   None if table is None else (table[0], table[1]))
+
+
+class DrivelineModel:
     """The driveline unit: input-shaft kinematics and output shaft, at communication points.
 
     ``phi_w``, ``w_w`` are the wheel's angle and speed at the start time; the shaft starts in
     steady state behind them.  ``table`` is the speed table already read (``(times, speeds)``,
     see :func:`read_speed_table`); without it the file the parameters name is read here, once.
+    Like the wheel steppers it is advanced by ``step`` and saved and set whole with
+    ``snapshot`` / ``restore`` (``from_snapshot``), which never start anything anew.
     """
 
     def __init__(self, p: DrivelineParameters, t_start: float, phi_w: float, w_w: float,
@@ -481,38 +522,63 @@ class Driveline:
         self.t_start = t_start
         if p.speed_table and table is None:
             table = read_speed_table(resolve_speed_table(p.speed_table, resources))
-        # Tuples: kept in every FMU state, which deep-copies lists item by item.
-        self.table = (tuple(table[0]), tuple(table[1])) if p.speed_table else None
-        self.kinematics = input_kinematics(p, t_start, resources, self.table)
+        self._use_table(table if p.speed_table else None)
         self.shaft = OutputShaft(p, phi_w, w_w)
         self.time = t_start
         self.last_step = 0.0  # the last communication step [s]; 0 before the first
 
+    def _use_table(self, table) -> None:
+        """The input-shaft kinematics from ``table`` (``(times, speeds)``) or engine orders."""
+        # Tuples: kept in every FMU state, which deep-copies lists item by item.
+        self.table = None if table is None else (tuple(table[0]), tuple(table[1]))
+        self.kinematics = input_kinematics(self.params, self.t_start, None, self.table)
+
     @classmethod
-    def from_snapshot(cls, p: DrivelineParameters, t_start: float, shaft: ShaftState,
-                      tau_load: float, time: float, last_step: float, table=None) -> Driveline:
+    def from_snapshot(cls, p: DrivelineParameters, t_start: float,
+                      snapshot: DrivelineSnapshot) -> DrivelineModel:
         """The driveline in a saved state: the shaft as saved (no steady-state start) and the
-        speed table ``(times, speeds)`` as saved with it -- no file is read.  ValueError if
-        the parameters name a speed table and ``table`` is missing or invalid."""
-        if p.speed_table and table is None:
-            raise ValueError("the saved driveline state lacks the speed table that parameter "
-                             "'engine.speed_table' names")
+        speed table as saved with it -- no file is read."""
         drive = cls.__new__(cls)
         drive.params = p
         drive.t_start = t_start
-        if p.speed_table:
-            times, speeds = check_speed_table(*table, "the saved speed table")
-            drive.table = (tuple(times), tuple(speeds))
-        else:
-            drive.table = None
-        drive.kinematics = input_kinematics(p, t_start, None, drive.table)
-        drive.shaft = OutputShaft.from_snapshot(p, shaft, tau_load)
-        drive.time = time
-        drive.last_step = last_step
+        drive.table = drive.kinematics = None
+        drive.restore(snapshot)
         return drive
 
-    def step(self, t: float, h: float, phi_w: float, w_w: float) -> None:
-        """Advance from the communication point t by h with the wheel's angle and speed at t."""
+    def snapshot(self) -> DrivelineSnapshot:
+        """The complete current state (a value: later steps do not change it)."""
+        s = self.shaft
+        return DrivelineSnapshot(ShaftState(s.state.phi, s.state.w), s.tau_load, self.time,
+                                 self.last_step, self.table)
+
+    def restore(self, snapshot: DrivelineSnapshot) -> None:
+        """Set the complete state saved by :meth:`snapshot` (nothing is started anew, no file
+        read).  ValueError, nothing changed, if the parameters name a speed table and the
+        snapshot has none, or its table is invalid."""
+        table = None
+        if self.params.speed_table:
+            if snapshot.table is None:
+                raise ValueError("the saved driveline state lacks the speed table that "
+                                 "parameter 'engine.speed_table' names")
+            times, speeds = check_speed_table(*snapshot.table, "the saved speed table")
+            table = (tuple(times), tuple(speeds))
+        if self.kinematics is None or table != self.table:
+            self._use_table(table)
+        self.shaft = OutputShaft.from_snapshot(self.params, snapshot.shaft, snapshot.tau_load)
+        self.time = snapshot.time
+        self.last_step = snapshot.last_step
+
+    def start_snapshot(self, phi_w: float, w_w: float) -> DrivelineSnapshot:
+        """The current state with the output shaft started anew in steady state behind the
+        wheel at ``phi_w`` [rad], ``w_w`` [rad/s], as the constructor starts it."""
+        shaft = OutputShaft(self.params, phi_w, w_w)
+        return DrivelineSnapshot(shaft.state, shaft.tau_load, self.time, self.last_step,
+                                 self.table)
+
+    def step(self, h: float, phi_w: float, w_w: float, *, t: float) -> None:
+        """Advance by ``h`` [s] with the wheel's angle [rad] and speed [rad/s] at the step
+        start ``t`` [s] (the communication point the step starts from: the input-shaft
+        kinematics are functions of time, and the time is taken, never accumulated)."""
         check_step_size(h, self.params.h_comm_max)
         self.shaft.step(h, phi_w, w_w)
         self.time = t + h

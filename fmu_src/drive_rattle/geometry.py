@@ -28,15 +28,33 @@ Conventions (docs/model.md, section 2):
 from __future__ import annotations
 
 import math
-
-from .parameters import DEG, MAX_PAIR_SLOTS, MeshParameters
+from typing import Protocol
 
 DRIVE = 1
 COAST = -1
 
+#: Upper bound on the number of tooth pairs that can be in the zone of action at once.
+#: The FMU exposes this many `pair[k].W` slots; a geometry needing more is rejected.
+MAX_PAIR_SLOTS = 8
+
 #: Roll distance [m] under which a breakpoint counts as reached (far below any physical
 #: length, above the rounding of roll coordinates of a long run: ~1e-14 m at 100 m of roll).
 BREAKPOINT_TOLERANCE = 1e-12
+
+
+class PairDimensions(Protocol):
+    """What the geometry reads of the parameters (``parameters.MeshParameters``: the gear.*
+    and contact.crowning parameters, SI units)."""
+
+    z_pinion: int
+    z_wheel: int
+    m_n: float
+    alpha_n: float
+    beta: float
+    addendum: float
+    b: float
+    backlash: float
+    crowning: float
 
 
 class HelicalPairGeometry:
@@ -46,7 +64,7 @@ class HelicalPairGeometry:
     have a transverse contact ratio below 1 or need more than ``MAX_PAIR_SLOTS`` pair slots.
     """
 
-    def __init__(self, p: MeshParameters):
+    def __init__(self, p: PairDimensions):
         self.z_pinion = p.z_pinion
         self.z_wheel = p.z_wheel
         self.ratio = p.z_pinion / p.z_wheel  # wheel speed / pinion speed in rigid mesh
@@ -101,7 +119,7 @@ class HelicalPairGeometry:
         self._breakpoints = self._roll_breakpoints()
 
     # ------------------------------------------------------------------ validation
-    def _check(self, p: MeshParameters) -> None:
+    def _check(self, p: PairDimensions) -> None:
         sin2 = math.sin(self.alpha_t) ** 2
         # Undercut limit of a rack cutter whose dedendum matches the addendum h_a m_n.
         z_min = 2.0 * p.addendum * math.cos(p.beta) / sin2
@@ -109,7 +127,8 @@ class HelicalPairGeometry:
             if z < z_min:
                 raise ValueError(
                     f"parameter '{name}' = {z} undercuts with gear.alpha_n = "
-                    f"{p.alpha_n / DEG:.4g} deg and gear.beta = {p.beta / DEG:.4g} deg; "
+                    f"{math.degrees(p.alpha_n):.4g} deg and gear.beta = "
+                    f"{math.degrees(p.beta):.4g} deg; "
                     f"allowed: {name} >= {math.ceil(z_min - 1e-9)} (2 cos(beta)/sin^2(alpha_t) "
                     f"* gear.h_a = {z_min:.4g})")
         if self.s_start <= 0.0 or self.s_end >= self.line_length:
@@ -122,8 +141,8 @@ class HelicalPairGeometry:
             raise ValueError(
                 f"transverse contact ratio eps_alpha = {self.eps_alpha:.4f} below 1 for "
                 f"gear.z_pinion = {p.z_pinion}, gear.z_wheel = {p.z_wheel}, gear.h_a = "
-                f"{p.addendum:.4g}, gear.alpha_n = {p.alpha_n / DEG:.4g} deg, gear.beta = "
-                f"{p.beta / DEG:.4g} deg; allowed: eps_alpha >= 1")
+                f"{p.addendum:.4g}, gear.alpha_n = {math.degrees(p.alpha_n):.4g} deg, gear.beta = "
+                f"{math.degrees(p.beta):.4g} deg; allowed: eps_alpha >= 1")
         if self.max_pairs > MAX_PAIR_SLOTS:
             b_max = (MAX_PAIR_SLOTS - self.eps_alpha) * math.pi * p.m_n / max(
                 math.sin(p.beta), 1e-300)

@@ -46,6 +46,10 @@ CIRCLE_RATIO = 1.0 + 1e-9
 #: Convergence of the arithmetic-geometric mean (relative difference of the two means).
 AGM_TOLERANCE = 1e-16
 AGM_MAX_ITERATIONS = 60
+#: Absolute tolerances of Brent's method on ln(q) of the exact ellipse and on the
+#: Hunt-Crossley factor d v (both dimensionless), and on the coefficient of restitution.
+ROOT_XTOL = 1e-15
+RESTITUTION_XTOL = 1e-16
 
 
 def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
@@ -126,7 +130,8 @@ def exact_ellipse(rho: float) -> ExactEllipse:
         if y_lo < -200.0:
             raise ValueError(f"radius ratio rho = {rho!r} too large for an elliptical contact")
     y_hi = -1e-9
-    y = roots.brent(residual, y_lo, y_hi, xtol=1e-15) if residual(y_hi) < 0.0 else y_hi
+    y = (roots.brent(residual, y_lo, y_hi, xtol=ROOT_XTOL, rtol=roots.BRENT_RTOL)
+         if residual(y_hi) < 0.0 else y_hi)
     q = math.exp(y)
     K, S = elliptic_integrals(q)
     e2 = (1.0 - q) * (1.0 + q)
@@ -161,6 +166,15 @@ def chebyshev_value(coeffs, t: float) -> float:
         b1, b2 = 2.0 * t * b1 - b2 + coeffs[j], b1
         j -= 1
     return t * b1 - b2 + coeffs[0]
+
+
+class LawCoefficients(NamedTuple):
+    """The contact law at one contact radius (``ContactLaw.coefficients``)."""
+
+    K: float  # stiffness non-linearity of W = K delta^(3/2) [N/m^1.5]
+    R: float  # the larger principal radius [m]
+    ka: float  # semi-major axis a = ka W^(1/3) [m / N^(1/3)]
+    kz: float  # contact area A = kz W^(2/3) [m^2 / N^(2/3)]
 
 
 class ContactLaw:
@@ -213,7 +227,7 @@ class ContactLaw:
             f"{CHEBYSHEV_TOLERANCE:g} (reached {worst:.3g}); use contact.hertz_law = 1")
 
     # ------------------------------------------------------------------ evaluation
-    def shape(self, r_x: float) -> tuple[float, float, float, float]:
+    def coefficients(self, r_x: float) -> LawCoefficients:
         """``(K, R, ka, kz)`` at the contact radius r_x: the stiffness non-linearity K
         [N/m^1.5], the larger radius R [m] and the coefficients of the semi-major axis
         a = ka W^(1/3) [m] and of the area A = kz W^(2/3) [m^2]."""
@@ -227,7 +241,8 @@ class ContactLaw:
             t = (math.log(rho) - self.t_mid) * self.t_scale
             K = E * math.sqrt(R) * chebyshev_value(self.kappa, t)
             c = (R / E) ** (1.0 / 3.0)
-            return K, R, c * chebyshev_value(self.alpha, t), c * c * chebyshev_value(self.zeta, t)
+            return LawCoefficients(K, R, c * chebyshev_value(self.alpha, t),
+                                   c * c * chebyshev_value(self.zeta, t))
         # Equivalent sphere (eq. 2) with Johnson's approximate ellipse: sqrt(ab) from Hertz,
         # a/b = (R/r)^(2/3) with a along the larger radius.
         K = (4.0 / 3.0) * E * math.sqrt(math.sqrt(r_x * r_y))
@@ -236,7 +251,7 @@ class ContactLaw:
             R, stretch = r_y, (r_y / r_x) ** (1.0 / 3.0)
         else:
             R, stretch = r_x, (r_x / r_y) ** (1.0 / 3.0)
-        return K, R, g * stretch, math.pi * g * g
+        return LawCoefficients(K, R, g * stretch, math.pi * g * g)
 
 
 def film_delta_max(v: float, K: float, r_x: float, ka: float, density: float) -> float:
@@ -292,7 +307,8 @@ def hunt_crossley_restitution(alpha: float) -> float:
     hi = min(1.0, 1.0 / alpha) * (1.0 - 1e-15)
     if _hunt_crossley_balance(alpha, hi) >= 0.0:
         return hi
-    return roots.brent(lambda e: _hunt_crossley_balance(alpha, e), 0.0, hi, xtol=1e-16)
+    return roots.brent(lambda e: _hunt_crossley_balance(alpha, e), 0.0, hi,
+                       xtol=RESTITUTION_XTOL, rtol=roots.BRENT_RTOL)
 
 
 def hunt_crossley_factor(e: float, v: float) -> float:
@@ -307,5 +323,6 @@ def hunt_crossley_factor(e: float, v: float) -> float:
     hi = 1.0
     while hunt_crossley_restitution(hi) > e:
         hi *= 2.0
-    alpha = roots.brent(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=1e-15)
+    alpha = roots.brent(lambda a: hunt_crossley_restitution(a) - e, 0.0, hi, xtol=ROOT_XTOL,
+                        rtol=roots.BRENT_RTOL)
     return alpha / v

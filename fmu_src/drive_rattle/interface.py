@@ -1,21 +1,29 @@
-"""Inputs and outputs of the two units: one declaration per signal (public name, unit,
-description), and the functions that compute the output values from the physics state.
+"""The two units of the system, their inputs and outputs and how they are connected: one
+declaration per signal (public name, unit, description, FMI type), the units' names, the one
+list of the connections between them, and the inputs' start values.
 
 The FMU slaves register exactly these signals, the modelDescription and the documentation
-tables are generated from them, and the co-simulation harness records them by name.  The
-names are public API: they change only on purpose.
+tables are generated from them, the co-simulation harness, the SSP system and the in-process
+twin couple the units by ``CONNECTIONS``, and the build makes one FMU per name of ``MODELS``.
+The names are public API: they change only on purpose.  The output values themselves are
+computed by the unit models (``WheelStepper.outputs``, ``DrivelineModel.outputs``).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
-from . import lubrication
-from .driveline import Driveline, DrivelineParameters
-from .geometry import DRIVE
-from .parameters import MAX_PAIR_SLOTS, MeshParameters
+from .driveline import DrivelineModel, DrivelineParameters
+from .geometry import MAX_PAIR_SLOTS
+from .parameters import MeshParameters
 from .stepper import WheelStepper
+
+#: The units' names: the model identifiers of the FMUs (and their slave classes' names).
+MESH, DRIVELINE = "GearMeshRattle", "Driveline"
+#: Every unit of the system, in build order.
+MODELS = (MESH, DRIVELINE)
 
 
 @dataclass(frozen=True)
@@ -25,7 +33,7 @@ class SignalSpec:
     name: str
     unit: str  # SI unit ("1" dimensionless)
     description: str
-    kind: str = "Real"  # FMI type: Real or Integer
+    fmi_type: str = "Real"  # FMI type: Real or Integer
     display_unit: str | None = None
     start: float = 0.0  # start value of inputs (see coupled_start_inputs)
     minimum: float | None = None  # accepted range of inputs (beyond it doStep refuses)
@@ -85,11 +93,11 @@ MESH_OUTPUTS = (
                "of the nearer flank plus its eq. 7 delta_max", display_unit="um"),
     SignalSpec("mesh.lambda", "1", "film parameter h/sigma (at mesh.h)"),
     SignalSpec("mesh.psi", "1", "proportion of dry contact psi (at mesh.h)"),
-    SignalSpec("mesh.n_contact", "1", "number of tooth pairs in contact now", kind="Integer"),
+    SignalSpec("mesh.n_contact", "1", "number of tooth pairs in contact now", fmi_type="Integer"),
     SignalSpec("mesh.impacts_drive", "1", "cumulative contact onsets on the drive flank",
-               kind="Integer"),
+               fmi_type="Integer"),
     SignalSpec("mesh.impacts_coast", "1", "cumulative contact onsets on the coast flank",
-               kind="Integer"),
+               fmi_type="Integer"),
     SignalSpec("mesh.transmission_error", "m",
                "dynamic transmission error: the signed rigid-body approach of the flanks along "
                "the tooth normal, cos(beta_b) (r_bp pinion.phi - r_bw wheel.phi), positive when "
@@ -134,51 +142,36 @@ DRIVELINE_OUTPUTS = (
 )
 
 
-def mesh_outputs(stepper: WheelStepper) -> dict[str, float]:
-    """Values of ``MESH_OUTPUTS`` for the stepper's current state (SI units)."""
-    st, last = stepper.state, stepper.last
-    mesh, g = stepper.mesh, stepper.geometry
-    loads = stepper.loads_now()
-    loaded = [p for p in loads.pairs if p.W > 0.0]
-    if loaded:
-        top = max(loaded, key=lambda p: p.W)
-        h, lam, psi = top.h, top.film_parameter, top.dry_fraction
-    else:
-        v_imp = st.v_impact_drive if loads.flank > 0 else st.v_impact_coast
-        d_max = mesh.energy_balance_delta_max(loads.flank, stepper.pinion[0], v_imp)
-        h = lubrication.film_thickness(-loads.delta, d_max)
-        lam = h / stepper.params.sigma
-        psi = lubrication.dry_fraction(lam)
-    W = loads.W
-    transverse = W * g.normal_factor
-    out = {
-        "wheel.tau_mesh": last.tau_wheel_mean,
-        "pinion.tau_mesh": last.tau_pinion_mean,
-        "wheel.phi": st.phi,
-        "wheel.w": st.w,
-        "mesh.W": loads.W,
-        "mesh.W_peak": last.W_peak,
-        "mesh.F": loads.F,
-        "mesh.delta": loads.delta if loaded else 0.0,
-        "mesh.delta_peak": last.delta_peak,
-        "mesh.v_impact": st.v_impact_last,
-        "mesh.h": h,
-        "mesh.lambda": lam,
-        "mesh.psi": psi,
-        "mesh.n_contact": len(loaded),
-        "mesh.impacts_drive": st.impacts_drive,
-        "mesh.impacts_coast": st.impacts_coast,
-        "mesh.transmission_error": mesh.penetration(DRIVE, stepper.pinion[0], st.phi)
-        + g.half_backlash,
-        "mesh.force_tangential": loads.flank * transverse * g.cos_alpha_t,
-        "mesh.force_radial": transverse * g.sin_alpha_t,
-        "mesh.force_axial": loads.flank * W * g.sin_beta_b,
-        "mesh.impact_energy": 0.5 * mesh.normal_mass * st.v_impact_last * st.v_impact_last,
-        "mesh.rattle_index": st.rattle_index,
-    }
-    for k, f in enumerate(mesh.pair_forces(loads)):
-        out[f"pair[{k}].W"] = f
-    return out
+class Connection(NamedTuple):
+    """One coupling signal: ``source``'s output feeds ``target``'s input."""
+
+    source: str  # unit
+    output: str
+    target: str  # unit
+    input: str
+
+
+def _fed_by(target: str, inputs, source: str, outputs) -> tuple[Connection, ...]:
+    """Each input of ``target`` fed by the output of the same name of ``source``."""
+    names = {s.name for s in outputs}
+    missing = [s.name for s in inputs if s.name not in names]
+    if missing:
+        raise ImportError(f"{target} inputs {missing} have no output of that name in {source}")
+    return tuple(Connection(source, s.name, target, s.name) for s in inputs)
+
+
+#: The coupling of the system: every input of a unit is fed by its partner's output of the
+#: same name (Driveline -> mesh: pinion kinematics and load torque; mesh -> Driveline: the
+#: wheel's angle and speed).  The one definition, used by the harness, the SSP system, the
+#: other masters, the regression kit and the in-process twin.
+CONNECTIONS = (_fed_by(MESH, MESH_INPUTS, DRIVELINE, DRIVELINE_OUTPUTS)
+               + _fed_by(DRIVELINE, DRIVELINE_INPUTS, MESH, MESH_OUTPUTS))
+
+
+def inputs_of(unit: str, outputs: dict[str, dict[str, float]]) -> dict[str, float]:
+    """The inputs of ``unit`` from the outputs of every unit (``{unit: {output: value}}``)
+    along ``CONNECTIONS``."""
+    return {c.input: outputs[c.source][c.output] for c in CONNECTIONS if c.target == unit}
 
 
 # ---------------------------------------------------------------------- input start values
@@ -203,11 +196,11 @@ def coupled_start_inputs(mesh_params: MeshParameters | None = None,
     dp = driveline_params or DrivelineParameters()
     wheel = {"wheel.phi": 0.0, "wheel.w": 0.0}
     for _ in range(START_EXCHANGE_ROUNDS):
-        drive = Driveline(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"]).outputs()
-        mesh_inputs = {s.name: drive[s.name] for s in MESH_INPUTS}
-        state = WheelStepper(mp, mesh_inputs["pinion.phi"], mesh_inputs["pinion.w"],
-                             mesh_inputs["wheel.tau_load"]).state
-        new_wheel = {"wheel.phi": state.phi, "wheel.w": state.w}
+        drive = DrivelineModel(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"]).outputs()
+        mesh_inputs = inputs_of(MESH, {DRIVELINE: drive})
+        phi, w = WheelStepper(mp, mesh_inputs["pinion.phi"], mesh_inputs["pinion.w"],
+                              mesh_inputs["wheel.tau_load"]).wheel_angle_speed()
+        new_wheel = inputs_of(DRIVELINE, {MESH: {"wheel.phi": phi, "wheel.w": w}})
         if new_wheel == wheel:
             return mesh_inputs, wheel
         wheel = new_wheel

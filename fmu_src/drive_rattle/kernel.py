@@ -1,30 +1,41 @@
 """Compiled twin of the wheel stepper: ``fmu_src/native/rattle_kernel.c`` loaded with ctypes.
 
 The C kernel performs exactly the computation of :meth:`WheelStepper.step` and of
-:func:`interface.mesh_outputs` -- the same floating-point operations in the same order and
-the same libm calls -- so its results are identical to the pure-Python stepper's, bit for
-bit, only faster (docs/kernel.md).  The Python stepper stays the reference, the fallback
-when the shared library is absent, and the way to get the located contact events.
+:meth:`WheelStepper.outputs` -- the same floating-point operations in the same order and the
+same libm calls -- so its results are identical to the pure-Python stepper's, bit for bit,
+only faster (docs/kernel.md).  :class:`CompiledWheelStepper` implements the stepper contract
+(``stepper.WheelStepperBase``) beside the Python :class:`WheelStepper`, which stays the
+reference, the fallback when the shared library is absent, and the way to get the located
+contact events.
 
-The arrays shared with the C code are declared in :mod:`kernel_layout`; a refused step is
-reported with the messages of :mod:`stepper`, so no layout and no message is written twice.
+The arrays shared with the C code are declared in :mod:`kernel_layout`.  The kernel holds no
+message text: a refused step comes back as a code and its numbers, and :func:`refusal` raises
+what the Python stepper raises, from the same functions (``stepper``, ``roots``,
+``lubrication``) or, where Python fails inside a library call, by making that call.
 
-Standard library only at run time; compiling the kernel needs a C compiler (gcc).
+Standard library only (it ships in the FMU); the build compiles the library
+(``drive_rattle_build.kernel``).
 """
 
 from __future__ import annotations
 
 import ctypes
-import os
+import math
+import operator
 import struct
 from pathlib import Path
 
 from . import kernel_layout as layout
+from .lubrication import unknown_form_error
 from .parameters import MeshParameters
+from .roots import bracket_error
 from .stepper import (
+    PinionState,
     StepResult,
+    WheelSnapshot,
     WheelState,
     WheelStepper,
+    WheelStepperBase,
     _check_finite,
     check_step_size,
     diverged_error,
@@ -34,11 +45,6 @@ from .stepper import (
 
 #: File name of the shared library, next to this module (in an FMU: resources/drive_rattle/).
 LIBRARY_NAME = "_rattle_kernel.so"
-#: The C source; it includes the generated layout header next to it.
-SOURCE = Path(__file__).resolve().parents[1] / "native" / "rattle_kernel.c"
-#: Compiler flags: IEEE semantics without contraction (no FMA), as the bit-for-bit identity
-#: with the Python stepper requires.
-CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-fPIC", "-shared")
 
 #: Names of the arrays' entries (kernel_layout declares them).
 MODEL_SIZE = layout.MODEL_SIZE
@@ -46,46 +52,27 @@ STATE_FIELDS = layout.STATE_FIELDS
 RESULT_FIELDS = layout.RESULT_FIELDS
 OUTPUT_NAMES = layout.OUTPUT_FIELDS
 INTEGER_OUTPUTS = layout.OUTPUT_INTEGERS
-_ERRLEN = 1024
-_CODE = {name: i for i, name in enumerate(layout.ERROR_CODES)}
+
+#: The library calls of a refusal with code "library", made again here so that Python raises
+#: its own exception with its own text (kernel_layout.LIBRARY_CALLS, in order).
+_CALLS = {
+    "pow": lambda x, y: x**y,
+    "sqrt": lambda x, y: math.sqrt(x),
+    "log": lambda x, y: math.log(x),
+    "exp": lambda x, y: math.exp(x),
+    "floor": lambda x, y: math.floor(x),
+    "ceil": lambda x, y: math.ceil(x),
+    "int": lambda x, y: int(x),
+    "none_gt": lambda x, y: operator.gt(None, x),
+}
+if tuple(_CALLS) != layout.LIBRARY_CALLS:
+    raise ImportError("kernel_layout.LIBRARY_CALLS changed; update kernel._CALLS")
 
 
-# ------------------------------------------------------------------ building and loading
+# ------------------------------------------------------------------ loading
 def default_library_path() -> Path:
     """Where :func:`load_kernel` looks by default: next to this module."""
     return Path(__file__).resolve().parent / LIBRARY_NAME
-
-
-def compile_kernel(out_path, cc: str = "gcc", source=None) -> Path:
-    """Compile the kernel into the shared library ``out_path`` (written atomically).
-
-    ``source`` defaults to :data:`SOURCE`; it includes ``rattle_kernel_layout.h`` from the
-    folder of :data:`SOURCE`.  Raises RuntimeError when that header is stale (it no longer
-    matches :mod:`kernel_layout`), or with the compiler's output when the compiler is missing
-    or fails."""
-    import subprocess  # build time only
-
-    if not layout.header_is_current():
-        raise RuntimeError(
-            f"{layout.HEADER} does not match drive_rattle/kernel_layout.py; regenerate it "
-            "with `python build_fmu.py --update-kernel-header` (every build does it) and "
-            "commit it")
-    src = Path(source) if source is not None else SOURCE
-    out = Path(out_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    cmd = [cc, *CFLAGS, "-I", str(layout.HEADER.parent), "-o", str(tmp), str(src), "-lm"]
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    except OSError as exc:
-        raise RuntimeError(f"cannot run the C compiler {cc!r}: {exc}") from exc
-    if proc.returncode != 0:
-        tmp.unlink(missing_ok=True)
-        raise RuntimeError(
-            f"compiling the rattle kernel failed (exit {proc.returncode}): {' '.join(cmd)}\n"
-            f"{proc.stdout}{proc.stderr}")
-    os.replace(tmp, out)
-    return out
 
 
 _LOADED: dict[str, ctypes.CDLL] = {}
@@ -111,17 +98,65 @@ def load_kernel(path=None) -> ctypes.CDLL | None:
     layout_hash.argtypes, layout_hash.restype = [], ctypes.c_ulonglong
     if layout_hash() != layout.LAYOUT_HASH:
         return None
-    # Pointers and an int only: without argtypes ctypes passes the arrays as pointers with
-    # the least per-call work (the hot path).
+    # Pointers only: without argtypes ctypes passes the arrays as pointers with the least
+    # per-call work (the hot path).
     lib.rk_step.argtypes, lib.rk_step.restype = None, ctypes.c_int
     lib.rk_outputs.argtypes, lib.rk_outputs.restype = None, ctypes.c_int
     _LOADED[key] = lib
     return lib
 
 
-def pack_model(stepper: WheelStepper) -> list[float]:
-    """The model array of ``stepper`` (:func:`kernel_layout.pack_model`)."""
-    return layout.pack_model(stepper)
+# ------------------------------------------------------------------ refusals
+def refusal(code: int, values, inputs: dict[str, float] | None = None,
+            h_comm_max: float = math.inf) -> Exception:
+    """The exception the Python core raises where the kernel returned ``code`` with the
+    numbers ``values`` (``kernel_layout.ERROR_CODES``).  ``inputs`` (the step's inputs by
+    name) and ``h_comm_max`` serve the "input" code, which the Python checks word."""
+    name = layout.ERROR_CODES[code] if 0 <= code < len(layout.ERROR_CODES) else None
+    v = list(values)
+    if name == "input" and inputs is not None:
+        try:
+            _check_finite(**{k: x for k, x in inputs.items() if k != "h"})
+            check_step_size(inputs["h"], h_comm_max)
+        except ValueError as err:
+            return err
+    elif name == "diverged":
+        return diverged_error(v[0], v[1])
+    elif name == "penetration":
+        return penetration_error(v[0], v[1])
+    elif name == "too_stiff":
+        return stiffness_error(v[0], v[1], v[2], v[3])
+    elif name == "no_bracket":
+        return bracket_error(v[0], v[1], v[2], v[3])
+    elif name == "friction_form":
+        return unknown_form_error(int(v[0]))
+    elif name == "library" and 0 <= v[0] < len(layout.LIBRARY_CALLS):
+        call = layout.LIBRARY_CALLS[int(v[0])]
+        try:
+            result = _CALLS[call](v[1], v[2])
+        except (ArithmeticError, ValueError, TypeError) as err:
+            return err
+        return ValueError(f"rattle kernel: {call}({v[1]!r}, {v[2]!r}) = {result!r} is not a "
+                          "real number the kernel can go on with")
+    elif name == "layout":
+        return RuntimeError(
+            f"rattle kernel: model array layout mismatch (kernel layout {layout.LAYOUT_HASH} "
+            f"with {MODEL_SIZE} fields; rebuild {LIBRARY_NAME} from the sources of this "
+            "version)")
+    elif name == "model_values":
+        return RuntimeError(f"rattle kernel: {int(v[0])} breakpoints, {int(v[1])} Chebyshev "
+                            f"terms, law {int(v[2])}: beyond the kernel's arrays")
+    elif name == "too_many_pairs":
+        return ValueError(f"more than {int(v[0])} tooth pairs in the zone of action")
+    elif name == "pair_number_range":
+        return ValueError(f"roll coordinate {v[0]!r} m beyond the kernel's range (pair number "
+                          f"{v[1]!r}; |pinion angle| too large)")
+    elif name == "no_progress":
+        return ValueError(f"the step makes no progress at t = {v[0]!r} s (the integrator is "
+                          "stuck; reduce solver.h_max or the communication step)")
+    elif name == "substep_count":
+        return ValueError(f"step size h = {v[0]!r} s needs {v[1]!r} substeps")
+    return RuntimeError(f"rattle kernel: return code {code} ({name}) with {v}")
 
 
 # ------------------------------------------------------------------ the stepper
@@ -138,39 +173,31 @@ _RESULT_AGGREGATES = tuple((name, RESULT_FIELDS.index(name), name in layout.RESU
                            for name in layout.RESULT_AGGREGATES)
 _R_EVENT_COUNT = RESULT_FIELDS.index("event_count")
 _R_PINION = (RESULT_FIELDS.index("pinion_phi"), RESULT_FIELDS.index("pinion_w"))
+_S_PHI, _S_W = STATE_FIELDS.index("phi"), STATE_FIELDS.index("w")
 # The `last` array of rk_outputs: the aggregates the outputs read, and the pinion.
 _LAST_FLOATS = tuple((name, RESULT_FIELDS.index(name)) for name in
                      ("tau_wheel_mean", "tau_pinion_mean", "W_peak", "delta_peak"))
 _INTEGER_INDICES = tuple(OUTPUT_NAMES.index(name) for name in INTEGER_OUTPUTS)
 
 
-class CompiledWheelStepper(WheelStepper):
-    """:class:`WheelStepper` whose :meth:`step` runs the compiled kernel.
+class CompiledWheelStepper(WheelStepperBase):
+    """The wheel stepper contract (``stepper.WheelStepperBase``) on the compiled kernel.
 
-    The initial state (the static equilibrium) comes from the Python constructor.  ``state``,
-    ``pinion`` and ``last`` follow each step as the Python stepper's do; ``last.events`` is
+    The start state (the static equilibrium) is solved by the shared constructor in Python;
+    the kernel only steps forward from a given state.  The state lives in a C array
+    (``state`` builds the :class:`WheelState` value on demand); ``last_result.events`` is
     empty (the Python stepper reports events; :attr:`last_event_count` counts them).
-    :meth:`outputs` gives the values of ``interface.mesh_outputs``.
-
-    The state lives in a C array; ``state`` builds the :class:`WheelState` on demand, and a
-    state read (or assigned) through ``state`` is written back before the next step or
-    outputs call, so changing it in place works as with the Python stepper.
+    ``library`` is a loaded kernel (:func:`load_kernel`), by default the one next to this
+    module.
     """
 
     def __init__(self, params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
                  tau_load: float = 0.0, *, library: ctypes.CDLL | None = None):
-        self._init_buffers(library)
-        super().__init__(params, phi_p, w_p, tau_load)
-        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
+        super().__init__(params, phi_p, w_p, tau_load, library=library)
 
-    def _setup_from_snapshot(self, params, state, pinion, last, *, library=None) -> None:
-        """:meth:`WheelStepper.from_snapshot` for the kernel: its buffers, then the state."""
-        self._init_buffers(library)
-        super()._setup_from_snapshot(params, state, pinion, last)
-        self._model = (ctypes.c_double * MODEL_SIZE)(*pack_model(self))
-
-    def _init_buffers(self, library: ctypes.CDLL | None) -> None:
-        """The kernel library and the C arrays shared with it."""
+    def _setup(self, params: MeshParameters, library: ctypes.CDLL | None = None) -> None:
+        """The mesh model, the kernel library and the C arrays shared with it."""
+        super()._setup(params)
         lib = library if library is not None else load_kernel()
         if lib is None:
             raise RuntimeError(
@@ -179,9 +206,8 @@ class CompiledWheelStepper(WheelStepper):
         self._lib = lib
         self._rk_step = lib.rk_step
         self._rk_outputs = lib.rk_outputs
+        self._model = (ctypes.c_double * MODEL_SIZE)(*layout.pack_model(self))
         self._state = _DoubleState()
-        self._state_obj: WheelState | None = None
-        self._state_dirty = False  # True: the WheelState object is the authoritative state
         self._inputs = _DoubleInputs()
         self._inputs_b = memoryview(self._inputs).cast("B")
         self._result = _DoubleResult()
@@ -190,30 +216,34 @@ class CompiledWheelStepper(WheelStepper):
         self._last_arr = _DoubleResult()
         self._out = _DoubleOutputs()
         self._out_mv = memoryview(self._out).cast("B").cast("d")
-        self._err = ctypes.create_string_buffer(_ERRLEN)
 
-    # The state: a WheelState on demand, written back when it may have been changed.
+    def _load(self, snapshot: WheelSnapshot) -> None:
+        self._state[:] = snapshot.state.as_tuple()
+        self._pinion = PinionState(float(snapshot.pinion[0]), float(snapshot.pinion[1]))
+        self._last = StepResult(*snapshot.result.aggregates())
+
+    def snapshot(self) -> WheelSnapshot:
+        return WheelSnapshot(self.state, self._pinion, StepResult(*self._last.aggregates()))
+
     @property
     def state(self) -> WheelState:
-        obj = self._state_obj
-        if obj is None:
-            obj = self._state_obj = WheelState.from_tuple(self._state)
-        self._state_dirty = True
-        return obj
+        return WheelState.from_tuple(self._state)
 
-    @state.setter
-    def state(self, value: WheelState) -> None:
-        self._state_obj = value
-        self._state_dirty = True
+    @property
+    def pinion(self) -> PinionState:
+        return self._pinion
 
-    def _pack_state(self) -> None:
-        self._state[:] = self._state_obj.as_tuple()
+    @property
+    def last_result(self) -> StepResult:
+        return self._last
+
+    def wheel_angle_speed(self) -> tuple[float, float]:
+        a = self._state
+        return a[_S_PHI], a[_S_W]
 
     def step(self, h: float, phi_p: float, w_p: float, a_p: float = 0.0,
              tau_load: float = 0.0) -> StepResult:
         """As :meth:`WheelStepper.step` (no events are reported)."""
-        if self._state_dirty:
-            self._pack_state()
         try:
             _pack_inputs(self._inputs_b, 0, h, phi_p, w_p, a_p, tau_load)
         except (struct.error, TypeError, OverflowError):
@@ -222,78 +252,46 @@ class CompiledWheelStepper(WheelStepper):
             check_step_size(h, self.params.h_comm_max)
             raise
         code = self._rk_step(self._model, self._state, self._inputs, self._result,
-                             self._err_values, self._err, _ERRLEN)
+                             self._err_values)
         if code:
-            raise self._refusal(code, h, phi_p, w_p, a_p, tau_load)
-        self._state_obj = None
-        self._state_dirty = False
+            raise refusal(code, self._err_values,
+                          {"h": h, "phi_p": phi_p, "w_p": w_p, "a_p": a_p, "tau_load": tau_load},
+                          self.params.h_comm_max)
         values = self._result_mv.tolist()
-        self.pinion = (values[_R_PINION[0]], values[_R_PINION[1]])
-        self.last = result = StepResult(
+        self._pinion = PinionState(values[_R_PINION[0]], values[_R_PINION[1]])
+        self._last = result = StepResult(
             **{name: (int(values[i]) if integer else values[i])
                for name, i, integer in _RESULT_AGGREGATES})
         return result
 
-    def _refusal(self, code: int, h, phi_p, w_p, a_p, tau_load) -> Exception:
-        """The exception the Python stepper raises for the kernel's return ``code``."""
-        v = self._err_values
-        if code == _CODE["input"]:
-            _check_finite(phi_p=phi_p, w_p=w_p, a_p=a_p, tau_load=tau_load)
-            check_step_size(h, self.params.h_comm_max)
-        elif code == _CODE["diverged"]:
-            return diverged_error(v[0], v[1])
-        elif code == _CODE["penetration"]:
-            return penetration_error(v[0], v[1])
-        elif code == _CODE["too_stiff"]:
-            return stiffness_error(v[0], v[1], v[2], v[3])
-        message = self._err.value.decode("utf-8", "replace")
-        if code == _CODE["value_error"]:
-            return ValueError(message)
-        if code == _CODE["overflow_error"]:
-            return OverflowError(message)
-        if code == _CODE["type_error"]:
-            return TypeError(message)
-        return RuntimeError(f"rattle kernel: return code {code}: {message}")
-
-    def wheel_angle_speed(self) -> tuple[float, float]:
-        """``(state.phi, state.w)`` without building the WheelState (cheap, for hot paths)."""
-        if self._state_dirty:
-            s = self._state_obj
-            return s.phi, s.w
-        a = self._state
-        return a[0], a[1]
-
     @property
     def last_event_count(self) -> int:
-        """Number of located events (onsets, releases, friction reversals) in the last step."""
+        """Number of located events (onsets, releases, friction reversals, pair engagements)
+        in the last step."""
         return int(self._result[_R_EVENT_COUNT])
 
     def output_values(self) -> list[float]:
         """The values of ``interface.MESH_OUTPUTS`` now, in their declared order (Integer
         outputs as int); cheaper than :meth:`outputs` where the names are known."""
-        if self._state_dirty:
-            self._pack_state()
-        last, arr = self.last, self._last_arr
+        last, arr = self._last, self._last_arr
         for name, i in _LAST_FLOATS:
             arr[i] = getattr(last, name)
-        arr[_R_PINION[0]], arr[_R_PINION[1]] = self.pinion
-        code = self._rk_outputs(self._model, self._state, arr, self._out)
+        arr[_R_PINION[0]], arr[_R_PINION[1]] = self._pinion
+        code = self._rk_outputs(self._model, self._state, arr, self._out, self._err_values)
         if code:
-            raise ValueError(
-                f"the mesh outputs cannot be evaluated at pinion.phi = {self.pinion[0]!r} rad "
-                f"(wheel.phi = {self._state[0]!r} rad; kernel code {code})")
+            raise refusal(code, self._err_values)
         values = self._out_mv.tolist()
         for i in _INTEGER_INDICES:
             values[i] = int(values[i])
         return values
 
     def outputs(self) -> dict[str, float]:
-        """The values of ``interface.MESH_OUTPUTS`` now (as ``interface.mesh_outputs``)."""
+        """The values of ``interface.MESH_OUTPUTS`` now (as :meth:`WheelStepper.outputs`)."""
         return dict(zip(OUTPUT_NAMES, self.output_values(), strict=True))
 
 
 def new_stepper(params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
-                tau_load: float = 0.0, prefer_compiled: bool = True) -> WheelStepper:
+                tau_load: float = 0.0, prefer_compiled: bool = True) -> WheelStepperBase:
     """A :class:`CompiledWheelStepper` when ``prefer_compiled`` and the kernel library loads,
     else the pure-Python :class:`WheelStepper`."""
     if prefer_compiled:
@@ -303,7 +301,5 @@ def new_stepper(params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
     return WheelStepper(params, phi_p, w_p, tau_load)
 
 
-__all__ = [
-    "LIBRARY_NAME", "SOURCE", "CompiledWheelStepper", "compile_kernel", "default_library_path",
-    "load_kernel", "new_stepper", "pack_model",
-]
+__all__ = ["LIBRARY_NAME", "CompiledWheelStepper", "default_library_path", "load_kernel",
+           "new_stepper", "refusal"]

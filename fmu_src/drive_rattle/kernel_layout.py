@@ -13,10 +13,11 @@ array, and nothing is written twice:
   compiled into the library and checked when it is loaded and on every call, so a library
   built from another layout is never used, even when only two names swapped places.
 
-``python build_fmu.py`` writes the header before it compiles the kernel (``python build_fmu.py
---update-kernel-header`` only that); :func:`kernel.compile_kernel` refuses a stale header and
-``tests/core/test_kernel.py`` fails while the committed one is stale.  Standard library only
-(it ships in the FMU with ``kernel.py``).
+The build (``drive_rattle_build.kernel``) writes the header before it compiles the kernel
+(``drive-rattle-build --update-kernel-header`` only that), refuses to compile against a stale
+header, and ``tests/core/test_kernel.py`` fails while the committed one is stale.  Standard
+library only (it ships in the FMU with ``kernel.py``: ``pack_model`` and ``LAYOUT_HASH`` are
+used at run time).
 """
 
 from __future__ import annotations
@@ -25,22 +26,30 @@ import hashlib
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, fields
-from pathlib import Path
 
 from . import geometry, hertz, lubrication, roots, stepper
+from .geometry import MAX_PAIR_SLOTS
 from .interface import MESH_OUTPUTS
-from .parameters import MAX_PAIR_SLOTS
 
-#: Bumped when the meaning of the arrays changes without a change of their names.
-ABI_VERSION = 2
+#: Bumped when the meaning of the arrays or the functions' arguments change without a change
+#: of the names (3: refusals as codes and numbers only, no message text).
+ABI_VERSION = 3
 #: First entry of the model array ("rattle" in ASCII digits), against stray arrays.
 MAGIC = 7261747465.0
-#: The header the C source includes, next to it.
-HEADER = Path(__file__).resolve().parents[1] / "native" / "rattle_kernel_layout.h"
 #: Largest number of roll breakpoints per base pitch (geometry._roll_breakpoints has 4).
 MAX_BREAKPOINTS = 4
-#: Extra values of a refused step (the numbers its message quotes).
+#: Extra values of a refused step (the numbers its message quotes, or a library call's code
+#: and arguments).
 ERROR_VALUES = 4
+#: The kernel's own limits (the Python stepper has none of them; kernel.py words the
+#: refusals): tooth pairs held per roll coordinate, the largest |pair number| (pair numbers are
+#: exact integers in doubles below 2**53), main-loop iterations without progress in time
+#: before a step is refused (the Python loop would not end), and the largest number of grid
+#: substeps (an int64).
+MAX_PAIRS = 16
+PAIR_NUMBER_LIMIT = 2.0**52
+STALL_LIMIT = 1_000_000
+MAX_GRID_SUBSTEPS = 9.2e18
 
 
 @dataclass(frozen=True)
@@ -143,8 +152,10 @@ MODEL_FIELDS: tuple[ModelField, ...] = (
                "stepper.GRAZING_SAMPLES"),
     ModelField("brent_max_iterations", lambda s: float(roots.MAX_ITERATIONS),
                "roots.MAX_ITERATIONS"),
-    ModelField("brent_rtol", lambda s: roots.BRENT_RTOL, "roots.BRENT_RTOL"),
+    ModelField("brent_rtol", lambda s: stepper.EVENT_RTOL, "stepper.EVENT_RTOL"),
     ModelField("event_xtol", lambda s: stepper.EVENT_XTOL, "stepper.EVENT_XTOL [s]"),
+    ModelField("engagement_min_fraction", lambda s: stepper.ENGAGEMENT_MIN_FRACTION,
+               "stepper.ENGAGEMENT_MIN_FRACTION"),
     ModelField("lambda_boundary", lambda s: lubrication.LAMBDA_BOUNDARY,
                "lubrication.LAMBDA_BOUNDARY"),
     ModelField("lambda_full_film", lambda s: lubrication.LAMBDA_FULL_FILM,
@@ -153,32 +164,42 @@ MODEL_FIELDS: tuple[ModelField, ...] = (
                "stepper.CONTACT_RATE_SAFETY"),
     ModelField("max_contact_substeps", lambda s: float(stepper.MAX_CONTACT_SUBSTEPS),
                "stepper.MAX_CONTACT_SUBSTEPS"),
+    ModelField("grid_slack", lambda s: stepper.GRID_SLACK, "stepper.GRID_SLACK"),
 )
 MODEL_SIZE = sum(f.count for f in MODEL_FIELDS)
 
 #: The state array: WheelState's fields in order (``int`` fields are stored exactly).
 STATE_FIELDS = tuple(f.name for f in fields(stepper.WheelState))
 STATE_INTEGERS = tuple(f.name for f in fields(stepper.WheelState) if f.type == "int")
-#: The result array: StepResult's aggregates, the number of located events (onsets, releases,
-#: reversals) and the pinion at the step end (``WheelStepper.pinion``).
+#: The result array: StepResult's aggregates and cost counters, the number of located events
+#: (onsets, releases, reversals, pair engagements) and the pinion at the step end
+#: (``pinion``).
 RESULT_AGGREGATES = tuple(f.name for f in fields(stepper.StepResult) if f.name != "events")
 RESULT_INTEGERS = tuple(f.name for f in fields(stepper.StepResult)
                         if f.name != "events" and f.type == "int")
 RESULT_FIELDS = (*RESULT_AGGREGATES, "event_count", "pinion_phi", "pinion_w")
 #: The output array: the values of interface.MESH_OUTPUTS in declared order.
 OUTPUT_FIELDS = tuple(s.name for s in MESH_OUTPUTS)
-OUTPUT_INTEGERS = tuple(s.name for s in MESH_OUTPUTS if s.kind == "Integer")
+OUTPUT_INTEGERS = tuple(s.name for s in MESH_OUTPUTS if s.fmi_type == "Integer")
 #: The step's inputs, as rk_step reads them.
 INPUT_FIELDS = ("h", "phi_p", "w_p", "a_p", "tau_load")
 
-#: Return codes of rk_step.  "input": a non-finite input or an invalid step size (Python
-#: raises it from the same checks); "diverged", "penetration", "too_stiff": the stepper's
-#: refusals, with the numbers of their messages in the error values; "value_error" and
-#: "overflow_error": what Python would raise as ValueError / OverflowError from a library call
-#: (a math function's argument out of range), "type_error" a comparison with None, each with
-#: the same message in the error text.
-ERROR_CODES = ("ok", "layout", "input", "diverged", "penetration", "too_stiff", "value_error",
-               "overflow_error", "type_error")
+#: Return codes of rk_step and rk_outputs, with what the error values hold; kernel.py raises
+#: the exception Python raises (kernel.refusal).  "layout": a model array of another layout;
+#: "model_values": counts beyond the kernel's arrays (breakpoints, Chebyshev terms, law);
+#: "input": a non-finite input or an invalid step size (Python raises it from the same
+#: checks); "diverged" (phi, w), "penetration" (depth, limit), "too_stiff" (fastest, k, c,
+#: mass): the stepper's refusals; "library" (call, x, y): a library call that raises in Python
+#: (``LIBRARY_CALLS``); "no_bracket" (a, fa, b, fb): Brent's method without a bracket;
+#: "friction_form" (form); the kernel's own limits: "too_many_pairs" (MAX_PAIRS),
+#: "pair_number_range" (u, n), "no_progress" (t), "substep_count" (h, n).
+ERROR_CODES = ("ok", "layout", "model_values", "input", "diverged", "penetration",
+               "too_stiff", "library", "no_bracket", "friction_form", "too_many_pairs",
+               "pair_number_range", "no_progress", "substep_count")
+#: The library calls the kernel reports by code: pow (x ** y), math.sqrt, math.log,
+#: math.exp, math.floor, math.ceil, int(), and ``None > 0.0`` (Brent's method meeting the
+#: None of a pair that left the zone).
+LIBRARY_CALLS = ("pow", "sqrt", "log", "exp", "floor", "ceil", "int", "none_gt")
 
 #: Codes both sides use, as C macros.
 CODES = {
@@ -193,6 +214,10 @@ CODES = {
     "RK_MAX_CHEBYSHEV_TERMS": hertz.MAX_CHEBYSHEV_TERMS,
     "RK_MAX_BREAKPOINTS": MAX_BREAKPOINTS,
     "RK_ERROR_VALUES": ERROR_VALUES,
+    "RK_MAX_PAIRS": MAX_PAIRS,
+    "RK_PAIR_NUMBER_LIMIT": PAIR_NUMBER_LIMIT,
+    "RK_STALL_LIMIT": STALL_LIMIT,
+    "RK_MAX_GRID_SUBSTEPS": MAX_GRID_SUBSTEPS,
     "RK_ABI_VERSION": ABI_VERSION,
 }
 
@@ -236,8 +261,11 @@ def _body() -> str:
     lines.append("/* input array of rk_step */")
     lines += _enum("I_", INPUT_FIELDS)
     lines.append("")
-    lines.append("/* return codes of rk_step */")
+    lines.append("/* return codes of rk_step and rk_outputs */")
     lines += _enum("RK_ERR_", ERROR_CODES)
+    lines.append("")
+    lines.append("/* library calls of RK_ERR_LIBRARY */")
+    lines += _enum("RK_CALL_", LIBRARY_CALLS)
     lines.append("")
     for name, value in CODES.items():
         lines.append(f"#define {name} ({value})")
@@ -259,24 +287,11 @@ def render_header() -> str:
     """The text of ``rattle_kernel_layout.h``."""
     return (
         "/* GENERATED by drive_rattle/kernel_layout.py -- do not edit.\n"
-        " * Regenerate: python build_fmu.py --update-kernel-header (every build does it). */\n"
+        " * Regenerate: drive-rattle-build --update-kernel-header (every build does it). */\n"
         "#ifndef RATTLE_KERNEL_LAYOUT_H\n#define RATTLE_KERNEL_LAYOUT_H\n\n"
         f"{_BODY}\n"
         f"#define RK_LAYOUT_HASH {LAYOUT_HASH}ULL\n\n"
         "#endif\n")
-
-
-def header_is_current(path: Path = HEADER) -> bool:
-    """True when the header at ``path`` is the one :func:`render_header` writes."""
-    return path.is_file() and path.read_text(encoding="utf-8") == render_header()
-
-
-def write_header(path: Path = HEADER) -> bool:
-    """Write the header at ``path`` when it differs; returns True when it was written."""
-    if header_is_current(path):
-        return False
-    path.write_text(render_header(), encoding="utf-8")
-    return True
 
 
 def pack_model(stepper_) -> list[float]:

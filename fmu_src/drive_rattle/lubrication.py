@@ -64,7 +64,14 @@ def friction_force(
         return A * (psi * tau_s + (1.0 - psi) * viscous)
     if form == FORM_AS_PRINTED:
         return A_e * (psi * tau_s + (1.0 - psi) * viscous)
-    raise ValueError(f"friction form {form!r} unknown; allowed: 0, 1, 2")
+    raise unknown_form_error(form)
+
+
+def unknown_form_error(form: int) -> ValueError:
+    """The refusal of a friction form that is not one of the FORM_ codes (the compiled kernel
+    reports it with the form's number)."""
+    return ValueError(f"friction form {form!r} unknown; allowed: {FORM_LOAD_SHARING}, "
+                      f"{FORM_APPARENT_AREA}, {FORM_AS_PRINTED}")
 
 
 def entrainment_speed(w_p: float, rho_p: float, w_w: float, rho_w: float) -> float:

@@ -26,8 +26,8 @@ import math
 from dataclasses import dataclass, field
 
 from . import hertz, lubrication
-from .geometry import HelicalPairGeometry
-from .parameters import MAX_PAIR_SLOTS, MeshParameters
+from .geometry import MAX_PAIR_SLOTS
+from .parameters import MeshParameters
 
 DISSIPATION_NONE = 0
 DISSIPATION_RESTITUTION = 1
@@ -79,9 +79,9 @@ def damping_factor(params: MeshParameters) -> float:
 class MeshModel:
     """Evaluates the mesh loads for given gear angles and speeds."""
 
-    def __init__(self, params: MeshParameters, geometry: HelicalPairGeometry | None = None):
+    def __init__(self, params: MeshParameters):
         self.params = params
-        self.geometry = g = geometry if geometry is not None else HelicalPairGeometry(params)
+        self.geometry = g = params.geometry
         self.E_star = hertz.effective_modulus(
             params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
         self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
@@ -135,7 +135,7 @@ class MeshModel:
         for _slot, s, g, _dg in self.geometry.pairs(flank, phi_p):
             d = delta - g
             if d > 0.0:
-                K = law.shape(self.geometry.normal_radii(s)[2])[0]
+                K = law.coefficients(self.geometry.normal_radii(s)[2]).K
                 total += K * (d * math.sqrt(d))
         return total
 
@@ -149,7 +149,7 @@ class MeshModel:
         for _slot, s, g, dg in self.geometry.pairs(flank, phi_p):
             pen = delta - g
             if pen > 0.0:
-                K = law.shape(self.geometry.normal_radii(s)[2])[0]
+                K = law.coefficients(self.geometry.normal_radii(s)[2]).K
                 root = math.sqrt(pen)
                 factor = 1.0 + d * (delta_dot - self.pair_rate(flank, w_p, dg))
                 if factor > 0.0:
@@ -174,11 +174,11 @@ class MeshModel:
             if pen <= 0.0:
                 if detail:
                     r_x = g.normal_radii(s)[2]
-                    out.pairs.append(PairLoad(slot, s, offset, r_x, law.shape(r_x)[0], pen, 0.0,
-                                              0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+                    out.pairs.append(PairLoad(slot, s, offset, r_x, law.coefficients(r_x).K,
+                                              pen, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             r_x = g.normal_radii(s)[2]
-            K, _R, ka, kz = law.shape(r_x)
+            K, _R, ka, kz = law.coefficients(r_x)
             W = K * (pen * math.sqrt(pen))
             if damping > 0.0:
                 W *= 1.0 + damping * (delta_dot - self.pair_rate(flank, w_p, dg))
@@ -227,7 +227,7 @@ class MeshModel:
         out = 0.0
         for _, s, _g, _dg in self.geometry.pairs(flank, phi_p):
             r_x = self.geometry.normal_radii(s)[2]
-            K, _R, ka, _kz = self.law.shape(r_x)
+            K, _R, ka, _kz = self.law.coefficients(r_x)
             d = hertz.film_delta_max(v_impact, K, r_x, ka, self.params.density)
             if d > out:
                 out = d

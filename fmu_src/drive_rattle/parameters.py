@@ -16,9 +16,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-#: Upper bound on the number of tooth pairs that can be in the zone of action at once.
-#: The FMU exposes this many `pair[k].W` slots; a geometry needing more is rejected.
-MAX_PAIR_SLOTS = 8
+from .geometry import HelicalPairGeometry
 
 
 @dataclass(frozen=True)
@@ -41,7 +39,7 @@ class ParameterSpec:
     choices: Mapping[int, str] | None = None
 
     @property
-    def kind(self) -> str:
+    def fmi_type(self) -> str:
         """FMI type name: ``Boolean``, ``Integer``, ``Real`` or ``String``."""
         if isinstance(self.default, str):
             return "String"
@@ -53,9 +51,9 @@ class ParameterSpec:
 
     def allowed(self) -> str:
         """Human-readable statement of the allowed values, used in error messages."""
-        if self.kind == "Boolean":
+        if self.fmi_type == "Boolean":
             return "true or false"
-        if self.kind == "String":
+        if self.fmi_type == "String":
             return "a string"
         if self.choices is not None:
             return "one of " + ", ".join(f"{k} ({v})" for k, v in self.choices.items())
@@ -68,16 +66,16 @@ class ParameterSpec:
 
     def check(self, value: Any) -> Any:
         """Return ``value`` converted to the parameter's type, or raise ValueError naming it."""
-        kind = self.kind
-        if kind == "String":
+        fmi_type = self.fmi_type
+        if fmi_type == "String":
             if not isinstance(value, str):
                 raise self._error(value, "must be a string")
             return value
-        if kind == "Boolean":
+        if fmi_type == "Boolean":
             if isinstance(value, bool) or value in (0, 1):
                 return bool(value)
             raise self._error(value)
-        if kind == "Integer":
+        if fmi_type == "Integer":
             if isinstance(value, bool) or not _is_integral(value):
                 raise self._error(value, "must be an integer")
             value = int(value)
@@ -328,7 +326,11 @@ class MeshParameters(ParameterSet):
 
     def _check_combination(self) -> None:
         # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the
-        # geometry that defines them; building it here makes every invalid set fail early.
-        from .geometry import HelicalPairGeometry
+        # geometry that defines them; building it here makes every invalid set fail early,
+        # and the set keeps it (``geometry``): it is built once per parameter set.
+        object.__setattr__(self, "_geometry", HelicalPairGeometry(self))
 
-        HelicalPairGeometry(self)
+    @property
+    def geometry(self) -> HelicalPairGeometry:
+        """The pair's geometry, built and checked when the parameters were validated."""
+        return self._geometry

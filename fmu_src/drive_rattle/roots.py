@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 #: Iteration cap of :func:`brent`; Brent's method needs at most ~log2(range/xtol)^2 steps.
 MAX_ITERATIONS = 200
-#: Default relative tolerance of :func:`brent`: four units of roundoff (2**-52).
+#: The usual relative tolerance of :func:`brent`: four units of roundoff (2**-52).
 BRENT_RTOL = 4.0 * 2.220446049250313e-16
 
 
@@ -22,13 +22,15 @@ def brent(
     b: float,
     fa: float | None = None,
     fb: float | None = None,
-    xtol: float = 1e-15,
-    rtol: float = BRENT_RTOL,
+    *,
+    xtol: float,
+    rtol: float,
 ) -> float:
     """Root of ``f`` in ``[a, b]`` where ``f(a)`` and ``f(b)`` differ in sign (or one is 0).
 
-    Converges to within ``xtol + rtol*|x|``.  Raises ValueError if the interval does not
-    bracket a root.
+    Converges to within ``xtol + rtol*|x|`` (both named by every caller: no default hides a
+    tolerance the compiled kernel must repeat).  Raises :func:`bracket_error` if the interval
+    does not bracket a root.
     """
     fa = f(a) if fa is None else fa
     fb = f(b) if fb is None else fb
@@ -37,7 +39,7 @@ def brent(
     if fb == 0.0:
         return b
     if (fa > 0.0) == (fb > 0.0):
-        raise ValueError(f"brent: f({a!r}) = {fa!r} and f({b!r}) = {fb!r} do not bracket a root")
+        raise bracket_error(a, fa, b, fb)
     c, fc = a, fa
     d = e = b - a
     for _ in range(MAX_ITERATIONS):
@@ -74,6 +76,12 @@ def brent(
         b += d if abs(d) > tol else math.copysign(tol, m)
         fb = f(b)
     return b
+
+
+def bracket_error(a: float, fa: float, b: float, fb: float) -> ValueError:
+    """The refusal of :func:`brent` for an interval ``[a, b]`` whose ends do not bracket a
+    root (the compiled kernel reports it with the same four numbers)."""
+    return ValueError(f"brent: f({a!r}) = {fa!r} and f({b!r}) = {fb!r} do not bracket a root")
 
 
 def first_crossing(c0: float, c1: float, c2: float, t_max: float, rising: bool) -> float | None:

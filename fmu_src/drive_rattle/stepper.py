@@ -29,17 +29,26 @@ changed.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from typing import ClassVar, NamedTuple
 
-from . import roots
-from .geometry import COAST, DRIVE
+from . import lubrication, roots
+from .geometry import COAST, DRIVE, MAX_PAIR_SLOTS
 from .mesh import MeshLoads, MeshModel
-from .parameters import MAX_PAIR_SLOTS, MeshParameters
+from .parameters import MeshParameters
+from .snapshots import check_fields
 
 #: Largest flank penetration [m] accepted in a start state given by wheel.phi_start: ten
 #: times the penetrations of loaded operation; more means a wheel angle that does not match the
 #: pinion's (the teeth would start deep inside each other).
 MAX_INITIAL_PENETRATION = 10e-6
+
+#: The static flank equilibrium of the start (init.in_contact): the first penetration [m]
+#: tried as the upper end of the bracket (doubled until it brackets), the largest penetration
+#: [m] searched, and the tolerance [m] of Brent's method on it.
+EQUILIBRIUM_FIRST_BRACKET = 1e-9
+EQUILIBRIUM_MAX_PENETRATION = 1e-2
+EQUILIBRIUM_XTOL = 1e-18
 
 #: Largest penetration [m], as a fraction of the normal module, that a step may reach: far
 #: beyond it the Hertz contact of the flanks' surfaces is no longer a model of anything (the
@@ -61,38 +70,73 @@ CONTACT_RATE_SAFETY = 0.25
 #: stiffer than the stepper resolves at a sensible cost and the step is refused.
 MAX_CONTACT_SUBSTEPS = 200_000
 
-#: xtol [s] of Brent's method for the release and the friction reversals.
+#: xtol [s] and rtol of Brent's method for the release, the friction reversals and the pair
+#: engagements.
 EVENT_XTOL = 1e-15
+EVENT_RTOL = roots.BRENT_RTOL
+
+#: Relative slack of the substep grid: a step that is a whole multiple of solver.h_max to
+#: rounding, h/h_max = n (1 + a few ulps), gets n grid substeps, not n + 1.
+GRID_SLACK = 1e-12
+
+#: A crowned pair's engagement located in the first this fraction of a substep does not end
+#: the substep: RK4's error from a kink that close to its start is negligible (it scales with
+#: the kink's offset to the power 2.5), and splitting there would let a pair hovering at its
+#: offset end substep after substep a few femtoseconds long.
+ENGAGEMENT_MIN_FRACTION = 1e-3
 
 
-@dataclass
+def _domain(kind: str, **options):
+    """A dataclass field whose metadata holds the domain of its saved value
+    (``snapshots.DOMAINS``)."""
+    return field(metadata={"domain": kind}, **options)
+
+
+def domains(cls) -> tuple[str, ...]:
+    """The domains of the saved fields of ``cls``, in field order."""
+    return tuple(f.metadata["domain"] for f in fields(cls) if "domain" in f.metadata)
+
+
+@dataclass(frozen=True)
 class WheelState:
-    """Complete state of the wheel and the contact bookkeeping (SI units)."""
+    """Complete state of the wheel and the contact bookkeeping (SI units); a value: change a
+    stepper's state with ``restore`` (``dataclasses.replace`` makes a changed copy)."""
 
-    phi: float  # wheel angle [rad]
-    w: float  # wheel speed [rad/s]
-    flank: int = 0  # flank in contact: +1 drive, -1 coast, 0 none
-    v_impact_drive: float = 0.0  # normal approach speed at the last drive-flank onset [m/s]
-    v_impact_coast: float = 0.0  # same, coast flank [m/s]
-    v_impact_last: float = 0.0  # normal approach speed at the last onset on either flank [m/s]
-    impacts_drive: int = 0  # cumulative contact onsets, drive flank
-    impacts_coast: int = 0  # cumulative contact onsets, coast flank
-    rattle_index: float = 0.0  # exponentially averaged impact kinetic energy per second [W]
+    phi: float = _domain("f")  # wheel angle [rad]
+    w: float = _domain("f")  # wheel speed [rad/s]
+    flank: int = _domain("flank", default=0)  # flank in contact: +1 drive, -1 coast, 0 none
+    v_impact_drive: float = _domain("f", default=0.0)  # normal approach speed at the last
+    # drive-flank onset [m/s]
+    v_impact_coast: float = _domain("f", default=0.0)  # same, coast flank [m/s]
+    v_impact_last: float = _domain("f", default=0.0)  # normal approach speed at the last
+    # onset on either flank [m/s]
+    impacts_drive: int = _domain("n", default=0)  # cumulative contact onsets, drive flank
+    impacts_coast: int = _domain("n", default=0)  # cumulative contact onsets, coast flank
+    rattle_index: float = _domain("f+", default=0.0)  # exponentially averaged impact kinetic
+    # energy per second [W]
 
     def as_tuple(self) -> tuple:
-        return (self.phi, self.w, self.flank, self.v_impact_drive, self.v_impact_coast,
-                self.v_impact_last, self.impacts_drive, self.impacts_coast, self.rattle_index)
+        return tuple(getattr(self, f.name) for f in fields(self))
 
     @classmethod
     def from_tuple(cls, values) -> WheelState:
-        phi, w, flank, vd, vc, vl, nd, nc, ri = values
-        return cls(float(phi), float(w), int(flank), float(vd), float(vc), float(vl),
-                   int(nd), int(nc), float(ri))
+        """From values in field order (integer fields converted with int, the others with
+        float)."""
+        return cls(*(int(v) if f.type == "int" else float(v)
+                     for f, v in zip(fields(cls), values, strict=True)))
+
+
+class PinionState(NamedTuple):
+    """The pinion's angle [rad] and speed [rad/s] at the end of the last step (the step-start
+    inputs at construction)."""
+
+    phi: float
+    w: float
 
 
 @dataclass
 class ContactEvent:
-    """A located contact onset or release."""
+    """A located contact event of a step."""
 
     time: float  # time from the start of the step [s]
     kind: str  # "onset", "release", "reversal" (a pair's friction turns) or "pair" (a crowned
@@ -103,39 +147,169 @@ class ContactEvent:
 
 @dataclass
 class StepResult:
-    """Per-step aggregates (SI units)."""
+    """Per-step aggregates (SI units), the located events and cost counters of a step."""
 
-    tau_wheel_mean: float  # mesh torque on the wheel averaged over the step [N.m]
-    tau_pinion_mean: float  # mesh torque on the pinion averaged over the step [N.m]
-    W_peak: float  # peak total normal force within the step [N]
-    delta_peak: float  # peak penetration within the step [m]
-    onsets_drive: int  # contact onsets in this step, drive flank
-    onsets_coast: int  # contact onsets in this step, coast flank
+    tau_wheel_mean: float = _domain("f")  # mesh torque on the wheel averaged over the step
+    # [N.m]
+    tau_pinion_mean: float = _domain("f")  # mesh torque on the pinion averaged over the step
+    # [N.m]
+    W_peak: float = _domain("f+")  # peak total normal force within the step [N]
+    delta_peak: float = _domain("f+")  # peak penetration within the step [m]
+    onsets_drive: int = _domain("n")  # contact onsets in this step, drive flank
+    onsets_coast: int = _domain("n")  # contact onsets in this step, coast flank
     events: list[ContactEvent] = field(default_factory=list)
     rhs_evaluations: int = 0  # cost counter
     contact_substeps: int = 0  # cost counter
 
+    @classmethod
+    def none(cls) -> StepResult:
+        """The aggregates before the first step (all zero)."""
+        return cls(0.0, 0.0, 0.0, 0.0, 0, 0)
 
-class WheelStepper:
-    """The wheel's equation of motion with the mesh model, stepped one communication step at
-    a time.
+    def aggregates(self) -> tuple:
+        """The saved aggregates, in field order (what a snapshot keeps of a step)."""
+        return tuple(getattr(self, f.name) for f in fields(self) if "domain" in f.metadata)
 
-    ``phi_p``, ``w_p`` and ``tau_load`` at construction are the initial inputs; with
-    ``init.in_contact`` the wheel starts in the static flank equilibrium for them.
+
+#: The saved aggregates of a StepResult, in order.
+AGGREGATES = tuple(f.name for f in fields(StepResult) if "domain" in f.metadata)
+
+
+@dataclass(frozen=True)
+class WheelSnapshot:
+    """Everything a wheel stepper needs to continue exactly where it was: the wheel's state,
+    the pinion at the end of the last step and that step's aggregates (its events and cost
+    counters are not kept)."""
+
+    state: WheelState
+    pinion: PinionState
+    result: StepResult
+
+    #: check_fields layout of ``to_json``.
+    LAYOUT: ClassVar[dict] = {"wheel": domains(WheelState), "pinion": ("f", "f"),
+                              "last": domains(StepResult)}
+
+    def to_json(self) -> dict:
+        """A JSON-able dict (floats round-trip exactly through repr-based JSON)."""
+        return {"wheel": list(self.state.as_tuple()), "pinion": list(self.pinion),
+                "last": list(self.result.aggregates())}
+
+    @classmethod
+    def from_json(cls, data) -> WheelSnapshot:
+        """The snapshot of a ``to_json`` dict; ValueError naming the first entry out of its
+        domain (the dict may come from a forged or corrupted FMU state)."""
+        s = check_fields(data, cls.LAYOUT)
+        return cls(WheelState(*s["wheel"]), PinionState(*s["pinion"]), StepResult(*s["last"]))
+
+
+class WheelStepperBase:
+    """The contract of a wheel stepper: the wheel's equation of motion with the mesh model
+    (paper eq. 10), advanced one communication step at a time.
+
+    Two implementations compute the same numbers bit for bit (docs/kernel.md): the
+    pure-Python reference :class:`WheelStepper` and ``kernel.CompiledWheelStepper``.  Callers
+    use only this contract and never ask which one they hold:
+
+    * ``Stepper(params, phi_p, w_p, tau_load)``: the start state for the initial inputs (the
+      static flank equilibrium with ``init.in_contact``, else ``wheel.phi_start`` checked
+      against the pinion); ``from_state(params, state, pinion)``: a given wheel state, nothing
+      solved; ``from_snapshot(params, snapshot)``: a saved stepper, nothing solved or checked;
+    * ``step(h, phi_p, w_p, a_p, tau_load)`` advances by ``h`` and returns the
+      :class:`StepResult`; a refused step raises ValueError and changes nothing;
+    * ``outputs()``: the values of ``interface.MESH_OUTPUTS`` now; ``wheel_angle_speed()``: the
+      two a partner reads every step, cheaply;
+    * ``snapshot()`` / ``restore(snapshot)``: save and set the complete state (restoring never
+      solves start conditions); ``start_snapshot(phi_p, w_p, tau_load)``: the state the
+      constructor starts from, for inputs given later;
+    * ``state``, ``pinion``, ``last_result``: the current values (read-only).
+
+    Subclasses implement ``_setup`` (their resources), ``_load`` / ``snapshot`` and the
+    stepping and output methods.
     """
 
     def __init__(self, params: MeshParameters, phi_p: float = 0.0, w_p: float = 0.0,
-                 tau_load: float = 0.0):
-        _check_finite(phi_p=phi_p, w_p=w_p, tau_load=tau_load)
+                 tau_load: float = 0.0, **options):
+        self._setup(params, **options)
+        self._load(self.start_snapshot(phi_p, w_p, tau_load))
+
+    @classmethod
+    def from_snapshot(cls, params: MeshParameters, snapshot: WheelSnapshot, **options):
+        """A stepper in a saved state (a restored FMU state), taken as it is: unlike the
+        constructor it solves no start equilibrium and checks no start condition (the state
+        was valid when it was saved, and its pinion has moved on since the start).
+        ``options`` go to the implementation's set-up (e.g. the kernel ``library``)."""
+        stepper = cls.__new__(cls)
+        stepper._setup(params, **options)
+        stepper._load(snapshot)
+        return stepper
+
+    @classmethod
+    def from_state(cls, params: MeshParameters, state: WheelState,
+                   pinion: tuple[float, float] = (0.0, 0.0), **options):
+        """A stepper whose wheel is in ``state`` against the pinion at ``pinion`` (angle
+        [rad], speed [rad/s]), before any step: nothing is solved or checked."""
+        return cls.from_snapshot(params, WheelSnapshot(state, PinionState(*pinion),
+                                                       StepResult.none()), **options)
+
+    def restore(self, snapshot: WheelSnapshot) -> None:
+        """Set the complete state saved by :meth:`snapshot` (no start condition is solved)."""
+        self._load(snapshot)
+
+    def _setup(self, params: MeshParameters) -> None:
+        """The parameters and the mesh model (subclasses add their resources)."""
         self.params = params
         self.mesh = MeshModel(params)
         self.geometry = self.mesh.geometry
+
+    # ------------------------------------------------------------------ to implement
+    def _load(self, snapshot: WheelSnapshot) -> None:
+        raise NotImplementedError
+
+    def snapshot(self) -> WheelSnapshot:
+        """The complete current state (values: later steps do not change it)."""
+        raise NotImplementedError
+
+    @property
+    def state(self) -> WheelState:
+        raise NotImplementedError
+
+    @property
+    def pinion(self) -> PinionState:
+        """The pinion's angle and speed at the end of the last step."""
+        raise NotImplementedError
+
+    @property
+    def last_result(self) -> StepResult:
+        """The result of the last step (all zero before the first)."""
+        raise NotImplementedError
+
+    def step(self, h: float, phi_p: float, w_p: float, a_p: float = 0.0,
+             tau_load: float = 0.0) -> StepResult:
+        raise NotImplementedError
+
+    def outputs(self) -> dict[str, float]:
+        raise NotImplementedError
+
+    def wheel_angle_speed(self) -> tuple[float, float]:
+        """``(state.phi, state.w)``: the wheel's angle [rad] and speed [rad/s] now."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ start conditions
+    def start_snapshot(self, phi_p: float, w_p: float, tau_load: float) -> WheelSnapshot:
+        """The state the constructor starts from for the initial inputs ``phi_p`` [rad],
+        ``w_p`` [rad/s] and ``tau_load`` [N.m]: with ``init.in_contact`` the wheel rests in the
+        static flank equilibrium for them; otherwise it starts at ``wheel.phi_start``,
+        ``wheel.w_start`` (ValueError if that puts the flanks into each other)."""
+        _check_finite(phi_p=phi_p, w_p=w_p, tau_load=tau_load)
+        params = self.params
         if params.init_in_contact:
-            self.state = self.equilibrium_state(phi_p, w_p, tau_load)
+            state = self.equilibrium_state(phi_p, w_p, tau_load)
         else:
-            self.state = WheelState(params.phi_start, params.w_start)
-            self.state.flank = self.contact_flank(phi_p, w_p, 0.0, tau_load, self.state)
-            depth = max(self.mesh.penetration(f, phi_p, params.phi_start) for f in (DRIVE, COAST))
+            free = WheelState(params.phi_start, params.w_start)
+            flank = self.contact_flank(phi_p, w_p, 0.0, tau_load, free)
+            state = WheelState(params.phi_start, params.w_start, flank)
+            pen = self.mesh.penetration
+            depth = max(pen(DRIVE, phi_p, params.phi_start), pen(COAST, phi_p, params.phi_start))
             if depth > MAX_INITIAL_PENETRATION:
                 g, ratio = self.geometry, self.geometry.ratio
                 half = g.half_backlash / self.mesh.arm_wheel
@@ -145,35 +319,8 @@ class WheelStepper:
                     f"allowed: within the backlash, |wheel.phi_start - {ratio:.6g} pinion.phi| "
                     f"<= {half:.4g} rad (plus {MAX_INITIAL_PENETRATION * 1e6:g} um), or "
                     "init.in_contact = true")
-        # Pinion kinematics at the end of the last step, for the "now" outputs.
-        self.pinion = (phi_p, w_p)
-        self.last = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
+        return WheelSnapshot(state, PinionState(phi_p, w_p), StepResult.none())
 
-    @classmethod
-    def from_snapshot(cls, params: MeshParameters, state: WheelState,
-                      pinion: tuple[float, float], last: StepResult, **options) -> WheelStepper:
-        """A stepper in a saved state (a restored FMU state): ``state``, ``pinion`` and the
-        last step's aggregates ``last`` are taken as they are.  Unlike the constructor, it
-        solves no start equilibrium and checks no start condition (the state was valid when
-        it was saved, and its pinion has moved on since the start).  ``options`` go to the
-        subclass' setup (e.g. the kernel ``library``)."""
-        stepper = cls.__new__(cls)
-        stepper._setup_from_snapshot(params, state, pinion, last, **options)
-        return stepper
-
-    def _setup_from_snapshot(self, params: MeshParameters, state: WheelState,
-                             pinion: tuple[float, float], last: StepResult) -> None:
-        """What ``from_snapshot`` sets: the constructor's mesh set-up, then copies of the
-        saved state (the caller keeps its objects)."""
-        self.params = params
-        self.mesh = MeshModel(params)
-        self.geometry = self.mesh.geometry
-        self.state = WheelState(*state.as_tuple())
-        self.pinion = (float(pinion[0]), float(pinion[1]))
-        self.last = StepResult(last.tau_wheel_mean, last.tau_pinion_mean, last.W_peak,
-                               last.delta_peak, last.onsets_drive, last.onsets_coast)
-
-    # ------------------------------------------------------------------ initial state
     def equilibrium_state(self, phi_p: float, w_p: float, tau_load: float) -> WheelState:
         """Wheel at the rigid speed ratio, resting on the flank that carries ``tau_load``
         with the penetration at which the mesh torque balances it."""
@@ -187,15 +334,16 @@ class WheelStepper:
             phi_w = self._wheel_angle(flank, phi_p, delta)
             return mesh.torques(flank, phi_p, w_p, phi_w, w_w, 0.0)[0] - tau_load
 
-        hi = 1e-9
+        hi = EQUILIBRIUM_FIRST_BRACKET
         r_hi = residual(hi)
         while (r_hi > 0.0) != (flank == DRIVE) or r_hi == 0.0:
             hi *= 2.0
-            if hi > 1e-2:
+            if hi > EQUILIBRIUM_MAX_PENETRATION:
                 raise ValueError(
                     f"no static flank equilibrium for wheel.tau_load = {tau_load!r} N.m: the "
-                    "mesh torque does not reach it within 10 mm penetration (friction "
-                    "dominates the normal force?); set init.in_contact = false")
+                    f"mesh torque does not reach it within {EQUILIBRIUM_MAX_PENETRATION * 1e3:g}"
+                    " mm penetration (friction dominates the normal force?); set "
+                    "init.in_contact = false")
             r_hi = residual(hi)
         r_0 = residual(0.0)
         if (r_0 >= 0.0) == (flank == DRIVE):
@@ -203,7 +351,8 @@ class WheelStepper:
             # (~1e-18 m) already carries it: the flanks just touch.
             delta = 0.0
         else:
-            delta = roots.brent(residual, 0.0, hi, fa=r_0, fb=r_hi, xtol=1e-18)
+            delta = roots.brent(residual, 0.0, hi, fa=r_0, fb=r_hi, xtol=EQUILIBRIUM_XTOL,
+                                rtol=roots.BRENT_RTOL)
         return WheelState(self._wheel_angle(flank, phi_p, delta), w_w, flank)
 
     def _wheel_angle(self, flank: int, phi_p: float, delta: float) -> float:
@@ -234,6 +383,35 @@ class WheelStepper:
                     return flank
         return 0
 
+
+class WheelStepper(WheelStepperBase):
+    """The pure-Python wheel stepper: the reference implementation of the contract
+    (:class:`WheelStepperBase`), and the only one that reports the located events
+    (``StepResult.events``)."""
+
+    def _load(self, snapshot: WheelSnapshot) -> None:
+        self._state = snapshot.state
+        self._pinion = PinionState(float(snapshot.pinion[0]), float(snapshot.pinion[1]))
+        self._last = StepResult(*snapshot.result.aggregates())
+
+    def snapshot(self) -> WheelSnapshot:
+        return WheelSnapshot(self._state, self._pinion, StepResult(*self._last.aggregates()))
+
+    @property
+    def state(self) -> WheelState:
+        return self._state
+
+    @property
+    def pinion(self) -> PinionState:
+        return self._pinion
+
+    @property
+    def last_result(self) -> StepResult:
+        return self._last
+
+    def wheel_angle_speed(self) -> tuple[float, float]:
+        return self._state.phi, self._state.w
+
     # ------------------------------------------------------------------ stepping
     def step(self, h: float, phi_p: float, w_p: float, a_p: float = 0.0,
              tau_load: float = 0.0) -> StepResult:
@@ -247,14 +425,16 @@ class WheelStepper:
         if not (math.isfinite(state.phi) and math.isfinite(state.w)
                 and math.isfinite(result.tau_pinion_mean) and math.isfinite(result.W_peak)):
             raise diverged_error(state.phi, state.w)
-        depth = max(result.delta_peak, *(self.mesh.penetration(
-            f, phi_p + h * (w_p + 0.5 * a_p * h), state.phi) for f in (DRIVE, COAST)))
+        phi_p_end = phi_p + h * (w_p + 0.5 * a_p * h)
+        pen = self.mesh.penetration
+        depth = max(max(result.delta_peak, pen(DRIVE, phi_p_end, state.phi)),
+                    pen(COAST, phi_p_end, state.phi))
         limit = MAX_PENETRATION_MODULES * self.params.m_n
         if depth > limit:
             raise penetration_error(depth, limit)
-        self.state = state
-        self.pinion = (phi_p + w_p * h + 0.5 * a_p * h * h, w_p + a_p * h)
-        self.last = result
+        self._state = state
+        self._pinion = PinionState(phi_p + w_p * h + 0.5 * a_p * h * h, w_p + a_p * h)
+        self._last = result
         return result
 
     # ------------------------------------------------------------------ outputs
@@ -263,14 +443,78 @@ class WheelStepper:
 
         When no flank is in contact, the loads of the flank nearer to contact (zero forces,
         negative ``delta`` = its clearance)."""
-        st = self.state
-        phi_p, w_p = self.pinion
+        st = self._state
+        phi_p, w_p = self._pinion
         flank = st.flank
         if flank == 0:
             pen = self.mesh.penetration
             flank = DRIVE if pen(DRIVE, phi_p, st.phi) >= pen(COAST, phi_p, st.phi) else COAST
         v_imp = st.v_impact_drive if flank == DRIVE else st.v_impact_coast
         return self.mesh.loads(flank, phi_p, w_p, st.phi, st.w, v_imp)
+
+    def outputs(self) -> dict[str, float]:
+        """Values of ``interface.MESH_OUTPUTS`` for the current state (SI units), in their
+        declared order."""
+        st, last = self._state, self._last
+        mesh, g = self.mesh, self.geometry
+        loads = self.loads_now()
+        loaded = [p for p in loads.pairs if p.W > 0.0]
+        if loaded:
+            top = loaded[0]  # the most loaded pair (the first of equals)
+            for pair in loaded:
+                if pair.W > top.W:
+                    top = pair
+            h, lam, psi = top.h, top.film_parameter, top.dry_fraction
+        else:
+            v_imp = st.v_impact_drive if loads.flank > 0 else st.v_impact_coast
+            d_max = mesh.energy_balance_delta_max(loads.flank, self._pinion.phi, v_imp)
+            h = lubrication.film_thickness(-loads.delta, d_max)
+            lam = h / self.params.sigma
+            psi = lubrication.dry_fraction(lam)
+        W = loads.W
+        transverse = W * g.normal_factor
+        out = {
+            "wheel.tau_mesh": last.tau_wheel_mean,
+            "pinion.tau_mesh": last.tau_pinion_mean,
+            "wheel.phi": st.phi,
+            "wheel.w": st.w,
+            "mesh.W": loads.W,
+            "mesh.W_peak": last.W_peak,
+            "mesh.F": loads.F,
+            "mesh.delta": loads.delta if loaded else 0.0,
+            "mesh.delta_peak": last.delta_peak,
+            "mesh.v_impact": st.v_impact_last,
+            "mesh.h": h,
+            "mesh.lambda": lam,
+            "mesh.psi": psi,
+            "mesh.n_contact": len(loaded),
+            "mesh.impacts_drive": st.impacts_drive,
+            "mesh.impacts_coast": st.impacts_coast,
+            "mesh.transmission_error": mesh.penetration(DRIVE, self._pinion.phi, st.phi)
+            + g.half_backlash,
+            "mesh.force_tangential": loads.flank * transverse * g.cos_alpha_t,
+            "mesh.force_radial": transverse * g.sin_alpha_t,
+            "mesh.force_axial": loads.flank * W * g.sin_beta_b,
+            "mesh.impact_energy": 0.5 * mesh.normal_mass * st.v_impact_last * st.v_impact_last,
+            "mesh.rattle_index": st.rattle_index,
+        }
+        for k, f in enumerate(mesh.pair_forces(loads)):
+            out[f"pair[{k}].W"] = f
+        return out
+
+
+class _WorkingState:
+    """The mutable copy of a :class:`WheelState` that a step advances; frozen again into a
+    new WheelState when the step is committed."""
+
+    __slots__ = tuple(f.name for f in fields(WheelState))
+
+    def __init__(self, state: WheelState):
+        for name in self.__slots__:
+            setattr(self, name, getattr(state, name))
+
+    def frozen(self) -> WheelState:
+        return WheelState(*(getattr(self, name) for name in self.__slots__))
 
 
 class _StepRun:
@@ -283,13 +527,13 @@ class _StepRun:
         self.mesh = stepper.mesh
         self.geometry = stepper.geometry
         self.H = h
-        self.n_sub = max(1, math.ceil(h / p.h_max * (1.0 - 1e-12)))
+        self.n_sub = max(1, math.ceil(h / p.h_max * (1.0 - GRID_SLACK)))
         self.phi_p0, self.w_p0, self.a_p = phi_p, w_p, a_p
         self.tau_load = tau_load
         self.J = p.J_wheel
-        s = stepper.state
-        self.state = WheelState(*s.as_tuple())
-        self.result = StepResult(0.0, 0.0, 0.0, 0.0, 0, 0)
+        self.start = stepper.state
+        self.state = _WorkingState(self.start)
+        self.result = StepResult.none()
         self.int_tau_pinion = 0.0
         # Friction direction of each pair slot on the current substep, and the directions
         # a located reversal prescribes for the substep after it.
@@ -327,14 +571,14 @@ class _StepRun:
             t = self._free_flight(t) if st.flank == 0 else self._contact_substep(t)
         r = self.result
         # Mean mesh torque from the momentum balance I_w dw = (tau_mesh - tau_load) dt.
-        dw = st.w - self.stepper.state.w
+        dw = st.w - self.start.w
         r.tau_wheel_mean = (self.J * dw + self.tau_load * self.H) / self.H
         r.tau_pinion_mean = self.int_tau_pinion / self.H
         st.rattle_index = st.rattle_index * math.exp(-self.H / self.rattle_time) + self.rattle_gain
         if st.flank != 0:
             r.delta_peak = max(r.delta_peak, mesh.penetration(st.flank, self.phi_p(self.H), st.phi))
             r.W_peak = max(r.W_peak, self._rhs(self.H, st.phi, st.w)[2])
-        return st, r
+        return st.frozen(), r
 
     # ------------------------------------------------------------------ events
     def _event(self, t: float, kind: str, flank: int) -> ContactEvent:
@@ -372,9 +616,9 @@ class _StepRun:
         v0 = m.arm_pinion * self.w_p(t) - m.arm_wheel * st.w
         half_acc = 0.5 * (m.arm_pinion * self.a_p - m.arm_wheel * a_w)
         span = self.H - t
-        c = g.half_backlash
-        hit_d = roots.first_crossing(x0 - c, v0, half_acc, span, rising=True)
-        hit_c = roots.first_crossing(-x0 - c, -v0, -half_acc, span, rising=True)
+        half_backlash = g.half_backlash
+        hit_d = roots.first_crossing(x0 - half_backlash, v0, half_acc, span, rising=True)
+        hit_c = roots.first_crossing(-x0 - half_backlash, -v0, -half_acc, span, rising=True)
         if hit_d is None and hit_c is None:
             dt, flank = span, 0
         elif hit_c is None or (hit_d is not None and hit_d <= hit_c):
@@ -466,10 +710,10 @@ class _StepRun:
                 dt_event, reversal, released = dt, slot, False
         # A crowned pair starting or ending to carry load (its own penetration crossing zero)
         # makes the force a C1 kink; ending the substep there keeps RK4's order.  One located
-        # at the substep start to rounding needs no split.
+        # right at the substep start needs no split (ENGAGEMENT_MIN_FRACTION).
         engaged = None
         for slot, dt in self._engagement_times(t, h, phi_b, k1):
-            if dt < dt_event and t + dt > t:
+            if dt < dt_event and dt > ENGAGEMENT_MIN_FRACTION * h:
                 dt_event, engaged, reversal, released = dt, slot, None, False
         if dt_event < h:
             h = dt_event
@@ -556,7 +800,8 @@ class _StepRun:
             f_b = speed(h, w_b)
             if f_a == 0.0 or (f_a > 0.0) == (f_b > 0.0):
                 continue  # no sign change on the substep's own RK4 path
-            out.append((slot, roots.brent(slide, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL)))
+            out.append((slot, roots.brent(slide, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL,
+                                                  rtol=EVENT_RTOL)))
         return out
 
     def _engagement_times(self, t: float, h: float, phi_b: float, k1):
@@ -584,7 +829,8 @@ class _StepRun:
             def crossing(dt: float, slot=slot) -> float:
                 return own_penetration(dt, self._rk4(t, dt, st.phi, st.w, k1)[0], slot)
 
-            out.append((slot, roots.brent(crossing, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL)))
+            out.append((slot, roots.brent(crossing, 0.0, h, fa=f_a, fb=f_b, xtol=EVENT_XTOL,
+                                                  rtol=EVENT_RTOL)))
         return out
 
     def _release_time(self, t: float, h: float, delta_a: float, delta_b: float, k1):
@@ -607,7 +853,8 @@ class _StepRun:
                     break
             else:
                 return None
-        return roots.brent(delta_after, lo, h, fa=f_lo, fb=delta_b, xtol=EVENT_XTOL)
+        return roots.brent(delta_after, lo, h, fa=f_lo, fb=delta_b, xtol=EVENT_XTOL,
+                           rtol=EVENT_RTOL)
 
     def _track_peak(self, t, h, flank, d_a, phi_a, w_a, d_b, phi_b, w_b) -> None:
         """Peak penetration and force inside the substep from the cubic Hermite interpolant

@@ -1,10 +1,10 @@
 """Co-simulation of GearMeshRattle and Driveline on fmpy's low-level FMU2Slave API.
 
 Fixed communication step, Jacobi coupling (both units step from the outputs of the last
-communication point), the same as libcosim's fixed-step algorithm and as the in-process twin
-``drive_rattle.system.simulate``.  Communication points are integer nanoseconds,
-``t_k = (t0_ns + k step_ns) / 1e9``, and each step is ``t_{k+1} - t_k``, as libcosim computes
-them, so the three agree bit for bit.
+communication point) along ``drive_rattle.interface.CONNECTIONS``, the same as libcosim's
+fixed-step algorithm and as the in-process twin ``drive_rattle_cosim.system.simulate``.
+Communication points are integer nanoseconds, ``t_k = (t0_ns + k step_ns) / 1e9``, and each
+step is ``t_{k+1} - t_k``, as libcosim computes them, so the three agree bit for bit.
 
 Python::
 
@@ -33,20 +33,9 @@ from typing import ClassVar
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
-from drive_rattle.system import communication_points
+from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
-MESH, DRIVELINE = "GearMeshRattle", "Driveline"
-
-#: (source unit, output, destination unit, input): the one definition of the coupling, used by
-#: the harness and the SSP writer.
-CONNECTIONS = (
-    (DRIVELINE, "pinion.phi", MESH, "pinion.phi"),
-    (DRIVELINE, "pinion.w", MESH, "pinion.w"),
-    (DRIVELINE, "pinion.a", MESH, "pinion.a"),
-    (DRIVELINE, "wheel.tau_load", MESH, "wheel.tau_load"),
-    (MESH, "wheel.phi", DRIVELINE, "wheel.phi"),
-    (MESH, "wheel.w", DRIVELINE, "wheel.w"),
-)
+from .system import communication_points
 
 #: Rounds of output-to-input exchange in initialization mode (libcosim does one per unit).
 INIT_ROUNDS = 2
@@ -100,7 +89,7 @@ class CoSimulationError(RuntimeError):
 class Variable:
     name: str
     vr: int
-    kind: str  # Real, Integer, Boolean, String
+    fmi_type: str  # Real, Integer, Boolean, String
     causality: str
     unit: str
 
@@ -119,30 +108,30 @@ class _Raw:
 
     _CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
 
-    def __init__(self, unit: Unit, kind: str, vrs: list[int]):
+    def __init__(self, unit: Unit, fmi_type: str, vrs: list[int]):
         n = len(vrs)
-        self.unit, self.kind, self.n = unit, kind, n
+        self.unit, self.fmi_type, self.n = unit, fmi_type, n
         self.vrs = (c_uint * n)(*vrs)
-        self.values = (self._CTYPES[kind] * n)()
-        self._get = raw_function(unit.slave, f"fmi2Get{kind}")
-        self._set = raw_function(unit.slave, f"fmi2Set{kind}")
+        self.values = (self._CTYPES[fmi_type] * n)()
+        self._get = raw_function(unit.slave, f"fmi2Get{fmi_type}")
+        self._set = raw_function(unit.slave, f"fmi2Set{fmi_type}")
         self.component = unit.slave.component
 
     def fetch(self):
         """Read into the value array (returned)."""
         status = self._get(self.component, self.vrs, self.n, self.values)
         if status > 1:
-            self.unit.fail(f"get{self.kind}", status)
+            self.unit.fail(f"get{self.fmi_type}", status)
         return self.values
 
     def get(self) -> list:
         values = self.fetch()
-        return [bool(v) for v in values] if self.kind == "Boolean" else values[:]
+        return [bool(v) for v in values] if self.fmi_type == "Boolean" else values[:]
 
     def put(self, values) -> None:
         status = self._set(self.component, self.vrs, self.n, values)
         if status > 1:
-            self.unit.fail(f"set{self.kind}", status)
+            self.unit.fail(f"set{self.fmi_type}", status)
 
 
 class Unit:
@@ -193,11 +182,11 @@ class Unit:
         groups: dict[str, tuple[list, list]] = {}
         for name, value in values.items():
             v = self.var(name)
-            vrs, vals = groups.setdefault(v.kind, ([], []))
+            vrs, vals = groups.setdefault(v.fmi_type, ([], []))
             vrs.append(v.vr)
             vals.append(value)
-        for kind, (vrs, vals) in groups.items():
-            self.call(f"set{kind}", getattr(self.slave, f"set{kind}"), vrs, vals)
+        for fmi_type, (vrs, vals) in groups.items():
+            self.call(f"set{fmi_type}", getattr(self.slave, f"set{fmi_type}"), vrs, vals)
 
     def close(self) -> None:
         if not self._freed:
@@ -318,13 +307,14 @@ class CoSimulation:
         if outputs is None:
             outputs = [f"{u.name}.{v.name}" for u in self.units.values()
                        for v in u.variables.values() if v.causality == "output"]
-        rec = []  # (unit, kind, [vrs], [qualified names])
+        rec = []  # (unit, FMI type, [vrs], [qualified names])
         for u in self.units.values():
-            for kind in ("Real", "Integer", "Boolean"):
+            for fmi_type in ("Real", "Integer", "Boolean"):
                 names = [o for o in outputs if self._split(o)[0] is u
-                         and u.var(self._split(o)[1]).kind == kind]
+                         and u.var(self._split(o)[1]).fmi_type == fmi_type]
                 if names:
-                    rec.append((u, kind, [u.var(self._split(o)[1]).vr for o in names], names))
+                    rec.append((u, fmi_type, [u.var(self._split(o)[1]).vr for o in names],
+                                names))
         result = Result(units={o: self._split(o)[0].var(self._split(o)[1]).unit or "1"
                                for o in outputs})
         result.columns = {o: [] for o in outputs}
@@ -342,7 +332,7 @@ class CoSimulation:
             steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5)
         # Hot loop on the FMUs' raw ctypes functions with preallocated arrays: fmpy's
         # convenience wrappers cost several microseconds per call.
-        raw_rec = [(_Raw(u, kind, vrs), names) for u, kind, vrs, names in rec]
+        raw_rec = [(_Raw(u, fmi_type, vrs), names) for u, fmi_type, vrs, names in rec]
         raw_plan = [(_Raw(src, "Real", outs), _Raw(dst, "Real", ins))
                     for src, outs, dst, ins in self._plan]
         steppers = [(u, raw_function(u.slave, "fmi2DoStep"), u.slave.component)
@@ -378,7 +368,7 @@ def time_grid(start: float, step: float, stop: float,
     step size passed at each (one fewer), as a master computes them:
 
     * ``"nanoseconds"``: ``t_k = (t0_ns + k step_ns)/1e9``, each step ``t_{k+1} - t_k``
-      (libcosim, this harness, ``drive_rattle.system.simulate``);
+      (libcosim, this harness, ``drive_rattle_cosim.system.simulate``);
     * ``"accumulated"``: ``t_{k+1} = t_k + step`` while ``t_k < stop``, every step ``step``
       (fmpy's SSP runner);
     * ``"accumulated-clipped"``: ``t_{k+1} = t_k + min(step, stop - t_k)`` while

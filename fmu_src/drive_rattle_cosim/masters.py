@@ -2,11 +2,11 @@
 
 Each ``run_*`` function runs the system (``dist/DriveRattle.ssp`` or the two FMUs) in one
 master and returns a ``harness.Result`` holding the coupling signals (``"<Unit>.<output>"`` of
-``harness.CONNECTIONS``) at the communication points the master computed.  Each master places
-its points with its own arithmetic (``MASTER_GRIDS``, ``harness.time_grid``): the harness run on
-the same grid gives the same numbers bit for bit (tests/cosim/test_masters.py), so these
-functions are also the reference for what each master computes.  docs/tools.md explains each
-workaround for users of the masters directly.
+``drive_rattle.interface.CONNECTIONS``) at the communication points the master computed.
+Each master places its points with its own arithmetic (``MASTER_GRIDS``,
+``harness.time_grid``): the harness run on the same grid gives the same numbers bit for bit
+(tests/cosim/test_masters.py), so these functions are also the reference for what each master
+computes.  docs/tools.md explains each workaround for users of the masters directly.
 
 Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0 and
 gemseo-fmu 3.1.1.  Run one master per process where a master can abort at exit (libcosim and
@@ -22,7 +22,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from .harness import CONNECTIONS, DRIVELINE, MESH, Result
+from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
+
+from .harness import Result
 
 #: The coupling signals every master exchanges, ``"<Unit>.<output>"``.
 COUPLING = [f"{src}.{out}" for src, out, _, _ in CONNECTIONS]

@@ -8,7 +8,8 @@ For each model ``<Model>`` the committed folder ``regression/<Model>/`` holds
 * ``<Model>_ref.csv`` -- the reference outputs over the same short, deterministic horizon,
 * ``<Model>_ref.opt`` -- StartTime, StopTime, StepSize and the tolerances of the check;
 
-``build_fmu.py`` packs the same files into each FMU under ``resources/regression/``.
+The build (``drive_rattle_build.fmu``) packs the same files into each FMU under
+``resources/regression/``.
 
 The check simulates the FMU with fmpy on the reference inputs and requires, for every output
 column, ``|y - y_ref| <= RelTol |y_ref| + AbsTol (max y_ref - min y_ref)`` at every point.  The
@@ -34,9 +35,10 @@ from pathlib import Path
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
+from drive_rattle.interface import CONNECTIONS, MODELS
+
 ROOT = Path(__file__).resolve().parents[2]
 REFERENCE_ROOT = ROOT / "regression"
-MODELS = ("GearMeshRattle", "Driveline")
 #: Horizon of the references: 500 communication steps of the paper scenario.
 START, STOP, STEP = 0.0, 0.05, 1e-4
 REL_TOL = 1e-6
@@ -46,10 +48,7 @@ ABS_TOL = 1e-6  # relative to each reference column's range
 #: horizon and the backlash acts on the dynamics, not only on the wheel's angle offset.
 SCENARIO_DRIVELINE = {"engine.amplitude[1]": 2000.0}
 #: Inputs of each model: the outputs of the other unit in the coupled run.
-INPUTS = {
-    "GearMeshRattle": ("pinion.phi", "pinion.w", "pinion.a", "wheel.tau_load"),
-    "Driveline": ("wheel.phi", "wheel.w"),
-}
+INPUTS = {model: tuple(c.input for c in CONNECTIONS if c.target == model) for model in MODELS}
 
 
 @dataclass
@@ -156,7 +155,8 @@ def generate(fmu_dir: Path, out_root: Path = REFERENCE_ROOT) -> list[Path]:
     """Write the references of both models from the coupled paper scenario (inputs) and the
     FMUs in ``fmu_dir`` (outputs)."""
     from drive_rattle.driveline import DrivelineParameters
-    from drive_rattle.system import simulate
+
+    from .system import simulate
 
     rec = simulate(driveline_params=DrivelineParameters.from_public(SCENARIO_DRIVELINE),
                    stop_time=STOP, step=STEP, start_time=START)

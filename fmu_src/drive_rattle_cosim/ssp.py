@@ -1,7 +1,7 @@
 """The mesh + driveline system as an SSP 1.0 system structure, and its run in libcosim.
 
 ``write_ssp`` writes a directory (``SystemStructure.ssd`` + ``resources/*.fmu``) or a zipped
-``.ssp`` with both FMUs, the connections of ``harness.CONNECTIONS``, parameter bindings, bindings
+``.ssp`` with both FMUs, the connections of ``interface.CONNECTIONS``, parameter bindings, bindings
 of the inputs' start values and the OSP fixed-step annotation libcosim needs.  The input starts
 are what each unit's partner outputs at the start time (``consistent_input_starts``), so that
 masters which exchange no values during initialization still start the pair consistent.
@@ -22,9 +22,10 @@ from xml.sax.saxutils import quoteattr
 
 from fmpy import read_model_description
 
-from drive_rattle.system import communication_points
+from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
-from .harness import CONNECTIONS, DRIVELINE, MESH, Result
+from .harness import Result
+from .system import communication_points
 
 SSD_NAME = "SystemStructure.ssd"
 NAMESPACES = (

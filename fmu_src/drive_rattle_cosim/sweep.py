@@ -21,7 +21,7 @@ normal-force spectrum, and the **rattle index**: the kinetic energy of the impac
 ``v_i`` the normal approach speed of each contact onset -- the power the mesh turns into impact
 energy, which is what the housing radiates as rattle.  The metrics leave out a start
 transient and are means over equal windows, each with its window-to-window standard deviation
-(``<metric>_std``; drive_rattle.analysis.windowed_statistics).
+(``<metric>_std``; drive_rattle_cosim.analysis.windowed_statistics).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ RECORDED = ["GearMeshRattle.wheel.phi", "GearMeshRattle.mesh.W", "GearMeshRattle
             "GearMeshRattle.mesh.n_contact", "GearMeshRattle.mesh.v_impact",
             "GearMeshRattle.mesh.impacts_drive", "GearMeshRattle.mesh.impacts_coast",
             "GearMeshRattle.mesh.delta_peak"]
-#: Metric column -> the drive_rattle.analysis.RattleStatistics field it reports.
+#: Metric column -> the drive_rattle_cosim.analysis.RattleStatistics field it reports.
 STATISTIC_OF = {
     "impacts_per_s_drive": "impacts_per_second_drive",
     "impacts_per_s_coast": "impacts_per_second_coast",
@@ -121,7 +121,7 @@ def rattle_metrics(time_s, signals: dict, normal_mass: float, transient: float =
     the first ``transient`` seconds dropped, the rest cut into windows of ``window`` seconds
     (None: one window), each metric the mean over the windows and ``<metric>_std`` its
     window-to-window standard deviation (nan with one window)."""
-    from drive_rattle.analysis import onsets_from_counters, welch_spectrum, windowed_statistics
+    from .analysis import onsets_from_counters, welch_spectrum, windowed_statistics
 
     t = np.asarray(time_s, dtype=float)
     onset_t, speeds, flanks = onsets_from_counters(t, signals["mesh.impacts_drive"],

@@ -31,11 +31,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from drive_rattle.driveline import DrivelineParameters, OutputShaft
-from drive_rattle.parameters import MeshParameters, declare
-from drive_rattle.stepper import WheelState
+from pythonfmu.enums import Fmi2Status
 
-from .slave import WARNING, check_snapshot_fields
+from drive_rattle.driveline import DrivelineParameters
+from drive_rattle.parameters import MeshParameters, declare
+from drive_rattle.snapshots import check_fields
 
 SETTLE_FIRST_STEP = "init.settle_first_step"
 CONTINUE_WHEN_HELD = "inputs.continue_when_held"
@@ -124,14 +124,39 @@ class HeldInputTracking:
         self._motion_set = False
 
 
+#: The entry of a model snapshot (``RattleSlave._model_state``) that holds how the unit reads
+#: its inputs; the others are the unit model's own snapshot (``to_json``).
+BOUNDARY_KEY = "fmi"
+
+
 class _InputReading(HeldInputTracking):
     """The first step's settling and the held inputs, for a unit whose ``_build`` ends with
-    ``return self._started(model, inputs)``; its model state carries ``_boundary_state``."""
+    ``return self._started(model, inputs)``, and the model snapshot of its FMU states: the unit
+    model's own (``SNAPSHOT.to_json`` of ``model.snapshot()``) with ``_boundary_state``."""
 
     #: Inputs whose values at the end of initialization the first step compares with.
     START_INPUTS: tuple[str, ...] = ()
-    #: check_snapshot_fields layout of a subclass' own entries in ``_boundary_state``.
+    #: check_fields layout of a subclass' own entries in ``_boundary_state``.
     _EXTRA_BOUNDARY_LAYOUT: ClassVar[dict] = {}
+    #: The snapshot type of the unit model (``to_json`` / ``from_json``).
+    SNAPSHOT: ClassVar[type] = None
+
+    def _model_state(self, model) -> dict:
+        return {**model.snapshot().to_json(), BOUNDARY_KEY: self._boundary_state(model)}
+
+    def _model_from_snapshot(self, params, start_time: float, data):
+        if not isinstance(data, dict) or BOUNDARY_KEY not in data:
+            got = sorted(data) if isinstance(data, dict) else type(data).__name__
+            raise ValueError(f"model snapshot has entries {got}, expected the model's and "
+                             f"{BOUNDARY_KEY!r}")
+        own = {key: value for key, value in data.items() if key != BOUNDARY_KEY}
+        model = self._restored_model(params, start_time, self.SNAPSHOT.from_json(own))
+        self._restore_boundary(model, data[BOUNDARY_KEY])
+        return model
+
+    def _restored_model(self, params, start_time: float, snapshot):
+        """The unit model in the saved ``snapshot`` (``from_snapshot``: nothing solved)."""
+        raise NotImplementedError
 
     def _started(self, model, inputs: dict):
         model.fmi_initial_inputs = tuple(inputs[name] for name in self.START_INPUTS)
@@ -151,14 +176,13 @@ class _InputReading(HeldInputTracking):
         """Load a ``_boundary_state`` snapshot into ``model`` (ValueError if malformed)."""
         layout = {"initial_inputs": ("f",) * len(cls.START_INPUTS), "first_step": ("any",),
                   "last_motion": ("any",), **cls._EXTRA_BOUNDARY_LAYOUT}
-        s = check_snapshot_fields(state, layout)
+        s = check_fields(state, layout)
         if not isinstance(s["first_step"], bool):
             raise ValueError(f"model snapshot first_step = {s['first_step']!r}: expected a "
                              "boolean")
         last = s["last_motion"]
         if last is not None:
-            check_snapshot_fields({"last_motion": last},
-                                  {"last_motion": ("f",) * len(cls.MOTION_INPUTS)})
+            check_fields({"last_motion": last}, {"last_motion": ("f",) * len(cls.MOTION_INPUTS)})
         model.fmi_initial_inputs = tuple(s["initial_inputs"])
         model.fmi_first_step = s["first_step"]
         model.fmi_last_motion = None if last is None else tuple(last)
@@ -171,7 +195,7 @@ class _InputReading(HeldInputTracking):
         units = {spec.name: spec.unit for spec in self.INPUTS}
         given = ", ".join(f"{n} = {v!r} {units[n]}"
                           for n, v in zip(self.START_INPUTS, values, strict=True))
-        self._report(WARNING, (
+        self._report(Fmi2Status.warning, (
             f"doStep at the first step: the inputs ({given}) differ from those at the end of "
             f"initialization {model.fmi_initial_inputs!r}: {what} "
             "(init.settle_first_step; a master that exchanges no values during "
@@ -195,14 +219,14 @@ class MeshInputReading(_InputReading):
             (phi_p, w_p), a_p = model.pinion, 0.0
         settled = None
         if p.init_in_contact and self._first_step_differs(model, (phi_p, w_p, tau_load)):
-            settled = (WheelState(*model.state.as_tuple()), model.pinion)
-            model.state = model.equilibrium_state(phi_p, w_p, tau_load)  # ValueError: none
-            model.pinion = (phi_p, w_p)
+            start = model.start_snapshot(phi_p, w_p, tau_load)  # ValueError: no equilibrium
+            settled = model.snapshot()
+            model.restore(start)
         try:
             model.step(h, phi_p, w_p, a_p, tau_load)
         except Exception as err:
             if settled is not None:  # a rejected step leaves the unit as it was
-                model.state, model.pinion = settled
+                model.restore(settled)
             advised = self.DEFAULT_EXPERIMENT["stepSize"]
             if isinstance(err, ValueError) and h > advised and "h_comm_max" not in str(err):
                 raise ValueError(
@@ -248,12 +272,14 @@ class DrivelineInputReading(_InputReading):
             phi_w, w_w = model.fmi_wheel_end
         settled = None
         if self._first_step_differs(model, (phi_w, w_w)):
-            settled, model.shaft = model.shaft, OutputShaft(p, phi_w, w_w)
+            start = model.start_snapshot(phi_w, w_w)
+            settled = model.snapshot()
+            model.restore(start)
         try:
-            model.step(t, h, phi_w, w_w)
+            model.step(h, phi_w, w_w, t=t)
         except Exception:
             if settled is not None:  # a rejected step leaves the unit as it was
-                model.shaft = settled
+                model.restore(settled)
             raise
         # The output shaft moves the wheel at its step-start speed within a step.
         model.fmi_wheel_end = (phi_w + w_w * h, w_w)

@@ -4,7 +4,8 @@ pythonfmu's own rendering lacks units, limits, dependencies and InitialUnknowns;
 (FMI 2.0 schema order): CoSimulation, UnitDefinitions, LogCategories, DefaultExperiment,
 ModelVariables and ModelStructure (Outputs without direct feedthrough, InitialUnknowns).
 The hidden status-channel variables are left out; being registered last, they leave every
-public value reference equal to its registration index.
+public value reference equal to its registration index.  pythonfmu's builder calls it (through
+``RattleSlave.to_xml``) when the build packs an FMU; nothing calls it at run time.
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
         "author": cls.author,
         "version": cls.version,
         "license": cls.license,
-        "generationTool": f"drive-rattle build_fmu.py (pythonfmu {pythonfmu_version})",
+        "generationTool": f"drive-rattle-build (pythonfmu {pythonfmu_version})",
         "generationDateAndTime": generation_time,
         "variableNamingConvention": "structured",
         "numberOfEventIndicators": "0",
@@ -76,7 +77,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
         return spec.unit, spec.display_unit
 
     used = sorted({unit_of(v.name)[0] for v in variables
-                   if slave._kinds[v.name] == "Real"})
+                   if slave._fmi_types[v.name] == "Real"})
     units = SubElement(root, "UnitDefinitions")
     for unit in used:
         check_display_unit(unit, None)
@@ -99,7 +100,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
             raise RuntimeError(
                 f"{var.name}: value reference {var.value_reference} != index {i - 1}")
         index[var.name] = i
-        kind = slave._kinds[var.name]
+        fmi_type = slave._fmi_types[var.name]
         attrs = {"name": var.name, "valueReference": str(var.value_reference),
                  "description": var.description, "causality": var.causality.name,
                  "variability": var.variability.name}
@@ -108,7 +109,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
             spec: ParameterSpec = param_specs[var.name]
             attrs["initial"] = "exact"
             type_attrs["start"] = _fmt(spec.default)
-            if kind in ("Real", "Integer"):
+            if fmi_type in ("Real", "Integer"):
                 if spec.minimum is not None:
                     type_attrs["min"] = _fmt(spec.minimum)
                 if spec.maximum is not None:
@@ -118,7 +119,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
             type_attrs["start"] = _fmt(spec.start)
             if spec.minimum is not None:
                 type_attrs["min"], type_attrs["max"] = _fmt(spec.minimum), _fmt(spec.maximum)
-        if kind == "Real":
+        if fmi_type == "Real":
             unit, display = unit_of(var.name)
             check_display_unit(unit, display)
             type_attrs["unit"] = unit
@@ -128,7 +129,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
             type_attrs = {k: type_attrs[k] for k in
                           ("unit", "displayUnit", "min", "max", "start") if k in type_attrs}
         sv = SubElement(mv, "ScalarVariable", attrs)
-        SubElement(sv, kind, type_attrs)
+        SubElement(sv, fmi_type, type_attrs)
 
     structure = SubElement(root, "ModelStructure")
     outputs = [index[s.name] for s in cls.OUTPUTS]
@@ -142,17 +143,3 @@ def model_description(slave, generation_time: str | None = None) -> Element:
         # Initial outputs depend on the parameters and the initial inputs (equilibrium).
         SubElement(init_el, "Unknown", {"index": str(i)})
     return root
-
-
-def normalised_xml(root: Element) -> str:
-    """Pretty-printed XML with the per-build attributes (guid, date) blanked, for comparison
-    with the committed templates in modelDescription_templates/."""
-    from xml.dom.minidom import parseString
-    from xml.etree.ElementTree import tostring
-
-    copy = Element(root.tag, dict(root.attrib))
-    copy.extend(list(root))
-    copy.set("guid", "{GUID}")
-    copy.set("generationDateAndTime", "DATE")
-    text = parseString(tostring(copy, "unicode")).toprettyxml(indent="  ")
-    return "\n".join(line for line in text.splitlines() if line.strip()) + "\n"

@@ -30,6 +30,7 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from drive_rattle.parameters import ParameterSpec, specs
+from drive_rattle.snapshots import MAX_STATE_INTEGER, is_finite_float, short_repr
 
 #: Names of the hidden variables of the native shim: the two String variables of the status
 #: channel and the Real the shim answers fmi2GetRealStatus(fmi2LastSuccessfulTime) from.
@@ -39,8 +40,6 @@ STATUS_ADDRESS_VARIABLE = "_fmi.status_address"
 MESSAGE_VARIABLE = "_fmi.message"
 LAST_SUCCESSFUL_TIME_VARIABLE = "_fmi.last_successful_time"
 
-OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
-
 #: Version of the content of an FMU state (the dict of ``_get_fmu_state``).  The native shim
 #: wraps serialized states in an envelope with the FMU's GUID, its own version and a checksum.
 STATE_FORMAT = 3
@@ -48,9 +47,6 @@ STATE_FORMAT = 3
 MODES = ("instantiated", "initialization", "stepping", "terminated")
 #: fmi2Integer is a 32-bit int: larger values (the cumulative impact counters) saturate.
 INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
-#: Largest magnitude of an Integer value in a restored state (the counters are held as
-#: doubles in the compiled kernel, exact up to 2^53).
-MAX_STATE_INTEGER = 2**53
 
 
 def vr_text(vr: int) -> str:
@@ -107,12 +103,12 @@ class RattleSlave(Fmi2Slave):
         super().__init__(**kwargs)
         if self.instance_name != _BUILDER_INSTANCE:  # the builder removes its path itself
             _forget_resources_path(self.resources)
-        self._fmi_status = ctypes.c_int(OK)
+        self._fmi_status = ctypes.c_int(Fmi2Status.ok)
         self._fmi_message = ""
         self._shim_attached = False  # set when the native shim reads the status address
         self._param_specs: dict[str, ParameterSpec] = {}
         self._values: dict[str, Any] = {}
-        self._kinds: dict[str, str] = {}
+        self._fmi_types: dict[str, str] = {}  # variable name -> FMI type
         self._mode = "instantiated"  # -> initialization -> stepping -> terminated
         self._start_time = 0.0
         self._time = 0.0  # communication point the next step must start from
@@ -124,16 +120,16 @@ class RattleSlave(Fmi2Slave):
         self._output_set = frozenset(s.name for s in self.OUTPUTS)
         for _attr, spec in specs(self.PARAMETERS):
             self._param_specs[spec.name] = spec
-            self._register(spec.name, spec.kind, Fmi2Causality.parameter,
+            self._register(spec.name, spec.fmi_type, Fmi2Causality.parameter,
                            Fmi2Variability.fixed, spec.default, spec.description)
         for spec in self.INPUTS:
-            self._register(spec.name, spec.kind, Fmi2Causality.input,
+            self._register(spec.name, spec.fmi_type, Fmi2Causality.input,
                            Fmi2Variability.continuous, spec.start, spec.description)
         for spec in self.OUTPUTS:
-            variability = (Fmi2Variability.continuous if spec.kind == "Real"
+            variability = (Fmi2Variability.continuous if spec.fmi_type == "Real"
                            else Fmi2Variability.discrete)
-            zero = 0.0 if spec.kind == "Real" else 0
-            self._register(spec.name, spec.kind, Fmi2Causality.output, variability, zero,
+            zero = 0.0 if spec.fmi_type == "Real" else 0
+            self._register(spec.name, spec.fmi_type, Fmi2Causality.output, variability, zero,
                            spec.description)
         self.register_variable(String(
             STATUS_ADDRESS_VARIABLE, causality=Fmi2Causality.local,
@@ -147,18 +143,19 @@ class RattleSlave(Fmi2Slave):
             variability=Fmi2Variability.continuous, getter=self._last_successful_time),
             nested=False)
         # Per value reference: FMI type and getter, for the hot get/set paths.
-        self._vr_kind = [type(v).__name__ for v in self.vars.values()]
+        self._vr_fmi_type = [type(v).__name__ for v in self.vars.values()]
         self._vr_getter = [v.getter for v in self.vars.values()]
         self._vr_setter = [v.setter for v in self.vars.values()]
         self._vr_name = [v.name for v in self.vars.values()]
-        self._vrs_of_kind = {kind: frozenset(vr for vr, k in enumerate(self._vr_kind) if k == kind)
-                             for kind in ("Real", "Integer", "Boolean", "String")}
+        self._vrs_of_type = {
+            fmi_type: frozenset(vr for vr, t in enumerate(self._vr_fmi_type) if t == fmi_type)
+            for fmi_type in _VARIABLE_TYPES}
 
     # ------------------------------------------------------------------ registration
-    def _register(self, name, kind, causality, variability, start, description) -> None:
+    def _register(self, name, fmi_type, causality, variability, start, description) -> None:
         self._values[name] = start
-        self._kinds[name] = kind
-        var = _VARIABLE_TYPES[kind](
+        self._fmi_types[name] = fmi_type
+        var = _VARIABLE_TYPES[fmi_type](
             name, causality=causality, variability=variability, description=description,
             getter=lambda n=name: self._get(n), setter=lambda v, n=name: self._set(n, v))
         self.register_variable(var, nested=False)
@@ -191,9 +188,10 @@ class RattleSlave(Fmi2Slave):
         """End of the last accepted communication step (the start time before the first):
         the native shim's answer to fmi2GetRealStatus(fmi2LastSuccessfulTime)."""
         if self._model is None:
-            self._report(ERROR, "getRealStatus(fmi2LastSuccessfulTime): no communication step "
-                                f"is possible yet (mode '{self._mode}'); allowed after "
-                                "exitInitializationMode")
+            self._report(Fmi2Status.error,
+                         "getRealStatus(fmi2LastSuccessfulTime): no communication step is "
+                         f"possible yet (mode '{self._mode}'); allowed after "
+                         "exitInitializationMode")
             return math.nan
         return self._time
 
@@ -203,9 +201,9 @@ class RattleSlave(Fmi2Slave):
         try:
             return fn(*args)
         except (ModelError, ValueError) as err:
-            self._report(ERROR, f"{action}: {err}")
+            self._report(Fmi2Status.error, f"{action}: {err}")
         except Exception:  # never let anything reach pythonfmu (it would be fmi2Fatal)
-            self._report(ERROR, f"{action}: unexpected error\n{traceback.format_exc()}")
+            self._report(Fmi2Status.error, f"{action}: unexpected error\n{traceback.format_exc()}")
         return _FAILED
 
     # ------------------------------------------------------------------ values
@@ -226,18 +224,18 @@ class RattleSlave(Fmi2Slave):
     def _checked_value(self, name: str, value):
         """``value`` converted to the variable's type, if ``name`` may be set now; ModelError
         (nothing stored) otherwise."""
-        kind = self._kinds[name]
+        fmi_type = self._fmi_types[name]
         if name in self._output_set:
             raise ModelError(f"'{name}' is an output and cannot be set")
         if name in self._param_specs and self._mode not in ("instantiated", "initialization"):
             raise ModelError(
                 f"parameter '{name}' is fixed: it can only be set before the end of "
                 f"initialization (mode is '{self._mode}'); value {value!r} rejected")
-        if kind == "Real":
+        if fmi_type == "Real":
             return float(value)
-        if kind == "Integer":
+        if fmi_type == "Integer":
             return int(value)
-        if kind == "Boolean":
+        if fmi_type == "Boolean":
             return bool(value)
         return str(value)
 
@@ -245,19 +243,20 @@ class RattleSlave(Fmi2Slave):
         self._values[name] = self._checked_value(name, value)
         self._provisional = None
 
-    def _set_values(self, vrs, values, kind: str) -> None:
+    def _set_values(self, vrs, values, fmi_type: str) -> None:
         """Set several values: every entry is checked before any is stored, so a refused call
         (one bad entry) stores nothing."""
-        kinds, setters, names = self._vr_kind, self._vr_setter, self._vr_name
-        n = len(kinds)
+        types, setters, names = self._vr_fmi_type, self._vr_setter, self._vr_name
+        n = len(types)
 
         def apply():
             if len(vrs) != len(values):
                 raise ModelError(f"{len(vrs)} value references but {len(values)} values")
             staged = []
             for vr, value in zip(vrs, values, strict=True):
-                if not (0 <= vr < n and kinds[vr] == kind and setters[vr] is not None):
-                    raise ModelError(f"no {kind} variable with value reference {vr_text(vr)}; "
+                if not (0 <= vr < n and types[vr] == fmi_type and setters[vr] is not None):
+                    raise ModelError(f"no {fmi_type} variable with value reference "
+                                     f"{vr_text(vr)}; "
                                      "nothing of this call was stored")
                 name = names[vr]
                 try:
@@ -268,25 +267,25 @@ class RattleSlave(Fmi2Slave):
                 self._values[name] = value
             if staged:
                 self._provisional = None
-        self._guard(f"set{kind}", apply)
+        self._guard(f"set{fmi_type}", apply)
 
-    def _get_values(self, vrs, kind: str, default) -> list:
+    def _get_values(self, vrs, fmi_type: str, default) -> list:
         getters = self._vr_getter
-        if self._vrs_of_kind[kind].issuperset(vrs):
+        if self._vrs_of_type[fmi_type].issuperset(vrs):
             try:  # fast path: every getter at once (they only read stored values)
                 return [getters[vr]() for vr in vrs]
             except Exception:  # redone value by value below, with the reports
                 pass
-        kinds = self._vr_kind
-        n = len(kinds)
+        types = self._vr_fmi_type
+        n = len(types)
         out = []
         for vr in vrs:
-            if not (0 <= vr < n and kinds[vr] == kind):
-                self._report(ERROR, f"get{kind}: no {kind} variable with value reference "
-                                    f"{vr_text(vr)}")
+            if not (0 <= vr < n and types[vr] == fmi_type):
+                self._report(Fmi2Status.error, f"get{fmi_type}: no {fmi_type} variable with "
+                                               f"value reference {vr_text(vr)}")
                 out.append(default)
                 continue
-            value = self._guard(f"get{kind} vr {vr_text(vr)}", getters[vr])
+            value = self._guard(f"get{fmi_type} vr {vr_text(vr)}", getters[vr])
             out.append(default if value is _FAILED else value)
         return out
 
@@ -470,7 +469,7 @@ class RattleSlave(Fmi2Slave):
         if s["mode"] not in MODES:
             raise invalid(f"mode {s['mode']!r} is not one of {', '.join(MODES)}")
         for key in ("start_time", "time"):
-            if not _is_finite_float(s[key]):
+            if not is_finite_float(s[key]):
                 raise invalid(f"{key} = {s[key]!r} is not a finite float")
         values = s["values"]
         if not isinstance(values, dict) or set(values) != set(self._values):
@@ -479,15 +478,15 @@ class RattleSlave(Fmi2Slave):
             raise invalid(f"its variables do not match this FMU's (missing {missing[:3]}, "
                           f"unknown {extra[:3]})")
         for name, value in values.items():
-            problem = _value_problem(self._kinds[name], value, name in self._output_set)
+            problem = _value_problem(self._fmi_types[name], value, name in self._output_set)
             if problem:
-                raise invalid(f"variable '{name}' = {_short_repr(value)}: {problem}")
+                raise invalid(f"variable '{name}' = {short_repr(value)}: {problem}")
         model_expected = s["mode"] == "stepping" or (
             s["mode"] == "terminated" and s["model"] is not None)
         if model_expected != (s["model"] is not None) or (
                 s["model"] is not None and not isinstance(s["model"], dict)):
             raise invalid(f"mode {s['mode']!r} does not go with model snapshot "
-                          f"{_short_repr(s['model'])}")
+                          f"{short_repr(s['model'])}")
         return s
 
     @staticmethod
@@ -538,30 +537,21 @@ class RattleSlave(Fmi2Slave):
         raise NotImplementedError
 
 
-def _is_finite_float(x) -> bool:
-    return isinstance(x, float) and math.isfinite(x)
-
-
-def _short_repr(value, limit: int = 60) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else f"{text[:limit]}..."
-
-
-def _value_problem(kind: str, value, output: bool) -> str:
-    """Why ``value`` cannot be a stored value of a variable of FMI type ``kind`` ("" if it
-    can).  Parameters and inputs may hold what a master set (a NaN is refused where it is
+def _value_problem(fmi_type: str, value, output: bool) -> str:
+    """Why ``value`` cannot be a stored value of a variable of FMI type ``fmi_type`` ("" if
+    it can).  Parameters and inputs may hold what a master set (a NaN is refused where it is
     used); outputs are finite."""
-    if kind == "Real":
+    if fmi_type == "Real":
         if not isinstance(value, float):
             return "expected a float"
         if output and not math.isfinite(value):
             return "an output must be finite"
-    elif kind == "Integer":
+    elif fmi_type == "Integer":
         if isinstance(value, bool) or not isinstance(value, int):
             return "expected an integer"
         if abs(value) > MAX_STATE_INTEGER:
             return f"beyond +-2^53 (+-{MAX_STATE_INTEGER})"
-    elif kind == "Boolean":
+    elif fmi_type == "Boolean":
         if not isinstance(value, bool):
             return "expected true or false"
     elif not isinstance(value, str):
@@ -574,38 +564,3 @@ def _value_problem(kind: str, value, output: bool) -> str:
         except UnicodeEncodeError:
             return "a string that is not valid Unicode"
     return ""
-
-
-def check_snapshot_fields(snapshot, layout: dict[str, tuple]) -> dict:
-    """``snapshot`` if it is a dict with exactly the keys of ``layout`` and each list entry
-    of the field kinds given there: "f" a finite float, "f+" a finite float >= 0, "n" an
-    integer in [0, 2^53], "flank" -1, 0 or 1, "any" unchecked.  ValueError otherwise."""
-    if not isinstance(snapshot, dict) or set(snapshot) != set(layout):
-        got = sorted(snapshot) if isinstance(snapshot, dict) else type(snapshot).__name__
-        raise ValueError(f"model snapshot has entries {got}, expected {sorted(layout)}")
-    for key, kinds in layout.items():
-        value = snapshot[key]
-        if kinds == ("any",):
-            continue
-        scalar = kinds[0].startswith("=")
-        items = [value] if scalar else value
-        if not scalar and not (isinstance(value, list) and len(value) == len(kinds)):
-            raise ValueError(f"model snapshot '{key}' = {_short_repr(value)}: expected a list "
-                             f"of {len(kinds)} values")
-        for i, (item, kind) in enumerate(zip(items, kinds, strict=True)):
-            kind = kind.lstrip("=")
-            ok = {
-                "f": _is_finite_float(item),
-                "f+": _is_finite_float(item) and item >= 0.0,
-                "n": isinstance(item, int) and not isinstance(item, bool)
-                and 0 <= item <= MAX_STATE_INTEGER,
-                "flank": isinstance(item, int) and not isinstance(item, bool)
-                and item in (-1, 0, 1),
-            }[kind]
-            if not ok:
-                where = key if scalar else f"{key}[{i}]"
-                wanted = {"f": "a finite float", "f+": "a finite float >= 0",
-                          "n": "an integer in [0, 2^53]", "flank": "-1, 0 or 1"}[kind]
-                raise ValueError(f"model snapshot {where} = {_short_repr(item)}: "
-                                 f"expected {wanted}")
-    return snapshot

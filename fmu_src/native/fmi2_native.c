@@ -147,7 +147,7 @@ static void set_default_values(Inst* inst)
         x->s = NULL;
         x->r = v->start_real;
         x->i = v->start_int;
-        if (v->kind == RN_STRING) x->s = copy_string(v->start_string ? v->start_string : "");
+        if (v->fmi_type == RN_STRING) x->s = copy_string(v->start_string ? v->start_string : "");
     }
 }
 
@@ -166,8 +166,8 @@ static int check_parameters(const RnValue* values, RnError* err)
         const RnVariable* v = &RN_VARIABLES[k];
         const char* reason = NULL;
         double x;
-        if (v->kind == RN_STRING || v->kind == RN_BOOLEAN) continue;
-        if (v->kind == RN_INTEGER) {
+        if (v->fmi_type == RN_STRING || v->fmi_type == RN_BOOLEAN) continue;
+        if (v->fmi_type == RN_INTEGER) {
             x = (double)values[k].i;
             if (v->n_choices > 0) {
                 int found = 0;
@@ -187,7 +187,7 @@ static int check_parameters(const RnValue* values, RnError* err)
         if (reason != NULL) {
             RnText* t = rn_error_value(err);
             rn_printf(t, "parameter '%s' = ", v->name);
-            if (v->kind == RN_INTEGER)
+            if (v->fmi_type == RN_INTEGER)
                 rn_printf(t, "%lld", (long long)values[k].i);
             else
                 rn_put_repr(t, values[k].r);
@@ -527,7 +527,7 @@ static void state_json(const Inst* inst, RnText* j)
         if (k) rn_puts(j, ", ");
         rn_json_put_string(j, v->name);
         rn_puts(j, ": ");
-        switch (v->kind) {
+        switch (v->fmi_type) {
         case RN_REAL: rn_json_put_float(j, x->r); break;
         case RN_INTEGER: rn_printf(j, "%lld", (long long)x->i); break;
         case RN_BOOLEAN: rn_puts(j, x->i ? "true" : "false"); break;
@@ -610,7 +610,7 @@ static void json_dump(RnText* t, const RnJson* j)
 /* _value_problem: why `value` cannot be the stored value of variable `v` ("" if it can). */
 static const char* value_problem(const RnVariable* v, const RnJson* value)
 {
-    switch (v->kind) {
+    switch (v->fmi_type) {
     case RN_REAL:
         if (value->kind != RJ_FLOAT) return "expected a float";
         if (v->causality == RN_OUTPUT && !isfinite(value->f)) return "an output must be finite";
@@ -808,7 +808,7 @@ static int restore_state(Inst* inst, const char* payload, size_t n, RnError* err
             const RnJson* x = &values->items[k];
             restored[vr].r = x->kind == RJ_FLOAT ? x->f : 0.0;
             restored[vr].i = x->kind == RJ_INT ? x->i : (x->kind == RJ_TRUE ? 1 : 0);
-            if (RN_VARIABLES[vr].kind == RN_STRING) {
+            if (RN_VARIABLES[vr].fmi_type == RN_STRING) {
                 restored[vr].s = copy_string(x->s);
                 if (restored[vr].s == NULL) {
                     free_values(restored);
@@ -1104,9 +1104,9 @@ fmi2Status fmi2Reset(fmi2Component c)
 }
 
 /* ------------------------------------------------------------------ get */
-static const char* kind_name(int kind)
+static const char* fmi_type_name(int fmi_type)
 {
-    switch (kind) {
+    switch (fmi_type) {
     case RN_REAL: return "Real";
     case RN_INTEGER: return "Integer";
     case RN_BOOLEAN: return "Boolean";
@@ -1132,7 +1132,7 @@ static const RnValue* value_for_get(Inst* inst, unsigned vr, RnError* err)
 
 /* slave._get_values: every valid entry answered; an unknown value reference or another type
  * reported (the last such message logged) with the type's default. */
-static fmi2Status get_values(Inst* inst, const char* function, int kind,
+static fmi2Status get_values(Inst* inst, const char* function, int fmi_type,
                              const fmi2ValueReference vr[], size_t nvr, void* out)
 {
     if (nvr == 0) return fmi2OK;
@@ -1142,14 +1142,14 @@ static fmi2Status get_values(Inst* inst, const char* function, int kind,
     begin(inst);
     for (size_t i = 0; i < nvr; i++) {
         const RnValue* x = NULL;
-        if (vr[i] < RN_N_VARIABLES && RN_VARIABLES[vr[i]].kind == kind) {
+        if (vr[i] < RN_N_VARIABLES && RN_VARIABLES[vr[i]].fmi_type == fmi_type) {
             RnError e;
             rn_error_init(&e);
             x = value_for_get(inst, vr[i], &e);
             if (x == NULL) {
                 RnText action;
                 rn_text_init(&action);
-                rn_printf(&action, "get%s vr %u", kind_name(kind), (unsigned)vr[i]);
+                rn_printf(&action, "get%s vr %u", fmi_type_name(fmi_type), (unsigned)vr[i]);
                 report_error(inst, rn_text_str(&action), &e);
                 rn_text_free(&action);
             }
@@ -1158,13 +1158,13 @@ static fmi2Status get_values(Inst* inst, const char* function, int kind,
         else {
             RnText t;
             rn_text_init(&t);
-            rn_printf(&t, "get%s: no %s variable with value reference ", kind_name(kind),
-                      kind_name(kind));
+            rn_printf(&t, "get%s: no %s variable with value reference ", fmi_type_name(fmi_type),
+                      fmi_type_name(fmi_type));
             put_vr(&t, vr[i]);
             rn_report(inst, fmi2Error, rn_text_str(&t));
             rn_text_free(&t);
         }
-        switch (kind) {
+        switch (fmi_type) {
         case RN_REAL: ((fmi2Real*)out)[i] = x != NULL ? x->r : NAN; break;
         case RN_INTEGER: {
             int64_t n = x != NULL ? x->i : 0;
@@ -1215,9 +1215,9 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* ------------------------------------------------------------------ set */
 /* repr() of the value a host passes, as pythonfmu hands it to the slave (Boolean as bool). */
-static void put_given(RnText* t, int kind, const void* values, size_t i)
+static void put_given(RnText* t, int fmi_type, const void* values, size_t i)
 {
-    switch (kind) {
+    switch (fmi_type) {
     case RN_REAL: rn_put_repr(t, ((const fmi2Real*)values)[i]); break;
     case RN_INTEGER: rn_printf(t, "%d", ((const fmi2Integer*)values)[i]); break;
     case RN_BOOLEAN: rn_puts(t, ((const fmi2Boolean*)values)[i] ? "True" : "False"); break;
@@ -1227,14 +1227,14 @@ static void put_given(RnText* t, int kind, const void* values, size_t i)
 
 /* slave._set_values: every entry checked before any is stored, so a refused call (one bad
  * entry) stores nothing. */
-static fmi2Status set_values(Inst* inst, const char* function, int kind,
+static fmi2Status set_values(Inst* inst, const char* function, int fmi_type,
                              const fmi2ValueReference vr[], size_t nvr, const void* values)
 {
     if (nvr == 0) return fmi2OK;
     if (vr == NULL || values == NULL)
         return refuse(inst, function, "nvr = %zu but the %s array is NULL", nvr,
                       vr == NULL ? "value-reference" : "value");
-    if (kind == RN_STRING) /* the shim's checks of String values */
+    if (fmi_type == RN_STRING) /* the shim's checks of String values */
         for (size_t i = 0; i < nvr; i++) {
             const char* s = ((const fmi2String*)values)[i];
             size_t bad;
@@ -1249,12 +1249,12 @@ static fmi2Status set_values(Inst* inst, const char* function, int kind,
                               bad);
         }
     begin(inst);
-    const char* kname = kind_name(kind);
+    const char* kname = fmi_type_name(fmi_type);
     int refused = 0;
     for (size_t i = 0; i < nvr && !refused; i++) {
         RnText t;
         rn_text_init(&t);
-        if (!(vr[i] < RN_N_VARIABLES && RN_VARIABLES[vr[i]].kind == kind)) {
+        if (!(vr[i] < RN_N_VARIABLES && RN_VARIABLES[vr[i]].fmi_type == fmi_type)) {
             rn_printf(&t, "set%s: no %s variable with value reference ", kname, kname);
             put_vr(&t, vr[i]);
             rn_puts(&t, "; nothing of this call was stored");
@@ -1272,7 +1272,7 @@ static fmi2Status set_values(Inst* inst, const char* function, int kind,
                 rn_printf(&t, "set%s: parameter '%s' is fixed: it can only be set before the "
                               "end of initialization (mode is '%s'); value ", kname, v->name,
                           RN_MODE_NAMES[inst->mode]);
-                put_given(&t, kind, values, i);
+                put_given(&t, fmi_type, values, i);
                 rn_puts(&t, " rejected; nothing of this call was stored");
                 refused = 1;
             }
@@ -1283,7 +1283,7 @@ static fmi2Status set_values(Inst* inst, const char* function, int kind,
     if (!refused) {
         for (size_t i = 0; i < nvr; i++) {
             RnValue* x = &inst->values[vr[i]];
-            switch (kind) {
+            switch (fmi_type) {
             case RN_REAL: x->r = ((const fmi2Real*)values)[i]; break;
             case RN_INTEGER: x->i = ((const fmi2Integer*)values)[i]; break;
             case RN_BOOLEAN: x->i = ((const fmi2Boolean*)values)[i] != fmi2False; break;
@@ -1302,7 +1302,7 @@ static fmi2Status set_values(Inst* inst, const char* function, int kind,
     }
     /* boundary.HeldInputTracking.set_real: a call naming a motion input marks them set (as
      * the pythonfmu FMUs do, whether the call was accepted or not) */
-    if (kind == RN_REAL && !inst->motion_set)
+    if (fmi_type == RN_REAL && !inst->motion_set)
         for (size_t i = 0; i < nvr; i++)
             if (rn_unit_is_motion_input(vr[i])) inst->motion_set = 1;
     return finish(inst, fmi2OK);

@@ -40,7 +40,8 @@
  *     fmi2Fatal its instance is never called (nor freed) again; and a pythonfmu double
  *     release at process exit is defused (see release_python_state_at_exit).
  *
- * Build: gcc -std=c99 -O2 -Wall -Wextra -shared -fPIC \
+ * Build (drive_rattle_build.shim.compile_shim does this):
+ *        gcc -std=c99 -O2 -Wall -Wextra -shared -fPIC -I <fmpy>/c-code \
  *            -DRATTLE_INNER_LIB="\"<id>_pythonfmu.so\"" -DRATTLE_VR_STATUS_ADDRESS=<n> \
  *            -DRATTLE_VR_MESSAGE=<m> [-DRATTLE_VR_LAST_TIME=<t>] [-DRATTLE_GUID="\"<guid>\""] \
  *            [-DRATTLE_MODEL_IDENTIFIER="\"<id>\""] -o <id>.so rattle_fmi_shim.c -ldl -lpthread
@@ -77,99 +78,14 @@
 #endif
 
 /* ------------------------------------------------------------------ FMI 2.0 types */
-/* Written from the FMI 2.0 standard (fmi2TypesPlatform.h / fmi2FunctionTypes.h).  The
- * callback struct members are not const here so that the shim can build its own copy; the
- * layout is the same as the standard's. */
+/* The official FMI 2.0 headers, as fmpy ships them (fmpy/c-code/; the build passes -I): they
+ * declare every exported function with its standard type (fmi2FunctionTypes.h), so the
+ * compiler checks each definition below against the standard's signature.  Their callback
+ * struct has non-const members (FMI 2.0.1 and later), so the shim can build its own copy. */
+#include "fmi2Functions.h"
 
-typedef void* fmi2Component;
-typedef void* fmi2ComponentEnvironment;
-typedef void* fmi2FMUstate;
-typedef unsigned int fmi2ValueReference;
-typedef double fmi2Real;
-typedef int fmi2Integer;
-typedef int fmi2Boolean;
-typedef char fmi2Char;
-typedef const fmi2Char* fmi2String;
-typedef char fmi2Byte;
-#define fmi2True 1
-#define fmi2False 0
-
-typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
-typedef enum { fmi2ModelExchange, fmi2CoSimulation } fmi2Type;
-typedef enum {
-    fmi2DoStepStatus,
-    fmi2PendingStatus,
-    fmi2LastSuccessfulTime,
-    fmi2Terminated
-} fmi2StatusKind;
-
-typedef void (*fmi2CallbackLogger)(fmi2ComponentEnvironment, fmi2String, fmi2Status,
-                                   fmi2String, fmi2String, ...);
-typedef void* (*fmi2CallbackAllocateMemory)(size_t, size_t);
-typedef void (*fmi2CallbackFreeMemory)(void*);
-typedef void (*fmi2StepFinished)(fmi2ComponentEnvironment, fmi2Status);
-
-typedef struct {
-    fmi2CallbackLogger logger;
-    fmi2CallbackAllocateMemory allocateMemory;
-    fmi2CallbackFreeMemory freeMemory;
-    fmi2StepFinished stepFinished;
-    fmi2ComponentEnvironment componentEnvironment;
-} fmi2CallbackFunctions;
-
-/* Function types, as in fmi2FunctionTypes.h.  The prototypes below are declared with them, so
- * the compiler checks every exported definition against its standard signature. */
-typedef const char* fmi2GetTypesPlatformTYPE(void);
-typedef const char* fmi2GetVersionTYPE(void);
-typedef fmi2Status fmi2SetDebugLoggingTYPE(fmi2Component, fmi2Boolean, size_t, const fmi2String[]);
-typedef fmi2Component fmi2InstantiateTYPE(fmi2String, fmi2Type, fmi2String, fmi2String,
-                                          const fmi2CallbackFunctions*, fmi2Boolean, fmi2Boolean);
-typedef void fmi2FreeInstanceTYPE(fmi2Component);
-typedef fmi2Status fmi2SetupExperimentTYPE(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real,
-                                           fmi2Boolean, fmi2Real);
-typedef fmi2Status fmi2EnterInitializationModeTYPE(fmi2Component);
-typedef fmi2Status fmi2ExitInitializationModeTYPE(fmi2Component);
-typedef fmi2Status fmi2TerminateTYPE(fmi2Component);
-typedef fmi2Status fmi2ResetTYPE(fmi2Component);
-typedef fmi2Status fmi2GetRealTYPE(fmi2Component, const fmi2ValueReference[], size_t, fmi2Real[]);
-typedef fmi2Status fmi2GetIntegerTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                      fmi2Integer[]);
-typedef fmi2Status fmi2GetBooleanTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                      fmi2Boolean[]);
-typedef fmi2Status fmi2GetStringTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                     fmi2String[]);
-typedef fmi2Status fmi2SetRealTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                   const fmi2Real[]);
-typedef fmi2Status fmi2SetIntegerTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                      const fmi2Integer[]);
-typedef fmi2Status fmi2SetBooleanTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                      const fmi2Boolean[]);
-typedef fmi2Status fmi2SetStringTYPE(fmi2Component, const fmi2ValueReference[], size_t,
-                                     const fmi2String[]);
-typedef fmi2Status fmi2GetFMUstateTYPE(fmi2Component, fmi2FMUstate*);
-typedef fmi2Status fmi2SetFMUstateTYPE(fmi2Component, fmi2FMUstate);
-typedef fmi2Status fmi2FreeFMUstateTYPE(fmi2Component, fmi2FMUstate*);
-typedef fmi2Status fmi2SerializedFMUstateSizeTYPE(fmi2Component, fmi2FMUstate, size_t*);
-typedef fmi2Status fmi2SerializeFMUstateTYPE(fmi2Component, fmi2FMUstate, fmi2Byte[], size_t);
-typedef fmi2Status fmi2DeSerializeFMUstateTYPE(fmi2Component, const fmi2Byte[], size_t,
-                                               fmi2FMUstate*);
-typedef fmi2Status fmi2GetDirectionalDerivativeTYPE(fmi2Component, const fmi2ValueReference[],
-                                                    size_t, const fmi2ValueReference[], size_t,
-                                                    const fmi2Real[], fmi2Real[]);
-typedef fmi2Status fmi2SetRealInputDerivativesTYPE(fmi2Component, const fmi2ValueReference[],
-                                                   size_t, const fmi2Integer[], const fmi2Real[]);
-typedef fmi2Status fmi2GetRealOutputDerivativesTYPE(fmi2Component, const fmi2ValueReference[],
-                                                    size_t, const fmi2Integer[], fmi2Real[]);
-typedef fmi2Status fmi2DoStepTYPE(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
-typedef fmi2Status fmi2CancelStepTYPE(fmi2Component);
-typedef fmi2Status fmi2GetStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Status*);
-typedef fmi2Status fmi2GetRealStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Real*);
-typedef fmi2Status fmi2GetIntegerStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Integer*);
-typedef fmi2Status fmi2GetBooleanStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2Boolean*);
-typedef fmi2Status fmi2GetStringStatusTYPE(fmi2Component, const fmi2StatusKind, fmi2String*);
-
-/* Every function of the API, once: used to declare the exports, the table of the wrapped
- * library's functions and the dlsym loop. */
+/* Every function the shim exports, once: used for the table of the wrapped library's
+ * functions and the dlsym loop (fmi2Functions.h declares the exports). */
 #define FMI2_FUNCTIONS(X)                                                                      \
     X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2Instantiate)        \
     X(fmi2FreeInstance) X(fmi2SetupExperiment) X(fmi2EnterInitializationMode)                  \
@@ -182,9 +98,6 @@ typedef fmi2Status fmi2GetStringStatusTYPE(fmi2Component, const fmi2StatusKind, 
     X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus)            \
     X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
 
-#define DECLARE_EXPORT(name) name##TYPE name;
-FMI2_FUNCTIONS(DECLARE_EXPORT)
-#undef DECLARE_EXPORT
 
 /* ------------------------------------------------------------------ the wrapped library */
 

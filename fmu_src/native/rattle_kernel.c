@@ -6,13 +6,13 @@
  *                               RK4 contact substeps split at breakpoints and subdivided from
  *                               the contact's time scales, release, friction-reversal and
  *                               pair-engagement location, peak tracking, rattle index, guards)
+ *                               and WheelStepper.outputs (the values of interface.MESH_OUTPUTS)
  *   drive_rattle/mesh.py        MeshModel._loads / torques / static_force / contact_rates /
  *                               energy_balance_delta_max / penetration / approach_rate ...
  *   drive_rattle/geometry.py    pairs_at_roll, next_breakpoint, normal_radii, flank_roll
- *   drive_rattle/hertz.py       ContactLaw.shape (Chebyshev series, Clenshaw), film_delta_max
+ *   drive_rattle/hertz.py       ContactLaw.coefficients (Chebyshev series, Clenshaw), film_delta_max
  *   drive_rattle/lubrication.py film_thickness, asperity_area, dry_fraction, friction_force
  *   drive_rattle/roots.py       brent, first_crossing
- *   drive_rattle/interface.py   mesh_outputs
  * that reproduces the Python results BIT FOR BIT (docs/kernel.md).  The Python code is the
  * reference: every expression below performs the same IEEE operations in the same order as
  * the Python line it ports (Python evaluates a + b + c as (a + b) + c, x ** y is pow(x, y),
@@ -24,7 +24,7 @@
  * Python's max(a, b) returns a unless b > a (so max(nan, x) is nan, max(x, nan) is x and
  * max(-0.0, 0.0) is -0.0); py_max reproduces that, fmax would not.
  *
- * Build (kernel.compile_kernel does this):
+ * Build (drive_rattle_build.kernel.compile_kernel does this):
  *   gcc -std=c99 -O2 -fno-fast-math -ffp-contract=off -fPIC -shared -o _rattle_kernel.so \
  *       rattle_kernel.c -lm
  * -ffp-contract=off is required: a fused multiply-add rounds once instead of twice.
@@ -36,17 +36,17 @@
  * constants are computed once in Python (kernel_layout.pack_model) and passed in the model
  * array: nothing is derived again here.
  *
- * Refusals: where the Python step raises, rk_step returns a code, leaves state and result
- * unchanged and passes the numbers of the message (RK_ERR_DIVERGED, _PENETRATION, _TOO_STIFF)
- * or the message itself (RK_ERR_VALUE_ERROR, _OVERFLOW_ERROR, _TYPE_ERROR: what a math
- * function, int() or a comparison with None raises in Python); kernel.py raises the same
- * exception with the same text.
+ * Refusals: where the Python step raises, rk_step returns a code (RK_ERR_...), leaves state
+ * and result unchanged and passes the numbers the refusal needs in err_values: those its
+ * message quotes (RK_ERR_DIVERGED, _PENETRATION, _TOO_STIFF, _NO_BRACKET, ...), or, where
+ * Python fails inside a library call (math.sqrt, math.log, math.exp, math.floor, math.ceil,
+ * int(), **, a comparison with None: RK_ERR_LIBRARY), which call (RK_CALL_...) with its
+ * arguments.  This file holds no message text: kernel.py raises the exception Python raises,
+ * from the functions the Python core raises from, or by making the same library call.
  */
 #include <math.h>
 #include <setjmp.h>
-#include <stdarg.h>
 #include <stdint.h>
-#include <stdio.h>
 #include <string.h>
 
 #include "rattle_kernel_layout.h"
@@ -55,11 +55,6 @@
 
 #define PI 3.141592653589793 /* math.pi */
 #define N_SLOTS RK_N_SLOTS
-/* Largest |pair number| handled: pair numbers are exact integers in doubles below 2**53. */
-#define PAIR_NUMBER_LIMIT 4503599627370496.0 /* 2**52 */
-/* Consecutive main-loop iterations without progress in time before the step is refused
- * (the Python loop would not terminate). */
-#define STALL_LIMIT 1000000
 
 /* The pair block of the outputs is contiguous: out[O_PAIR_0_W + k] is pair[k].W. */
 typedef char pair_outputs_are_contiguous[O_PAIR_7_W - O_PAIR_0_W == N_SLOTS - 1 ? 1 : -1];
@@ -79,9 +74,9 @@ typedef struct {
     double J, tau_s, eta, sigma, gamma, density, h_max, h_comm_max, rattle_time;
     int friction_enabled;
     int64_t friction_form, shear_speed;
-    double pen_limit, bp_tol, brent_rtol, event_xtol;
+    double pen_limit, bp_tol, brent_rtol, event_xtol, engagement_min_fraction;
     int64_t grazing_samples, brent_max_iter, max_contact_substeps;
-    double lambda_boundary, lambda_full_film, contact_rate_safety;
+    double lambda_boundary, lambda_full_film, contact_rate_safety, grid_slack;
     double sqrt_gamma_sigma; /* math.sqrt(gamma / sigma), the same value every call */
 } Model;
 
@@ -93,28 +88,14 @@ typedef struct {
     double rattle_index;
 } State;
 
-/* Error exit: code, message and values, then longjmp back to the entry point. */
+/* Error exit: the code and the values of the refusal, then longjmp back to the entry point. */
 typedef struct {
     jmp_buf jb;
     int code;
     double values[RK_ERROR_VALUES];
-    char* err;
-    int errlen;
 } Fail;
 
-static void fail_message(Fail* f, int code, const char* fmt, ...)
-{
-    if (f->err != NULL && f->errlen > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(f->err, (size_t)f->errlen, fmt, ap);
-        va_end(ap);
-    }
-    f->code = code;
-    longjmp(f->jb, 1);
-}
-
-static void fail_values(Fail* f, int code, double v0, double v1, double v2, double v3)
+static void fail(Fail* f, int code, double v0, double v1, double v2, double v3)
 {
     f->code = code;
     f->values[0] = v0;
@@ -124,14 +105,10 @@ static void fail_values(Fail* f, int code, double v0, double v1, double v2, doub
     longjmp(f->jb, 1);
 }
 
-static void set_err(char* err, int errlen, const char* fmt, ...)
+/* A library call that raises in Python: which one (RK_CALL_...) and its arguments. */
+static void fail_call(Fail* f, int call, double x, double y)
 {
-    if (err != NULL && errlen > 0) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, (size_t)errlen, fmt, ap);
-        va_end(ap);
-    }
+    fail(f, RK_ERR_LIBRARY, (double)call, x, y, 0.0);
 }
 
 /* ------------------------------------------------------------------ Python semantics */
@@ -140,31 +117,28 @@ static inline double py_max(double a, double b) { return b > a ? b : a; }
 
 /* x ** y for the exponents used (1/3, 2/3): CPython's float_pow calls pow(x, y) for a
  * positive finite base and raises OverflowError when a finite base gives an infinite
- * result; a negative base with a fractional exponent would give a complex number (never
- * reached: the bases are stiffnesses, loads and lengths > 0). */
+ * result; a negative base with a fractional exponent gives a complex number in Python, which
+ * the kernel does not follow (never reached: the bases are stiffnesses, loads and lengths). */
 static inline double py_pow(Fail* f, double x, double y)
 {
-    if (x < 0.0)
-        fail_message(f, RK_ERR_VALUE_ERROR,
-                     "negative number %.17g raised to the fractional power %.17g", x, y);
     double r = pow(x, y);
-    if (isinf(r) && isfinite(x))
-        fail_message(f, RK_ERR_OVERFLOW_ERROR, "(34, 'Numerical result out of range')");
+    if (x < 0.0 || (isinf(r) && isfinite(x)))
+        fail_call(f, RK_CALL_POW, x, y);
     return r;
 }
 
-/* math.sqrt / math.log / math.exp with CPython's domain and range errors. */
+/* math.sqrt / math.log / math.exp where CPython raises a domain or range error. */
 static inline double py_sqrt(Fail* f, double x)
 {
     if (x < 0.0)
-        fail_message(f, RK_ERR_VALUE_ERROR, "math domain error");
+        fail_call(f, RK_CALL_SQRT, x, 0.0);
     return sqrt(x);
 }
 
 static inline double py_log(Fail* f, double x)
 {
     if (x <= 0.0)
-        fail_message(f, RK_ERR_VALUE_ERROR, "math domain error");
+        fail_call(f, RK_CALL_LOG, x, 0.0);
     return log(x);
 }
 
@@ -172,46 +146,35 @@ static inline double py_exp(Fail* f, double x)
 {
     double r = exp(x);
     if (isinf(r) && isfinite(x))
-        fail_message(f, RK_ERR_OVERFLOW_ERROR, "math range error");
+        fail_call(f, RK_CALL_EXP, x, 0.0);
     return r;
 }
 
-/* math.floor / math.ceil / int() of a float that is not finite. */
-static void not_integral(Fail* f, double x)
-{
-    if (isnan(x))
-        fail_message(f, RK_ERR_VALUE_ERROR, "cannot convert float NaN to integer");
-    fail_message(f, RK_ERR_OVERFLOW_ERROR, "cannot convert float infinity to integer");
-}
-
-/* math.floor / math.ceil return ints.  The pair and breakpoint arithmetic keeps the integer
- * in a double: float(int(floor(x)) + 1) equals floor(x) + 1.0 for every finite x (both are
- * the correctly rounded exact sum). */
+/* math.floor / math.ceil return ints (CPython raises for a float that is not finite).  The
+ * pair and breakpoint arithmetic keeps the integer in a double: float(int(floor(x)) + 1)
+ * equals floor(x) + 1.0 for every finite x (both are the correctly rounded exact sum). */
 static inline double py_floor(Fail* f, double x)
 {
     if (!isfinite(x))
-        not_integral(f, x);
+        fail_call(f, RK_CALL_FLOOR, x, 0.0);
     return floor(x);
 }
 
 static inline double py_ceil(Fail* f, double x)
 {
     if (!isfinite(x))
-        not_integral(f, x);
+        fail_call(f, RK_CALL_CEIL, x, 0.0);
     return ceil(x);
 }
 
 /* ------------------------------------------------------------------ unpacking */
-static int unpack_model(const double* a, Model* m, char* err, int errlen)
+/* Returns RK_ERR_OK, RK_ERR_LAYOUT (an array of another layout) or RK_ERR_MODEL_VALUES
+ * (counts out of the kernel's range, passed in err_values). */
+static int unpack_model(const double* a, Model* m, double* err_values)
 {
     if (a == NULL || a[M_MAGIC] != RK_MAGIC || a[M_LAYOUT_HASH] != (double)RK_LAYOUT_HASH
-        || a[M_SIZE] != (double)M_COUNT) {
-        set_err(err, errlen,
-                "rattle kernel: model array layout mismatch (kernel layout %llu with %d "
-                "fields; rebuild _rattle_kernel.so from the sources of this version)",
-                (unsigned long long)RK_LAYOUT_HASH, (int)M_COUNT);
-        return 0;
-    }
+        || a[M_SIZE] != (double)M_COUNT)
+        return RK_ERR_LAYOUT;
     m->rb_pinion = a[M_RB_PINION];
     m->flank_phase = a[M_FLANK_PHASE];
     m->base_pitch = a[M_BASE_PITCH];
@@ -227,9 +190,13 @@ static int unpack_model(const double* a, Model* m, char* err, int errlen)
     m->law = (int64_t)a[M_LAW];
     if (m->n_bp < 0 || m->n_bp > M_BREAKPOINTS_LENGTH || m->n_cheb < 0
         || m->n_cheb > M_KAPPA_LENGTH || (m->law == RK_LAW_EXACT && m->n_cheb < 1)) {
-        set_err(err, errlen, "rattle kernel: %d breakpoints, %d Chebyshev terms, law %lld",
-                m->n_bp, m->n_cheb, (long long)m->law);
-        return 0;
+        if (err_values != NULL) {
+            err_values[0] = (double)m->n_bp;
+            err_values[1] = (double)m->n_cheb;
+            err_values[2] = (double)m->law;
+            err_values[3] = 0.0;
+        }
+        return RK_ERR_MODEL_VALUES;
     }
     for (int i = 0; i < RK_MAX_BREAKPOINTS; i++)
         m->bp[i] = a[M_BREAKPOINTS + i];
@@ -266,12 +233,14 @@ static int unpack_model(const double* a, Model* m, char* err, int errlen)
     m->brent_max_iter = (int64_t)a[M_BRENT_MAX_ITERATIONS];
     m->brent_rtol = a[M_BRENT_RTOL];
     m->event_xtol = a[M_EVENT_XTOL];
+    m->engagement_min_fraction = a[M_ENGAGEMENT_MIN_FRACTION];
     m->lambda_boundary = a[M_LAMBDA_BOUNDARY];
     m->lambda_full_film = a[M_LAMBDA_FULL_FILM];
     m->contact_rate_safety = a[M_CONTACT_RATE_SAFETY];
     m->max_contact_substeps = (int64_t)a[M_MAX_CONTACT_SUBSTEPS];
+    m->grid_slack = a[M_GRID_SLACK];
     m->sqrt_gamma_sigma = sqrt(m->gamma / m->sigma);
-    return 1;
+    return RK_ERR_OK;
 }
 
 static void unpack_state(const double* a, State* s)
@@ -360,9 +329,7 @@ static double brent(Fail* f, RootFn fn, void* ctx, double a, double b, double fa
     if (fb == 0.0)
         return b;
     if ((fa > 0.0) == (fb > 0.0))
-        fail_message(f, RK_ERR_VALUE_ERROR,
-                     "brent: f(%.17g) = %.17g and f(%.17g) = %.17g do not bracket a root", a,
-                     fa, b, fb);
+        fail(f, RK_ERR_NO_BRACKET, a, fa, b, fb);
     double c = a, fc = fa;
     double d = b - a, e = b - a;
     for (int64_t it = 0; it < max_iter; it++) {
@@ -440,8 +407,8 @@ static inline double chebyshev_value(const double* c, int n, double t)
     return t * b1 - b2 + c[0];
 }
 
-/* ContactLaw.shape(r_x): K, ka, kz (R is not used by the stepper). */
-static void law_shape(const Model* M, Fail* f, double r_x, double* K, double* ka, double* kz)
+/* ContactLaw.coefficients(r_x): K, ka, kz (R is not used by the stepper). */
+static void law_coefficients(const Model* M, Fail* f, double r_x, double* K, double* ka, double* kz)
 {
     double r_y = M->r_y;
     double E = M->law_E_star;
@@ -503,8 +470,7 @@ static inline double friction_force(const Model* M, Fail* f, double psi, double 
     case RK_FORM_AS_PRINTED:
         return A_e * (psi * M->tau_s + (1.0 - psi) * viscous);
     default:
-        fail_message(f, RK_ERR_VALUE_ERROR, "friction form %lld unknown; allowed: 0, 1, 2",
-                     (long long)M->friction_form);
+        fail(f, RK_ERR_FRICTION_FORM, (double)M->friction_form, 0.0, 0.0, 0.0);
     }
     return 0.0;
 }
@@ -550,19 +516,19 @@ static int next_breakpoint(const Model* M, Fail* f, double u_a, double u_b, doub
 }
 
 /* The tooth pairs in the zone of action at roll coordinate u (geometry.pairs_at_roll) with
- * the pure functions of them the stepper needs: the contact law's shape at the pair's radius
+ * the pure functions of them the stepper needs: the contact law's coefficients at the pair's radius
  * (computed on first use) and, per impact speed, the eq. 7 delta_max.  The integrator
  * evaluates the pairs twice at t + h/2 of each RK4 step and at the start of a substep for the
  * right-hand side, the substep length and the friction directions, so a step keeps a few of
  * these sets: each value is computed by the same expression as without the cache, only fewer
  * times. */
-#define PAIR_MAX 16
+#define PAIR_MAX RK_MAX_PAIRS
 typedef struct {
     double u;
     int n;
     int64_t slot[PAIR_MAX];
     double s[PAIR_MAX], offset[PAIR_MAX], dg[PAIR_MAX];
-    int shape_ok[PAIR_MAX];
+    int coefficients_ok[PAIR_MAX];
     double r_x[PAIR_MAX], K[PAIR_MAX], ka[PAIR_MAX], kz[PAIR_MAX];
     double d_max_v;         /* impact speed of the d_max entries */
     int d_max_ok[PAIR_MAX]; /* d_max[i] computed for d_max_v */
@@ -572,15 +538,14 @@ typedef struct {
 static inline void pairset_add(Fail* f, PairSet* ps, double n, double s, double g, double dg)
 {
     if (ps->n == PAIR_MAX)
-        fail_message(f, RK_ERR_VALUE_ERROR, "more than %d tooth pairs in the zone of action",
-                     PAIR_MAX);
+        fail(f, RK_ERR_TOO_MANY_PAIRS, (double)PAIR_MAX, 0.0, 0.0, 0.0);
     int i = ps->n++;
     int64_t k = (int64_t)n % N_SLOTS; /* n % MAX_PAIR_SLOTS (Python: never negative) */
     ps->slot[i] = k < 0 ? k + N_SLOTS : k;
     ps->s[i] = s;
     ps->offset[i] = g;
     ps->dg[i] = dg;
-    ps->shape_ok[i] = 0;
+    ps->coefficients_ok[i] = 0;
     ps->d_max_ok[i] = 0;
 }
 
@@ -593,10 +558,8 @@ static void pairset_build(const Model* M, Fail* f, double u, PairSet* ps)
     double k = M->crown_factor;
     double n_lo = py_floor(f, (u - s1 - half) / pb) + 1.0;
     double n_hi = py_ceil(f, (u - s0 + half) / pb) - 1.0;
-    if (!(fabs(n_lo) < PAIR_NUMBER_LIMIT && fabs(n_hi) < PAIR_NUMBER_LIMIT))
-        fail_message(f, RK_ERR_VALUE_ERROR,
-                     "roll coordinate %.17g m beyond the kernel's range (pair number %.17g; "
-                     "|pinion angle| too large)", u, n_lo);
+    if (!(fabs(n_lo) < RK_PAIR_NUMBER_LIMIT && fabs(n_hi) < RK_PAIR_NUMBER_LIMIT))
+        fail(f, RK_ERR_PAIR_NUMBER_RANGE, u, n_lo, 0.0, 0.0);
     ps->u = u;
     ps->n = 0;
     ps->d_max_v = 0.0;
@@ -623,10 +586,10 @@ static void pairset_build(const Model* M, Fail* f, double u, PairSet* ps)
     }
 }
 
-/* normal_radii(s)[2] and law.shape(r_x) of pair i. */
-static inline void pairset_shape(const Model* M, Fail* f, PairSet* ps, int i)
+/* normal_radii(s)[2] and law.coefficients(r_x) of pair i. */
+static inline void pairset_coefficients(const Model* M, Fail* f, PairSet* ps, int i)
 {
-    if (ps->shape_ok[i])
+    if (ps->coefficients_ok[i])
         return;
     double s = ps->s[i];
     double c = M->normal_factor;
@@ -634,11 +597,11 @@ static inline void pairset_shape(const Model* M, Fail* f, PairSet* ps, int i)
     double rw = (M->line_length - s) / c;
     double r_x = rp * rw / (rp + rw);
     ps->r_x[i] = r_x;
-    law_shape(M, f, r_x, &ps->K[i], &ps->ka[i], &ps->kz[i]);
-    ps->shape_ok[i] = 1;
+    law_coefficients(M, f, r_x, &ps->K[i], &ps->ka[i], &ps->kz[i]);
+    ps->coefficients_ok[i] = 1;
 }
 
-/* hertz.film_delta_max(v, K, r_x, ka, density) of pair i (shape computed). */
+/* hertz.film_delta_max(v, K, r_x, ka, density) of pair i (coefficients computed). */
 static inline double pairset_d_max(const Model* M, Fail* f, PairSet* ps, int i, double v)
 {
     if (!(v == ps->d_max_v)) {
@@ -737,7 +700,7 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
                 out->forces[slot] = 0.0;
             continue;
         }
-        pairset_shape(M, f, ps, i);
+        pairset_coefficients(M, f, ps, i);
         double K = ps->K[i];
         double W = K * (pen * py_sqrt(f, pen));
         if (damping > 0.0) {
@@ -782,7 +745,7 @@ static void mesh_loads(const Model* M, Fail* f, PairCache* cache, int64_t flank,
             }
         }
         if (detail) {
-            /* interface.mesh_outputs: loaded pairs (W > 0), the most loaded one (the first
+            /* WheelStepper.outputs: loaded pairs (W > 0), the most loaded one (the first
              * of equal maxima), pair_forces (a later pair in the same slot overwrites). */
             if (W > 0.0) {
                 if (out->n_loaded == 0 || W > out->top_W) {
@@ -811,7 +774,7 @@ static double static_force(const Model* M, Fail* f, PairCache* cache, int64_t fl
     for (int i = 0; i < ps->n; i++) {
         double d = delta - ps->offset[i];
         if (d > 0.0) {
-            pairset_shape(M, f, ps, i);
+            pairset_coefficients(M, f, ps, i);
             total += ps->K[i] * (d * py_sqrt(f, d));
         }
     }
@@ -829,7 +792,7 @@ static void contact_rates(const Model* M, Fail* f, PairCache* cache, int64_t fla
     for (int i = 0; i < ps->n; i++) {
         double pen = delta - ps->offset[i];
         if (pen > 0.0) {
-            pairset_shape(M, f, ps, i);
+            pairset_coefficients(M, f, ps, i);
             double K = ps->K[i];
             double root = py_sqrt(f, pen);
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
@@ -849,7 +812,7 @@ static double energy_balance_delta_max(const Model* M, Fail* f, PairCache* cache
     PairSet* ps = pairs_at(M, f, cache, flank_roll(M, flank, phi_p));
     double out = 0.0;
     for (int i = 0; i < ps->n; i++) {
-        pairset_shape(M, f, ps, i);
+        pairset_coefficients(M, f, ps, i);
         double d = film_delta_max(f, v_impact, ps->K[i], ps->r_x[i], ps->ka[i], M->density);
         if (d > out)
             out = d;
@@ -944,10 +907,10 @@ static double free_flight(Run* r, double t)
     double v0 = M->arm_pinion * run_w_p(r, t) - M->arm_wheel * st->w;
     double half_acc = 0.5 * (M->arm_pinion * r->a_p - M->arm_wheel * a_w);
     double span = r->H - t;
-    double c = M->half_backlash;
+    double half_backlash = M->half_backlash;
     double hit_d = 0.0, hit_c = 0.0;
-    int has_d = first_crossing(x0 - c, v0, half_acc, span, 1, &hit_d);
-    int has_c = first_crossing(-x0 - c, -v0, -half_acc, span, 1, &hit_c);
+    int has_d = first_crossing(x0 - half_backlash, v0, half_acc, span, 1, &hit_d);
+    int has_c = first_crossing(-x0 - half_backlash, -v0, -half_acc, span, 1, &hit_c);
     double dt;
     int64_t flank;
     if (!has_d && !has_c) {
@@ -1028,7 +991,7 @@ static double resolved_substep(Run* r, double t, double span)
     /* contact_substeps + parts > MAX_CONTACT_SUBSTEPS in Python's exact integers: both sides
      * are integers and the sum is exact below 2**53, above which it exceeds the cap anyway */
     if ((double)r->contact_substeps + parts > (double)M->max_contact_substeps)
-        fail_values(r->f, RK_ERR_TOO_STIFF, fastest, k, c, mass);
+        fail(r->f, RK_ERR_TOO_STIFF, fastest, k, c, mass);
     return span / parts;
 }
 
@@ -1157,9 +1120,8 @@ static double crossing_after(void* vctx, double dt)
     int found;
     rk4(r, c->t, dt, r->st.phi, r->st.w, c->k1, &phi_b, &w_b, &q);
     double pen = slot_own_penetration(c, dt, phi_b, &found);
-    if (!found)
-        fail_message(r->f, RK_ERR_TYPE_ERROR,
-                     "'>' not supported between instances of 'NoneType' and 'float'");
+    if (!found) /* Python: brent compares the None of own_penetration with 0.0 */
+        fail_call(r->f, RK_CALL_NONE_GT, 0.0, 0.0);
     return pen;
 }
 
@@ -1267,7 +1229,7 @@ static double contact_substep(Run* r, double t)
     int64_t flank = st->flank;
     double x = t * (double)r->n_sub / r->H;
     if (!isfinite(x))
-        not_integral(r->f, x);
+        fail_call(r->f, RK_CALL_INT, x, 0.0);
     int64_t j = (int64_t)x; /* int(): truncation (t < H, so x < n_sub) */
     if (r->n_sub - 1 < j)
         j = r->n_sub - 1;
@@ -1331,13 +1293,13 @@ static double contact_substep(Run* r, double t)
             released = 0;
         }
     }
-    /* a crowned pair starting or ending to carry load: end the substep there (one located at
-     * the substep start to rounding needs no split) */
+    /* a crowned pair starting or ending to carry load: end the substep there (one located
+     * right at the substep start needs no split: ENGAGEMENT_MIN_FRACTION) */
     int64_t engaged = -1;
     Reversal eng[PAIR_MAX];
     int n_eng = engagement_times(r, t, h, phi_b, k1, eng);
     for (int i = 0; i < n_eng; i++) {
-        if (eng[i].dt < dt_event && t + eng[i].dt > t) {
+        if (eng[i].dt < dt_event && eng[i].dt > r->M->engagement_min_fraction * h) {
             dt_event = eng[i].dt;
             engaged = eng[i].slot;
             reversal = -1;
@@ -1379,15 +1341,16 @@ EXPORT unsigned long long rk_layout_hash(void) { return RK_LAYOUT_HASH; }
  * WheelStepper.step: advances `state` (S_COUNT doubles) by inputs[I_H] under the pinion
  * kinematics and the held load torque of `inputs` (I_COUNT doubles).  Returns RK_ERR_OK and
  * writes state and result (R_COUNT doubles) on success; on a refusal returns its code, writes
- * the message's numbers to err_values (RK_ERROR_VALUES doubles) or the message to err, and
- * leaves state and result as they were.
+ * the refusal's numbers to err_values (RK_ERROR_VALUES doubles) and leaves state and result
+ * as they were.
  */
 EXPORT int rk_step(const double* model, double* state, const double* inputs, double* result,
-                   double* err_values, char* err, int errlen)
+                   double* err_values)
 {
     Model M;
-    if (!unpack_model(model, &M, err, errlen))
-        return RK_ERR_LAYOUT;
+    int unpacked = unpack_model(model, &M, err_values);
+    if (unpacked != RK_ERR_OK)
+        return unpacked;
     double h = inputs[I_H], phi_p = inputs[I_PHI_P], w_p = inputs[I_W_P];
     double a_p = inputs[I_A_P], tau_load = inputs[I_TAU_LOAD];
     /* _check_finite, then check_step_size: Python words the message */
@@ -1396,8 +1359,6 @@ EXPORT int rk_step(const double* model, double* state, const double* inputs, dou
         return RK_ERR_INPUT;
 
     Fail f;
-    f.err = err;
-    f.errlen = errlen;
     f.code = RK_ERR_OK;
     Run run;
     run.M = &M;
@@ -1428,10 +1389,9 @@ EXPORT int rk_step(const double* model, double* state, const double* inputs, dou
         return f.code;
     }
     {
-        double x = py_ceil(&f, h / M.h_max * (1.0 - 1e-12));
-        if (!(x < 9.2e18))
-            fail_message(&f, RK_ERR_VALUE_ERROR, "step size h = %.17g s needs %.17g substeps",
-                         h, x);
+        double x = py_ceil(&f, h / M.h_max * (1.0 - M.grid_slack));
+        if (!(x < RK_MAX_GRID_SUBSTEPS))
+            fail(&f, RK_ERR_SUBSTEP_COUNT, h, x, 0.0, 0.0);
         run.n_sub = x > 1.0 ? (int64_t)x : 1;
     }
 
@@ -1452,10 +1412,8 @@ EXPORT int rk_step(const double* model, double* state, const double* inputs, dou
         if (t_new > t) {
             stall = 0;
         }
-        else if (++stall > STALL_LIMIT) {
-            fail_message(&f, RK_ERR_VALUE_ERROR,
-                         "the step makes no progress at t = %.17g s (the integrator is stuck; "
-                         "reduce solver.h_max or the communication step)", t);
+        else if (++stall > RK_STALL_LIMIT) {
+            fail(&f, RK_ERR_NO_PROGRESS, t, 0.0, 0.0, 0.0);
         }
         t = t_new;
     }
@@ -1475,13 +1433,13 @@ EXPORT int rk_step(const double* model, double* state, const double* inputs, dou
     /* WheelStepper.step: divergence and penetration guards */
     if (!(isfinite(st->phi) && isfinite(st->w) && isfinite(tau_pinion_mean)
           && isfinite(run.W_peak)))
-        fail_values(&f, RK_ERR_DIVERGED, st->phi, st->w, 0.0, 0.0);
+        fail(&f, RK_ERR_DIVERGED, st->phi, st->w, 0.0, 0.0);
     double phi_end = phi_p + h * (w_p + 0.5 * a_p * h);
     double depth = py_max(py_max(run.delta_peak, penetration(&M, RK_DRIVE, phi_end, st->phi)),
                           penetration(&M, RK_COAST, phi_end, st->phi));
     double limit = M.pen_limit;
     if (depth > limit)
-        fail_values(&f, RK_ERR_PENETRATION, depth, limit, 0.0, 0.0);
+        fail(&f, RK_ERR_PENETRATION, depth, limit, 0.0, 0.0);
 
     /* commit */
     pack_state(st, state);
@@ -1500,30 +1458,33 @@ EXPORT int rk_step(const double* model, double* state, const double* inputs, dou
 }
 
 /*
- * interface.mesh_outputs: the values of MESH_OUTPUTS (O_COUNT doubles, declared order) for
+ * WheelStepper.outputs: the values of MESH_OUTPUTS (O_COUNT doubles, declared order) for
  * the state and `last` (R_COUNT doubles: the last step's aggregates and, in R_PINION_PHI and
  * R_PINION_W, the pinion at the end of the last step).  Returns RK_ERR_OK, or the code of
- * the error Python would raise (out is then unspecified).
+ * the error Python would raise with its numbers in err_values (out is then unspecified).
  */
 EXPORT int rk_outputs(const double* model, const double* state, const double* last,
-                      double* out)
+                      double* out, double* err_values)
 {
     Model M;
-    if (!unpack_model(model, &M, NULL, 0))
-        return RK_ERR_LAYOUT;
+    int unpacked = unpack_model(model, &M, err_values);
+    if (unpacked != RK_ERR_OK)
+        return unpacked;
     for (int k = 0; k < O_COUNT; k++)
         out[k] = NAN; /* an output this port does not write shows as a difference */
     Fail f;
-    f.err = NULL;
-    f.errlen = 0;
     f.code = RK_ERR_OK;
     State st;
     unpack_state(state, &st);
     double phi_p = last[R_PINION_PHI], w_p = last[R_PINION_W];
     PairCache cache;
     cache.n_used = cache.next = 0;
-    if (setjmp(f.jb) != 0)
+    if (setjmp(f.jb) != 0) {
+        if (err_values != NULL)
+            for (int i = 0; i < RK_ERROR_VALUES; i++)
+                err_values[i] = f.values[i];
         return f.code;
+    }
     /* WheelStepper.loads_now */
     int64_t flank = st.flank;
     if (flank == 0)
@@ -1582,24 +1543,27 @@ EXPORT int rk_outputs(const double* model, const double* state, const double* la
  * MeshModel.torques(flank, phi_p, w_p, phi_w, w_w, v_impact) with the friction directions of
  * the sliding speeds (no substep's signs): out[0] the torque on the wheel, out[1] on the
  * pinion, out[2] the total normal force.  The static start equilibrium of the native FMUs
- * (rattle_model.c, WheelStepper.equilibrium_state) solves on it.  Returns RK_ERR_OK, or the
- * code of the error Python would raise with its message in err.
+ * (rattle_model.c, WheelStepper.equilibrium_state) solves on it.  Returns RK_ERR_OK, or a
+ * code with its numbers in err_values (kernel_layout.ERROR_CODES).
  */
 EXPORT int rk_mesh_torques(const double* model, double flank, double phi_p, double w_p,
-                           double phi_w, double w_w, double v_impact, double* out, char* err,
-                           int errlen)
+                           double phi_w, double w_w, double v_impact, double* out,
+                           double* err_values)
 {
     Model M;
-    if (!unpack_model(model, &M, err, errlen))
-        return RK_ERR_LAYOUT;
+    int unpacked = unpack_model(model, &M, err_values);
+    if (unpacked != RK_ERR_OK)
+        return unpacked;
     Fail f;
-    f.err = err;
-    f.errlen = errlen;
     f.code = RK_ERR_OK;
     PairCache cache;
     cache.n_used = cache.next = 0;
-    if (setjmp(f.jb) != 0)
+    if (setjmp(f.jb) != 0) {
+        if (err_values != NULL)
+            for (int i = 0; i < RK_ERROR_VALUES; i++)
+                err_values[i] = f.values[i];
         return f.code;
+    }
     Loads L;
     mesh_loads(&M, &f, &cache, (int64_t)flank, phi_p, w_p, phi_w, w_w, v_impact, NULL, 0, &L);
     out[0] = L.tau_w;

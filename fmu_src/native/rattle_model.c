@@ -43,10 +43,11 @@
 
 /* rattle_kernel.c */
 int rk_step(const double* model, double* state, const double* inputs, double* result,
-            double* err_values, char* err, int errlen);
-int rk_outputs(const double* model, const double* state, const double* last, double* out);
+            double* err_values);
+int rk_outputs(const double* model, const double* state, const double* last, double* out,
+               double* err_values);
 int rk_mesh_torques(const double* model, double flank, double phi_p, double w_p, double phi_w,
-                    double w_w, double v_impact, double* out, char* err, int errlen);
+                    double w_w, double v_impact, double* out, double* err_values);
 
 #define PI 3.141592653589793 /* math.pi */
 
@@ -1056,11 +1057,11 @@ typedef struct {
 static int same_parameters(const RnValue* a, const RnValue* b)
 {
     for (int k = 0; k < RN_N_PARAMETERS; k++) {
-        int kind = RN_VARIABLES[k].kind;
-        if (kind == RN_REAL) {
+        int fmi_type = RN_VARIABLES[k].fmi_type;
+        if (fmi_type == RN_REAL) {
             if (memcmp(&a[k].r, &b[k].r, sizeof(double)) != 0) return 0;
         }
-        else if (kind == RN_STRING) {
+        else if (fmi_type == RN_STRING) {
             if (strcmp(a[k].s ? a[k].s : "", b[k].s ? b[k].s : "") != 0) return 0;
         }
         else if (a[k].i != b[k].i)
@@ -1111,25 +1112,155 @@ static double wheel_angle(const double* M, double flank, double phi_p, double de
     return (M[M_ARM_PINION] * phi_p - x) / M[M_ARM_WHEEL];
 }
 
-/* The error of a failed kernel call in Python's terms (kernel.CompiledWheelStepper). */
-static void kernel_error(int code, const char* message, RnError* err)
+/* A failed kernel call as the Python core raises it: kernel.refusal, transcribed (the codes
+ * and their numbers are kernel_layout.ERROR_CODES; the texts are those of the Python functions
+ * named).  The "input" code is the caller's: it knows the step's inputs. */
+static void kernel_refusal(int code, const double* v, RnError* err)
 {
-    if (code == RK_ERR_OVERFLOW_ERROR)
-        rn_puts(rn_error_other(err, "OverflowError"), message);
-    else if (code == RK_ERR_TYPE_ERROR)
-        rn_puts(rn_error_other(err, "TypeError"), message);
-    else if (code == RK_ERR_VALUE_ERROR)
-        rn_puts(rn_error_value(err), message);
-    else
-        rn_printf(rn_error_other(err, "RuntimeError"), "rattle kernel: return code %d: %s", code,
-                  message);
+    RnText* t;
+    switch (code) {
+    case RK_ERR_DIVERGED: /* stepper.diverged_error */
+        t = rn_error_value(err);
+        rn_puts(t, "the step diverged (wheel angle ");
+        rn_put_repr(t, v[0]);
+        rn_puts(t, " rad, speed ");
+        rn_put_repr(t, v[1]);
+        rn_puts(t, " rad/s); the inputs or parameters are beyond what the integrator resolves "
+                   "(reduce solver.h_max or the communication step)");
+        return;
+    case RK_ERR_PENETRATION: /* stepper.penetration_error */
+        t = rn_error_value(err);
+        rn_puts(t, "the flanks would penetrate ");
+        rn_put_g(t, v[0] * 1e3, 4);
+        rn_puts(t, " mm in this step, beyond the validity of the Hertz contact (allowed: ");
+        rn_put_g(t, v[1] * 1e3, 4);
+        rn_puts(t, " mm = ");
+        rn_put_repr(t, RN_MAX_PENETRATION_MODULES);
+        rn_puts(t, " gear.m_n); the inputs drive the teeth into each other far harder than any "
+                   "transmission (check wheel.tau_load and the pinion kinematics, or reduce the "
+                   "communication step)");
+        return;
+    case RK_ERR_TOO_STIFF: /* stepper.stiffness_error */
+        t = rn_error_value(err);
+        rn_puts(t, "the contact is too stiff to resolve: its fastest time scale ");
+        rn_put_g(t, 1.0 / v[0], 3);
+        rn_puts(t, " s (stiffness ");
+        rn_put_g(t, v[1], 4);
+        rn_puts(t, " N/m, damping ");
+        rn_put_g(t, v[2], 4);
+        rn_puts(t, " N.s/m on the wheel's normal mass ");
+        rn_put_g(t, v[3], 4);
+        rn_printf(t, " kg) needs more than %d substeps in this step; reduce the communication "
+                     "step, the impact speed (inputs) or contact.damping, or raise wheel.J",
+                  RN_MAX_CONTACT_SUBSTEPS);
+        return;
+    case RK_ERR_NO_BRACKET: /* roots.bracket_error */
+        t = rn_error_value(err);
+        rn_puts(t, "brent: f(");
+        rn_put_repr(t, v[0]);
+        rn_puts(t, ") = ");
+        rn_put_repr(t, v[1]);
+        rn_puts(t, " and f(");
+        rn_put_repr(t, v[2]);
+        rn_puts(t, ") = ");
+        rn_put_repr(t, v[3]);
+        rn_puts(t, " do not bracket a root");
+        return;
+    case RK_ERR_FRICTION_FORM: /* lubrication.unknown_form_error */
+        rn_printf(rn_error_value(err), "friction form %lld unknown; allowed: %d, %d, %d",
+                  (long long)v[0], RK_FORM_LOAD_SHARING, RK_FORM_APPARENT_AREA,
+                  RK_FORM_AS_PRINTED);
+        return;
+    case RK_ERR_LIBRARY: /* the exception of the library call, as CPython words it */
+        switch ((int)v[0]) {
+        case RK_CALL_POW:
+            if (v[1] < 0.0) { /* Python gives a complex number: never reached (bases > 0) */
+                t = rn_error_value(err);
+                rn_puts(t, "rattle kernel: pow(");
+                rn_put_repr(t, v[1]);
+                rn_puts(t, ", ");
+                rn_put_repr(t, v[2]);
+                rn_puts(t, ") is a complex number, not a real number the kernel can go on with");
+            }
+            else
+                rn_puts(rn_error_other(err, "OverflowError"),
+                        "(34, 'Numerical result out of range')");
+            return;
+        case RK_CALL_SQRT:
+        case RK_CALL_LOG:
+            rn_puts(rn_error_value(err), "math domain error");
+            return;
+        case RK_CALL_EXP:
+            rn_puts(rn_error_other(err, "OverflowError"), "math range error");
+            return;
+        case RK_CALL_FLOOR:
+        case RK_CALL_CEIL:
+        case RK_CALL_INT:
+            if (isnan(v[1]))
+                rn_puts(rn_error_value(err), "cannot convert float NaN to integer");
+            else
+                rn_puts(rn_error_other(err, "OverflowError"),
+                        "cannot convert float infinity to integer");
+            return;
+        case RK_CALL_NONE_GT:
+            rn_puts(rn_error_other(err, "TypeError"),
+                    "'>' not supported between instances of 'NoneType' and 'float'");
+            return;
+        default:
+            break;
+        }
+        break;
+    case RK_ERR_TOO_MANY_PAIRS:
+        rn_printf(rn_error_value(err), "more than %d tooth pairs in the zone of action",
+                  (int)v[0]);
+        return;
+    case RK_ERR_PAIR_NUMBER_RANGE:
+        t = rn_error_value(err);
+        rn_puts(t, "roll coordinate ");
+        rn_put_repr(t, v[0]);
+        rn_puts(t, " m beyond the kernel's range (pair number ");
+        rn_put_repr(t, v[1]);
+        rn_puts(t, "; |pinion angle| too large)");
+        return;
+    case RK_ERR_NO_PROGRESS:
+        t = rn_error_value(err);
+        rn_puts(t, "the step makes no progress at t = ");
+        rn_put_repr(t, v[0]);
+        rn_puts(t, " s (the integrator is stuck; reduce solver.h_max or the communication "
+                   "step)");
+        return;
+    case RK_ERR_SUBSTEP_COUNT:
+        t = rn_error_value(err);
+        rn_puts(t, "step size h = ");
+        rn_put_repr(t, v[0]);
+        rn_puts(t, " s needs ");
+        rn_put_repr(t, v[1]);
+        rn_puts(t, " substeps");
+        return;
+    case RK_ERR_LAYOUT:
+        rn_printf(rn_error_other(err, "RuntimeError"),
+                  "rattle kernel: model array layout mismatch (kernel layout %llu with %d "
+                  "fields; rebuild the FMU from the sources of this version)",
+                  (unsigned long long)RK_LAYOUT_HASH, (int)M_COUNT);
+        return;
+    case RK_ERR_MODEL_VALUES:
+        rn_printf(rn_error_other(err, "RuntimeError"),
+                  "rattle kernel: %d breakpoints, %d Chebyshev terms, law %d: beyond the "
+                  "kernel's arrays", (int)v[0], (int)v[1], (int)v[2]);
+        return;
+    default:
+        break;
+    }
+    t = rn_error_other(err, "RuntimeError");
+    rn_printf(t, "rattle kernel: return code %d with ", code);
+    put_tuple(t, v, RK_ERROR_VALUES);
 }
 
 typedef struct {
     const double* M;
     double flank, phi_p, w_p, w_w, tau_load;
     int code;
-    char message[1024];
+    double err_values[RK_ERROR_VALUES];
 } Residual;
 
 /* residual(delta) of equilibrium_state: the mesh torque on the wheel minus the load */
@@ -1140,7 +1271,7 @@ static double equilibrium_residual(void* vctx, double delta)
     if (r->code != RK_ERR_OK) return NAN;
     double phi_w = wheel_angle(r->M, r->flank, r->phi_p, delta);
     int code = rk_mesh_torques(r->M, r->flank, r->phi_p, r->w_p, phi_w, r->w_w, 0.0, out,
-                               r->message, (int)sizeof r->message);
+                               r->err_values);
     if (code != RK_ERR_OK) {
         r->code = code;
         return NAN;
@@ -1163,7 +1294,7 @@ static int equilibrium_state(const RnValue* values, const double* M, double phi_
         return 1;
     }
     double flank = tau_load > 0.0 ? RK_DRIVE : RK_COAST;
-    Residual r = {M, flank, phi_p, w_p, w_w, tau_load, RK_ERR_OK, ""};
+    Residual r = {M, flank, phi_p, w_p, w_w, tau_load, RK_ERR_OK, {0.0}};
     double hi = 1e-9;
     double r_hi = equilibrium_residual(&r, hi);
     while ((r_hi > 0.0) != (flank == RK_DRIVE) || r_hi == 0.0) {
@@ -1190,7 +1321,7 @@ static int equilibrium_state(const RnValue* values, const double* M, double phi_
         }
     }
     if (r.code != RK_ERR_OK) {
-        kernel_error(r.code, r.message, err);
+        kernel_refusal(r.code, r.err_values, err);
         return 0;
     }
     state[S_PHI] = wheel_angle(M, flank, phi_p, delta);
@@ -1277,14 +1408,13 @@ static int kernel_step(MeshModel* m, double h, double phi_p, double w_p, double 
                        double tau_load, RnError* err)
 {
     double inputs[I_COUNT], result[R_COUNT], err_values[RK_ERROR_VALUES], state[S_COUNT];
-    char message[1024] = "";
     inputs[I_H] = h;
     inputs[I_PHI_P] = phi_p;
     inputs[I_W_P] = w_p;
     inputs[I_A_P] = a_p;
     inputs[I_TAU_LOAD] = tau_load;
     memcpy(state, m->state, sizeof state);
-    int code = rk_step(m->model, state, inputs, result, err_values, message, (int)sizeof message);
+    int code = rk_step(m->model, state, inputs, result, err_values);
     if (code == RK_ERR_OK) {
         memcpy(m->state, state, sizeof state);
         memcpy(m->last, result, sizeof result);
@@ -1310,45 +1440,7 @@ static int kernel_step(MeshModel* m, double h, double phi_p, double w_p, double 
         }
         return 0;
     }
-    if (code == RK_ERR_DIVERGED) {
-        RnText* t = rn_error_value(err);
-        rn_puts(t, "the step diverged (wheel angle ");
-        rn_put_repr(t, err_values[0]);
-        rn_puts(t, " rad, speed ");
-        rn_put_repr(t, err_values[1]);
-        rn_puts(t, " rad/s); the inputs or parameters are beyond what the integrator resolves "
-                   "(reduce solver.h_max or the communication step)");
-        return 0;
-    }
-    if (code == RK_ERR_PENETRATION) {
-        RnText* t = rn_error_value(err);
-        rn_puts(t, "the flanks would penetrate ");
-        rn_put_g(t, err_values[0] * 1e3, 4);
-        rn_puts(t, " mm in this step, beyond the validity of the Hertz contact (allowed: ");
-        rn_put_g(t, err_values[1] * 1e3, 4);
-        rn_puts(t, " mm = ");
-        rn_put_repr(t, RN_MAX_PENETRATION_MODULES);
-        rn_puts(t, " gear.m_n); the inputs drive the teeth into each other far harder than any "
-                   "transmission (check wheel.tau_load and the pinion kinematics, or reduce the "
-                   "communication step)");
-        return 0;
-    }
-    if (code == RK_ERR_TOO_STIFF) {
-        RnText* t = rn_error_value(err);
-        rn_puts(t, "the contact is too stiff to resolve: its fastest time scale ");
-        rn_put_g(t, 1.0 / err_values[0], 3);
-        rn_puts(t, " s (stiffness ");
-        rn_put_g(t, err_values[1], 4);
-        rn_puts(t, " N/m, damping ");
-        rn_put_g(t, err_values[2], 4);
-        rn_puts(t, " N.s/m on the wheel's normal mass ");
-        rn_put_g(t, err_values[3], 4);
-        rn_printf(t, " kg) needs more than %d substeps in this step; reduce the communication "
-                     "step, the impact speed (inputs) or contact.damping, or raise wheel.J",
-                  RN_MAX_CONTACT_SUBSTEPS);
-        return 0;
-    }
-    kernel_error(code, message, err);
+    kernel_refusal(code, err_values, err);
     return 0;
 }
 
@@ -1415,20 +1507,15 @@ int rn_unit_outputs(void* model, unsigned groups, RnValue* out, RnError* err)
     MeshModel* m = model;
     const double* st = m->state;
     if (groups & RN_GROUP_LOADS) {
-        double o[O_COUNT];
-        int code = rk_outputs(m->model, m->state, m->last, o);
+        double o[O_COUNT], err_values[RK_ERROR_VALUES];
+        int code = rk_outputs(m->model, m->state, m->last, o, err_values);
         if (code != RK_ERR_OK) {
-            RnText* t = rn_error_value(err);
-            rn_puts(t, "the mesh outputs cannot be evaluated at pinion.phi = ");
-            rn_put_repr(t, m->last[R_PINION_PHI]);
-            rn_puts(t, " rad (wheel.phi = ");
-            rn_put_repr(t, st[S_PHI]);
-            rn_printf(t, " rad; kernel code %d)", code);
+            kernel_refusal(code, err_values, err);
             return 0;
         }
         for (int k = 0; k < O_COUNT; k++) {
             unsigned vr = RN_OUTPUT_VR[k];
-            if (RN_VARIABLES[vr].kind == RN_INTEGER)
+            if (RN_VARIABLES[vr].fmi_type == RN_INTEGER)
                 out[vr].i = (int64_t)o[k];
             else
                 out[vr].r = o[k];

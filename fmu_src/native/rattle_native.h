@@ -12,7 +12,7 @@
  *   rattle_files.c   the file system: resource folder, speed-table file (POSIX and Windows)
  *   rattle_kernel.c  the compiled stepper kernel (shared with the pythonfmu FMUs)
  *
- * and the generated rattle_native_tables.h / .c (drive_rattle_fmi/native_fmu.py renders them
+ * and the generated rattle_native_tables.h / .c (drive_rattle_build/native.py renders them
  * from the same specs as the pythonfmu FMUs' registration and modelDescription: the unit, its
  * GUID, every variable with its value reference, type, causality, start value and limits, and
  * the constants of the Python modules the C code transcribes).
@@ -36,7 +36,7 @@ enum { RN_PARAMETER, RN_INPUT, RN_OUTPUT };
 /* One variable of the interface (the generated table, in value-reference order). */
 typedef struct {
     const char* name;
-    int kind;        /* RN_REAL ... */
+    int fmi_type;    /* RN_REAL ... */
     int causality;   /* RN_PARAMETER, RN_INPUT, RN_OUTPUT */
     const char* unit; /* SI unit of the spec ("" for none) */
     double start_real;

@@ -51,8 +51,8 @@ class Case:
 
     def outputs(self) -> list:
         names = [v.name for v in self.u.variables.values() if v.causality == "output"]
-        real = [self.u.var(n).vr for n in names if self.u.var(n).kind == "Real"]
-        ints = [self.u.var(n).vr for n in names if self.u.var(n).kind == "Integer"]
+        real = [self.u.var(n).vr for n in names if self.u.var(n).fmi_type == "Real"]
+        ints = [self.u.var(n).vr for n in names if self.u.var(n).fmi_type == "Integer"]
         return [repr(x) for x in self.u.slave.getReal(real)] + self.u.slave.getInteger(ints)
 
     def step(self) -> int:
@@ -121,7 +121,7 @@ def cases(fmu: Path) -> list[dict]:
     out.append(run_case(fmu, "setupExperiment after initialization",
                         lambda c: status_of(c.u.slave.setupExperiment, None, 0.0)))
     param = next(v for v in variables.values() if v.causality == "parameter"
-                 and v.kind == "Real")
+                 and v.fmi_type == "Real")
     out.append(run_case(fmu, f"fixed parameter {param.name} set after initialization",
                         lambda c: status_of(c.u.slave.setReal, [param.vr], [1.0])))
     out.append(run_case(fmu, "getReal of an unknown value reference",

@@ -35,7 +35,7 @@ def probe_fmu(tmp_path_factory):
         pytest.skip("gcc is not installed: the native shim cannot be compiled")
     from fmpy import read_model_description
 
-    from drive_rattle_fmi.native import install_shim
+    from drive_rattle_build.shim import install_shim
 
     out = tmp_path_factory.mktemp("probe")
     subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(PROBE), "-d",

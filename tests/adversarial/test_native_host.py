@@ -17,8 +17,9 @@ import pytest
 from fmpy import read_model_description
 
 from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
-from drive_rattle.system import communication_points
+from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
+from drive_rattle_cosim.system import communication_points
 
 HOST_SOURCE = Path(__file__).with_name("native_host.c")
 STOP, STEP = 0.1, 1e-4
@@ -127,8 +128,9 @@ def bits(table) -> list[list[str]]:
 @pytest.fixture(scope="module")
 def host(tmp_path_factory) -> Path:
     exe = tmp_path_factory.mktemp("native_host") / "native_host"
-    cc = subprocess.run([shutil.which("gcc"), *GCC_FLAGS, "-o", str(exe), str(HOST_SOURCE),
-                         "-ldl"], capture_output=True, text=True, timeout=120)
+    cc = subprocess.run([shutil.which("gcc"), *GCC_FLAGS, "-I", str(fmi2_headers()), "-o",
+                         str(exe), str(HOST_SOURCE), "-ldl"],
+                        capture_output=True, text=True, timeout=120)
     assert cc.returncode == 0, f"gcc failed:\n{cc.stderr}"
     return exe
 

@@ -66,7 +66,7 @@ def test_slave_never_raises_and_accepted_runs_stay_finite(params, series, h):
         code, msg = m.status()
         assert code in (0, ERROR), msg
         if code:  # refused with a clean reason, nothing changed
-            assert "diverged" in msg or "allowed" in msg, msg
+            assert "diverged" in msg or "allowed" in msg or "too stiff to resolve" in msg, msg
             assert m.slave._time == time_before
             break
         t = (k + 1) * h
@@ -83,7 +83,7 @@ def test_slave_never_raises_and_accepted_runs_stay_finite(params, series, h):
 
 def _stiffness(mesh, s: float) -> float:
     """K [N/m^1.5] of a pair touching at roll coordinate s."""
-    return mesh.law.shape(mesh.geometry.normal_radii(s)[2])[0]
+    return mesh.law.coefficients(mesh.geometry.normal_radii(s)[2])[0]
 
 
 def _energy(stepper) -> float:

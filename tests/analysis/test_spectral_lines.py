@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from scipy import signal, stats
 
-from drive_rattle.spectral_lines import (
+from drive_rattle_cosim.spectral_lines import (
     UNEXPLAINED,
     LineCatalogue,
     LineSearch,

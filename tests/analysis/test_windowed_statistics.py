@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from drive_rattle.analysis import (
+from drive_rattle_cosim.analysis import (
     LineCatalogue,
     LineSearch,
     Scatter,

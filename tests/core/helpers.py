@@ -1,8 +1,14 @@
 """Shared set-ups for core tests."""
 
 import math
+from dataclasses import replace
 
 from drive_rattle import DRIVE, MeshParameters, WheelStepper
+
+
+def set_state(stepper, **changes):
+    """Change fields of ``stepper``'s wheel state (through ``restore``: a state is a value)."""
+    stepper.restore(replace(stepper.snapshot(), state=replace(stepper.state, **changes)))
 
 
 def approach_stepper(v, flank=DRIVE, gap=20e-9, **changes):
@@ -14,7 +20,7 @@ def approach_stepper(v, flank=DRIVE, gap=20e-9, **changes):
     m = st.mesh
     phi_w = st._wheel_angle(flank, 0.0, -gap)
     w_w = -flank * v / m.arm_wheel
-    st.state.phi, st.state.w = phi_w, w_w
+    set_state(st, phi=phi_w, w=w_w)
     return st
 
 

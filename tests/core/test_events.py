@@ -7,7 +7,7 @@ import pytest
 
 from drive_rattle import COAST, DRIVE, MeshParameters, WheelStepper
 
-from .helpers import approach_stepper
+from .helpers import approach_stepper, set_state
 
 
 def test_onset_between_substeps_located_within_1ns():
@@ -26,8 +26,7 @@ def test_onset_with_load_and_pinion_acceleration_matches_quadratic():
     p = MeshParameters(init_in_contact=False, friction_enabled=False)
     st = WheelStepper(p, 0.0, 0.0, 0.0)
     m = st.mesh
-    st.state.phi = st._wheel_angle(DRIVE, 0.0, -50e-9)
-    st.state.w = 0.0
+    set_state(st, phi=st._wheel_angle(DRIVE, 0.0, -50e-9), w=0.0)
     a_p, tau = 40.0, -0.05  # pinion accelerates forward, load pulls the wheel forward
     r = st.step(2e-4, 0.0, 0.0, a_p, tau)
     a_w = -tau / p.J_wheel

@@ -18,7 +18,7 @@ FORMS = (lubrication.FORM_LOAD_SHARING, lubrication.FORM_APPARENT_AREA,
 
 def apparent_area():
     law = hertz.ContactLaw(hertz.LAW_EXACT, E, RY, (math.log(RY / RX),) * 2)
-    return law.shape(RX)[3] * W ** (2.0 / 3.0)
+    return law.coefficients(RX)[3] * W ** (2.0 / 3.0)
 
 
 def force(form, lam):

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from drive_rattle.geometry import COAST, DRIVE, HelicalPairGeometry
-from drive_rattle.parameters import DEG, MAX_PAIR_SLOTS, MeshParameters
+from drive_rattle.geometry import COAST, DRIVE, MAX_PAIR_SLOTS, HelicalPairGeometry
+from drive_rattle.parameters import DEG, MeshParameters
 
 
 @pytest.fixture(scope="module")

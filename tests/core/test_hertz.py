@@ -89,7 +89,7 @@ def test_contact_law_tabulation_is_exact_to_rounding(law):
     x_range = (math.log(r_y / r_hi), math.log(r_y / r_lo))
     contact = hertz.ContactLaw(law, E, r_y, x_range)
     for r_x in np.linspace(r_lo, r_hi, 37):
-        K, R, ka, kz = contact.shape(r_x)
+        K, R, ka, kz = contact.coefficients(r_x)
         assert r_y == R
         if law == hertz.LAW_EXACT:
             ell = hertz.exact_ellipse(r_y / r_x)
@@ -109,7 +109,7 @@ def test_contact_law_tabulation_is_exact_to_rounding(law):
 def test_film_delta_max_solves_eq7_with_the_ellipse_mass():
     rx, ry, rho, v = 5e-3, 7.8, 7850.0, 4e-3
     contact = hertz.ContactLaw(hertz.LAW_EXACT, E, ry, (math.log(ry / rx),) * 2)
-    K, _, ka, _ = contact.shape(rx)
+    K, _, ka, _ = contact.coefficients(rx)
     d = hertz.film_delta_max(v, K, rx, ka, rho)
 
     def residual(delta):

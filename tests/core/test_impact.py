@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from drive_rattle import COAST, DRIVE, MeshParameters, WheelStepper, hertz
 from drive_rattle.mesh import damping_factor
 
-from .helpers import approach_stepper
+from .helpers import approach_stepper, set_state
 
 SPUR = {"beta": 0.0, "b": 20e-3}  # no crown offsets: every pair touches at the same approach
 
@@ -42,7 +42,7 @@ def restitution(v, flank=DRIVE, H=1e-4, gap=20e-9, **changes):
 def test_single_impact_matches_hertz_closed_form(flank, v):
     # Spur pair, no dissipation: the pairs in mesh share one penetration, W = sum K_i delta^1.5.
     st = approach_stepper(v, flank, dissipation=0, **SPUR)
-    K = sum(st.mesh.law.shape(st.geometry.normal_radii(s)[2])[0]
+    K = sum(st.mesh.law.coefficients(st.geometry.normal_radii(s)[2])[0]
             for _, s, _, _ in st.geometry.pairs(flank, 0.0))
     assert K > 0.0
     ref = hertz.hertz_impact(st.mesh.normal_mass, K, v)
@@ -141,7 +141,7 @@ def test_exact_touch_at_a_communication_point_is_an_onset():
     while st.mesh.penetration(DRIVE, 0.0, phi) != 0.0:  # nudge to an exact touch
         phi = math.nextafter(phi, -math.inf if st.mesh.penetration(DRIVE, 0.0, phi) > 0
                              else math.inf)
-    st.state.phi, st.state.w = phi, -v / st.mesh.arm_wheel
+    set_state(st, phi=phi, w=-v / st.mesh.arm_wheel)
     r = st.step(1e-4, 0.0, 0.0, 0.0, 0.0)
     assert r.events[0].kind == "onset" and r.events[0].time == 0.0
     assert r.W_peak > 0.0

@@ -8,8 +8,9 @@ these tests catch a changed kernel)."""
 import collections
 import math
 import os
+import re
 import shutil
-from dataclasses import fields
+from dataclasses import fields, replace
 
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
@@ -29,6 +30,7 @@ from drive_rattle import (
 )
 from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
 from drive_rattle.parameters import DEG
+from drive_rattle_build import kernel as build_kernel
 
 from .helpers import pinion_with_order
 
@@ -42,8 +44,8 @@ def lib(tmp_path_factory):
     if shutil.which("gcc") is None:
         pytest.skip("gcc not found on PATH: the compiled kernel cannot be built here")
     source = os.environ.get("RATTLE_KERNEL_SOURCE") or None
-    path = kernel.compile_kernel(tmp_path_factory.mktemp("kernel") / kernel.LIBRARY_NAME,
-                                 source=source)
+    path = build_kernel.compile_kernel(tmp_path_factory.mktemp("kernel") / kernel.LIBRARY_NAME,
+                                       source=source)
     loaded = kernel.load_kernel(path)
     assert loaded is not None
     return loaded
@@ -74,8 +76,8 @@ def pair(params, init, lib, state=None):
     py, cc = (WheelStepper(params, *init),
               kernel.CompiledWheelStepper(params, *init, library=lib))
     if state is not None:
-        py.state = WheelState.from_tuple(state)
-        cc.state = WheelState.from_tuple(state)
+        for s in (py, cc):
+            s.restore(replace(s.snapshot(), state=WheelState.from_tuple(state)))
     return py, cc
 
 
@@ -86,10 +88,10 @@ def assert_same(py, cc, k, rp=None, rc=None, outputs=False):
     assert bits(cc.pinion) == bits(py.pinion), where
     if rp is not None:
         assert bits(aggregates(rc)) == bits(aggregates(rp)), where
-        assert rc.events == [] and cc.last is rc, where
+        assert rc.events == [] and cc.last_result is rc, where
         assert cc.last_event_count == len(rp.events), where
     if outputs:
-        assert bits(cc.outputs()) == bits(interface.mesh_outputs(py)), where
+        assert bits(cc.outputs()) == bits(py.outputs()), where
 
 
 class Run:
@@ -117,7 +119,7 @@ def lockstep(params, init, inputs, lib, outputs_every=10, state=None):
         check = bool(outputs_every) and k % outputs_every == 0
         assert_same(py, cc, k, rp, rc, outputs=check)
         if check:
-            run.outputs.append(interface.mesh_outputs(py))
+            run.outputs.append(py.outputs())
     return run
 
 
@@ -157,7 +159,7 @@ def touching_angle(s, flank, phi_p):
 
 # ------------------------------------------------------------------ the layout
 def test_layout_header_is_current_and_the_hash_covers_names_and_order():
-    assert kernel_layout.header_is_current(), (
+    assert build_kernel.header_is_current(), (
         "fmu_src/native/rattle_kernel_layout.h is stale: python build_fmu.py "
         "--update-kernel-header, and commit it")
     # The arrays follow the Python declarations, in order.
@@ -167,6 +169,7 @@ def test_layout_header_is_current_and_the_hash_covers_names_and_order():
     assert sample.as_tuple() == tuple(getattr(sample, n) for n in state_names)
     output_names = tuple(s.name for s in interface.MESH_OUTPUTS)
     assert output_names == kernel_layout.OUTPUT_FIELDS
+    assert tuple(WheelStepper(MeshParameters()).outputs()) == output_names
     model = kernel_layout.pack_model(WheelStepper(MeshParameters()))
     assert len(model) == kernel_layout.MODEL_SIZE
     # Swapping two names (same count) changes the header and its hash.
@@ -198,8 +201,18 @@ def test_a_library_of_another_layout_is_not_loaded(lib, tmp_path, monkeypatch):
 def test_a_stale_header_stops_the_build(monkeypatch, tmp_path):
     monkeypatch.setattr(kernel_layout, "render_header", lambda: "/* other */\n")
     with pytest.raises(RuntimeError, match="update-kernel-header"):
-        kernel.compile_kernel(tmp_path / "x.so")
+        build_kernel.compile_kernel(tmp_path / "x.so")
     assert not (tmp_path / "x.so").exists()
+
+
+def test_the_kernel_holds_no_message_text():
+    """Every refusal's text is written once, in Python (kernel.refusal and the functions the
+    Python core raises from): the only string literals of the C source are its includes."""
+    code = re.sub(r"/\*.*?\*/", "", build_kernel.SOURCE.read_text(encoding="utf-8"),
+                  flags=re.S)
+    literals = [line.strip() for line in code.splitlines() if '"' in line]
+    assert literals == ['#include "rattle_kernel_layout.h"',
+                        '#define EXPORT __attribute__((visibility("default")))']
 
 
 # ------------------------------------------------------------------ scenarios
@@ -395,24 +408,27 @@ def test_zero_load_equilibrium_start_with_accelerating_pinion(lib):
 
 
 # ------------------------------------------------------------------ state handling
-def test_state_changed_in_place_and_assigned(lib):
+def test_state_changed_between_steps_through_restore(lib):
     init, inputs = paper_inputs(60)
     py, cc = pair(MeshParameters(), init, lib)
     for k, args in enumerate(inputs):
-        if k == 20:
-            for s in (py.state, cc.state):
-                s.phi += 2e-6
-                s.w -= 0.5
-                s.rattle_index = 1e-3
-        if k == 40:
-            py.state = py.state.from_tuple(py.state.as_tuple())
-            cc.state = py.state.from_tuple(py.state.as_tuple())
+        if k == 20:  # a changed state, set in each stepper
+            for s in (py, cc):
+                st = s.state
+                changed = replace(st, phi=st.phi + 2e-6, w=st.w - 0.5, rattle_index=1e-3)
+                s.restore(replace(s.snapshot(), state=changed))
+        if k == 40:  # the Python stepper's snapshot set in both
+            snapshot = py.snapshot()
+            py.restore(snapshot)
+            cc.restore(snapshot)
         assert_same(py, cc, k, py.step(*args), cc.step(*args), outputs=True)
+    with pytest.raises(AttributeError):  # a state is a value: no change in place
+        cc.state.phi = 0.0  # type: ignore[misc]
 
 
 # ------------------------------------------------------------------ refused steps
 def _snapshot(s):
-    return bits((s.state.as_tuple(), s.pinion, aggregates(s.last)))
+    return bits((s.state.as_tuple(), s.pinion, aggregates(s.last_result)))
 
 
 @pytest.mark.parametrize("args, match", [
@@ -439,17 +455,39 @@ def test_refused_steps_raise_the_same_message_and_leave_the_state(lib, args, mat
                     cc.step(H, 87.0 * k * H, 87.0, 0.0, 0.1))
     before_py, before_cc = _snapshot(py), _snapshot(cc)
     assert before_py == before_cc
-    last_cc = cc.last
+    last_cc = cc.last_result
     with pytest.raises(ValueError, match=match) as exc_py:
         py.step(*args)
     with pytest.raises(ValueError, match=match) as exc_cc:
         cc.step(*args)
     assert str(exc_cc.value) == str(exc_py.value)
     assert _snapshot(py) == before_py
-    assert _snapshot(cc) == before_cc and cc.last is last_cc
+    assert _snapshot(cc) == before_cc and cc.last_result is last_cc
     # and both continue identically
     args = (H, 87.0 * 5 * H, 87.0, 0.0, 0.1)
     assert_same(py, cc, 5, py.step(*args), cc.step(*args), outputs=True)
+
+
+@pytest.mark.parametrize("phi_offset, w", [(1e-7, -math.inf), (math.inf, 0.0), (1e-7, 1e300)])
+def test_a_refusal_inside_a_library_call_is_pythons_own(lib, phi_offset, w):
+    """States a step cannot follow (a restored FMU state may hold anything finite or not):
+    Python fails inside math.ceil / int() (OverflowError); the kernel reports which call
+    failed with its argument, and kernel.refusal makes that call, so the exception and its
+    text are Python's own, and nothing changes."""
+    p = MeshParameters(init_in_contact=False)
+    probe = WheelStepper(p)
+    phi = (probe._wheel_angle(DRIVE, 0.0, phi_offset) if math.isfinite(phi_offset)
+           else phi_offset)
+    state = WheelState(phi, w, DRIVE)
+    errors = []
+    for s in (WheelStepper.from_state(p, state),
+              kernel.CompiledWheelStepper.from_state(p, state, library=lib)):
+        before = s.snapshot()
+        with pytest.raises(ArithmeticError) as exc:
+            s.step(H, 0.0, 0.0, 0.0, 0.0)
+        assert bits(s.snapshot().state.as_tuple()) == bits(before.state.as_tuple())
+        errors.append((type(exc.value), str(exc.value)))
+    assert errors[0] == errors[1]
 
 
 def test_h_comm_max_parameter_is_honoured(lib):
@@ -538,10 +576,10 @@ def test_load_kernel_absent_and_compile_errors(tmp_path, lib, monkeypatch):
     bad = tmp_path / "bad.c"
     bad.write_text("int f(void) { return syntax error; }\n")
     with pytest.raises(RuntimeError, match=r"bad\.c"):
-        kernel.compile_kernel(tmp_path / "bad.so", source=bad)
+        build_kernel.compile_kernel(tmp_path / "bad.so", source=bad)
     assert not (tmp_path / "bad.so").exists()
     with pytest.raises(RuntimeError, match="compiler"):
-        kernel.compile_kernel(tmp_path / "x.so", cc=str(tmp_path / "no-such-cc"))
+        build_kernel.compile_kernel(tmp_path / "x.so", cc=str(tmp_path / "no-such-cc"))
     # new_stepper: the library next to kernel.py when present, else the Python stepper
     p = MeshParameters()
     monkeypatch.setattr(kernel, "default_library_path", lambda: tmp_path / "missing.so")

@@ -1,6 +1,8 @@
 """Restoring the core from a snapshot (the FMU state path) and the exact output-shaft solution
 for shafts too stiff or too damped for the RK4 substep (issue 12, rows 7 and 10)."""
 
+import dataclasses
+import json
 import math
 import shutil
 
@@ -8,13 +10,15 @@ import pytest
 
 from drive_rattle import kernel
 from drive_rattle.driveline import (
-    Driveline,
+    DrivelineModel,
     DrivelineParameters,
+    DrivelineSnapshot,
     OutputShaft,
     ShaftState,
 )
 from drive_rattle.parameters import MeshParameters
-from drive_rattle.stepper import WheelStepper
+from drive_rattle.stepper import GRID_SLACK, WheelStepper, WheelStepperBase
+from drive_rattle_build.kernel import compile_kernel
 
 from .helpers import pinion_with_order
 
@@ -34,7 +38,7 @@ def run(stepper, k0, n):
 def lib(tmp_path_factory):
     if shutil.which("gcc") is None:
         pytest.skip("gcc not found on PATH: the compiled kernel cannot be built here")
-    path = kernel.compile_kernel(tmp_path_factory.mktemp("kernel") / kernel.LIBRARY_NAME)
+    path = compile_kernel(tmp_path_factory.mktemp("kernel") / kernel.LIBRARY_NAME)
     return kernel.load_kernel(path)
 
 
@@ -48,38 +52,50 @@ def test_snapshot_continues_bit_for_bit_without_solving_the_start(compiled, lib,
     options = {"library": lib} if compiled else {}
     original = cls(p, 0.0, 86.92, 0.15, **options)
     run(original, 0, 30)
-    saved = (original.state, original.pinion, original.last)
+    saved = original.snapshot()
     with pytest.raises(ValueError, match=r"wheel\.phi_start"):  # what rebuilding would do
         cls(p, original.pinion[0], original.pinion[1], 0.15, **options)
 
     def forbidden(*args):
-        raise AssertionError("from_snapshot solved a start equilibrium")
-    monkeypatch.setattr(WheelStepper, "equilibrium_state", forbidden)
-    restored = cls.from_snapshot(p, *saved, **options)
+        raise AssertionError("from_snapshot or restore solved a start condition")
+    for name in ("start_snapshot", "equilibrium_state"):
+        monkeypatch.setattr(WheelStepperBase, name, forbidden)
+    restored = cls.from_snapshot(p, saved, **options)
     assert type(restored) is cls
-    assert restored.state == original.state and restored.state is not original.state
+    assert restored.snapshot() == saved
     assert run(restored, 30, 40) == run(original, 30, 40)
+    # restore() into a stepper that moved on continues as well, from the same state
+    restored.restore(saved)
+    assert restored.snapshot() == saved
+    again = cls.from_snapshot(p, saved, **options)
+    assert run(restored, 30, 40) == run(again, 30, 40)
 
 
 def test_driveline_snapshot_keeps_its_speed_table_without_the_file(tmp_path):
     table = tmp_path / "speed.csv"
     table.write_text("time,speed\n0,80\n0.004,95\n0.008,85\n")
     p = DrivelineParameters(speed_table=str(table))
-    drive = Driveline(p, 0.0, 0.0, 44.57)
+    drive = DrivelineModel(p, 0.0, 0.0, 44.57)
     for k in range(20):
-        drive.step(k * H, H, 44.57 * k * H, 44.57)
-    snapshot = (drive.shaft.state, drive.shaft.tau_load, drive.time, drive.last_step,
-                drive.table)
+        drive.step(H, 44.57 * k * H, 44.57, t=k * H)
+    snapshot = drive.snapshot()
     table.unlink()
-    restored = Driveline.from_snapshot(p, 0.0, *snapshot)
+    # through JSON, as in a serialized FMU state
+    restored = DrivelineModel.from_snapshot(
+        p, 0.0, DrivelineSnapshot.from_json(json.loads(json.dumps(snapshot.to_json()))))
     for k in range(20, 120):
         for d in (drive, restored):
-            d.step(k * H, H, 44.57 * k * H, 44.57)
+            d.step(H, 44.57 * k * H, 44.57, t=k * H)
         assert restored.outputs() == drive.outputs()
     with pytest.raises(ValueError, match="lacks the speed table"):
-        Driveline.from_snapshot(p, 0.0, *snapshot[:4], None)
+        DrivelineModel.from_snapshot(p, 0.0, dataclasses.replace(snapshot, table=None))
+    bad = dataclasses.replace(snapshot, table=([0.0, 0.0], [1.0, 2.0]))
     with pytest.raises(ValueError, match="does not increase"):
-        Driveline.from_snapshot(p, 0.0, *snapshot[:4], ([0.0, 0.0], [1.0, 2.0]))
+        DrivelineModel.from_snapshot(p, 0.0, bad)
+    before = restored.snapshot()
+    with pytest.raises(ValueError, match="does not increase"):
+        restored.restore(bad)
+    assert restored.snapshot() == before  # a refused restore changes nothing
 
 
 def shaft_run(p, steps, h=H, w=44.57):
@@ -152,7 +168,7 @@ def test_default_shaft_stays_on_rk4_bit_for_bit():
     for k in range(50):
         w = 44.57 + math.sin(k)
         tau = a.step(H, w * k * H, w)
-        n = max(1, math.ceil(H / p.h_max * (1.0 - 1e-12)))
+        n = max(1, math.ceil(H / p.h_max * (1.0 - GRID_SLACK)))
         phi, wv = b._rk4(H, n, w * k * H, w)
         b.state = ShaftState(phi, wv)
         assert tau == b.torque(w * k * H + w * H, w, b.state)

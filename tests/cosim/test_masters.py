@@ -18,11 +18,12 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from drive_rattle.driveline import Driveline, DrivelineParameters
-from drive_rattle.interface import DRIVELINE_INPUTS, MESH_INPUTS, coupled_start_inputs
+from drive_rattle.driveline import DrivelineModel, DrivelineParameters
+from drive_rattle.interface import CONNECTIONS, DRIVELINE_INPUTS, MESH_INPUTS, coupled_start_inputs
 from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
 from drive_rattle.parameters import MeshParameters, specs
-from drive_rattle_cosim.harness import CONNECTIONS, CoSimulation, CoSimulationError, time_grid
+from drive_rattle_build import write_system
+from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, time_grid
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
 from drive_rattle_cosim.ssp import SSD_NAME, consistent_input_starts, validate_ssd
 
@@ -47,9 +48,9 @@ def run_master(kind: str, **args) -> tuple[dict, str]:
 
 
 @pytest.fixture(scope="module")
-def system_ssp(fmus, build_script):
+def system_ssp(fmus):
     """dist/DriveRattle.ssp as `python build_fmu.py` writes it, next to this session's FMUs."""
-    return build_script.write_system(list(fmus.values()), fmus["GearMeshRattle"].parent)
+    return write_system(list(fmus.values()), fmus["GearMeshRattle"].parent)
 
 
 @pytest.fixture(scope="module")
@@ -222,13 +223,13 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
     step = result["step"]
     starts = {s.name: s.start for s in DRIVELINE_INPUTS}
     phi_w, w_w = starts["wheel.phi"], starts["wheel.w"]
-    core = Driveline(DrivelineParameters(), 0.0, phi_w, w_w)
+    core = DrivelineModel(DrivelineParameters(), 0.0, phi_w, w_w)
     times, _ = time_grid(0.0, step, stop, "multiplied")
     assert result["time"] == times
     _, sizes = time_grid(0.0, step, stop, "multiplied")
     for k, t in enumerate(times):
         if k:
-            core.step(times[k - 1], sizes[k - 1], phi_w, w_w)
+            core.step(sizes[k - 1], phi_w, w_w, t=times[k - 1])
             phi_w += w_w * sizes[k - 1]  # the held wheel runs on at constant speed
         for name, value in core.outputs().items():
             assert result["columns"][name][k] == value, (name, t)

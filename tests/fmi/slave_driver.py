@@ -24,7 +24,8 @@ def kernel_resources() -> str:
         import shutil
         import tempfile
 
-        from drive_rattle.kernel import LIBRARY_NAME, compile_kernel
+        from drive_rattle.kernel import LIBRARY_NAME
+        from drive_rattle_build.kernel import compile_kernel
 
         folder = Path(tempfile.mkdtemp(prefix="slave_resources_"))
         atexit.register(shutil.rmtree, folder, ignore_errors=True)
@@ -40,7 +41,7 @@ class Driven:
     def __init__(self, cls, name="inst", resources=None):
         self.slave = cls(instance_name=name, resources=resources or kernel_resources())
         self.vr = {v.name: v.value_reference for v in self.slave.vars.values()}
-        self.kind = dict(self.slave._kinds)
+        self.fmi_type = dict(self.slave._fmi_types)
 
     def status(self) -> tuple[int, str]:
         """(status code, message) reported since the last call; resets the channel like the
@@ -53,15 +54,15 @@ class Driven:
     def set(self, **values):
         for key, value in values.items():
             name = key.replace("__", ".")
-            setter = getattr(self.slave, f"set_{self.kind[name].lower()}")
+            setter = getattr(self.slave, f"set_{self.fmi_type[name].lower()}")
             setter([self.vr[name]], [value])
 
     def set_named(self, values: dict):
         for name, value in values.items():
-            getattr(self.slave, f"set_{self.kind[name].lower()}")([self.vr[name]], [value])
+            getattr(self.slave, f"set_{self.fmi_type[name].lower()}")([self.vr[name]], [value])
 
     def get(self, name):
-        return getattr(self.slave, f"get_{self.kind[name].lower()}")([self.vr[name]])[0]
+        return getattr(self.slave, f"get_{self.fmi_type[name].lower()}")([self.vr[name]])[0]
 
     def initialize(self, start_time=0.0, **inputs):
         self.slave.setup_experiment(start_time)

@@ -206,7 +206,7 @@ def fmus(tmp_path_factory) -> dict:
         pytest.skip("gcc is not installed: the native shim cannot be compiled")
     from fmpy import read_model_description
 
-    from drive_rattle_fmi.native import install_shim
+    from drive_rattle_build.shim import install_shim
 
     out = tmp_path_factory.mktemp("shim_fmus")
     build = subprocess.run(
@@ -242,7 +242,7 @@ def statuses(result: dict) -> dict:
 
 
 def test_install_shim_replaces_only_the_linux64_binary(fmus):
-    from drive_rattle_fmi.native import install_shim
+    from drive_rattle_build.shim import install_shim
 
     binary, inner = "binaries/linux64/ShimProbe.so", "binaries/linux64/ShimProbe_pythonfmu.so"
     with zipfile.ZipFile(fmus["plain"]) as z:
@@ -356,7 +356,7 @@ def test_without_the_shim_the_error_is_lost(fmus, tmp_path):
 def test_compile_shim_reports_compiler_errors(tmp_path, monkeypatch):
     if shutil.which("gcc") is None:
         pytest.skip("gcc is not installed")
-    from drive_rattle_fmi import native
+    from drive_rattle_build import shim as native
 
     broken = tmp_path / "broken.c"
     broken.write_text("int f(void) { return missing_symbol; }\n")

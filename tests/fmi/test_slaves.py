@@ -7,7 +7,7 @@ import pytest
 
 from drive_rattle.driveline import DrivelineParameters
 from drive_rattle.parameters import MeshParameters, specs
-from drive_rattle.system import simulate
+from drive_rattle_cosim.system import simulate
 
 from .slave_driver import SLAVES, Driveline, Driven, GearMeshRattle
 

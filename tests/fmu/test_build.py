@@ -11,6 +11,9 @@ from fmpy.validation import validate_fmu
 
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS
 from drive_rattle.parameters import specs
+from drive_rattle_build import BuildError, build_one, templates
+from drive_rattle_build.documentation import interface_docs
+from drive_rattle_build.paths import RUNTIME_PACKAGES, SOURCE
 
 from ..fmi.slave_driver import SLAVES
 
@@ -56,7 +59,7 @@ def test_model_description_is_complete(fmus, name):
     for _, s in specs(params):
         v = by_name[s.name]
         assert v.causality == "parameter" and v.variability == "fixed" and v.initial == "exact"
-        if s.kind in ("Real", "Integer") and s.minimum is not None:
+        if s.fmi_type in ("Real", "Integer") and s.minimum is not None:
             assert float(v.min) == s.minimum and float(v.max) == s.maximum
     # Outputs: no direct feedthrough; all of them initial unknowns.
     out_idx = [md.modelVariables.index(by_name[s.name]) + 1 for s in outputs]
@@ -69,25 +72,23 @@ def test_model_description_is_complete(fmus, name):
 def test_model_description_matches_committed_template(fmus, name):
     from xml.etree import ElementTree
 
-    from drive_rattle_fmi.model_description import normalised_xml
-
     with zipfile.ZipFile(fmus[name]) as z:
         xml = ElementTree.fromstring(z.read("modelDescription.xml"))
-    template = ROOT / "modelDescription_templates" / f"{name}.xml"
-    assert normalised_xml(xml) == template.read_text(encoding="utf-8"), (
+    template = (ROOT / "modelDescription_templates" / f"{name}.xml").read_text(encoding="utf-8")
+    assert template.splitlines()[0] == templates.TEMPLATE_NOTE  # says what it is
+    assert templates.template_body(template) == templates.normalised_xml(xml), (
         "interface changed: run `python build_fmu.py --update-templates` and review the diff")
 
 
-def test_build_refuses_an_interface_that_differs_from_its_template(build_script, tmp_path,
-                                                                   monkeypatch):
+def test_build_refuses_an_interface_that_differs_from_its_template(tmp_path, monkeypatch):
     fake = tmp_path / "templates"
     fake.mkdir()
     for name in ("GearMeshRattle", "Driveline"):
         text = (ROOT / "modelDescription_templates" / f"{name}.xml").read_text()
         (fake / f"{name}.xml").write_text(text.replace('name="wheel.J"', 'name="wheel.I"'))
-    monkeypatch.setattr(build_script, "TEMPLATES", fake)
-    with pytest.raises(build_script.BuildError, match="interface differs"):
-        build_script.build_one("GearMeshRattle", tmp_path / "out")
+    monkeypatch.setattr(templates, "TEMPLATES", fake)
+    with pytest.raises(BuildError, match="interface differs"):
+        build_one("GearMeshRattle", tmp_path / "out")
 
 
 @pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
@@ -98,15 +99,19 @@ def test_fmu_contents(fmus, name):
     assert f"binaries/linux64/{name}.so" in names  # the shim
     assert f"binaries/linux64/{name}_pythonfmu.so" in names
     assert f"resources/{name}.py" in names
-    assert "resources/drive_rattle/stepper.py" in names
-    # Only the standard-library part of the core is shipped.
-    assert "resources/drive_rattle/analysis.py" not in names
+    # The runtime packages are shipped whole, and nothing else of the sources.
+    shipped = {n.removeprefix("resources/") for n in names
+               if n.startswith("resources/drive_rattle")}
+    sources = {str(p.relative_to(SOURCE)) for package in RUNTIME_PACKAGES
+               for p in (SOURCE / package).glob("*.py")}
+    assert "drive_rattle/stepper.py" in sources
+    assert shipped == sources | {"drive_rattle/_rattle_kernel.so"}
     _, inputs, outputs = INTERFACE[name]
     for s in (*inputs, *outputs):
         assert f"<td>{s.name}</td>" in html
 
 
-def test_docs_interface_tables_are_generated_from_the_specs(build_script):
+def test_docs_interface_tables_are_generated_from_the_specs():
     text = (ROOT / "docs" / "fmi.md").read_text(encoding="utf-8")
-    assert build_script.interface_docs(text) == text, (
+    assert interface_docs(text, SLAVES) == text, (
         "docs/fmi.md is stale: run `python build_fmu.py --update-docs`")

@@ -10,8 +10,8 @@ from fmpy.fmi1 import FMICallException
 from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
 from drive_rattle.parameters import MeshParameters
 from drive_rattle.stepper import WheelStepper
-from drive_rattle.system import simulate
 from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, Unit
+from drive_rattle_cosim.system import simulate
 
 W_P = 86.92
 

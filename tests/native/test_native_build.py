@@ -15,9 +15,9 @@ from xml.etree import ElementTree
 import pytest
 from fmpy.validation import validate_fmu
 
+from drive_rattle_build.native import C_SOURCES, FMI_HEADERS, HEADERS, RESOURCE_MARKER, interface_of
 from drive_rattle_cosim.regression import reference_files
 from drive_rattle_fmi.model_description import normalised_xml
-from drive_rattle_fmi.native_fmu import C_SOURCES, FMI_HEADERS, HEADERS, RESOURCE_MARKER, interface_of
 
 MODELS = ("GearMeshRattle", "Driveline")
 

@@ -12,6 +12,7 @@ runs each FMU on its regression inputs
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import subprocess
@@ -22,9 +23,10 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
+from drive_rattle_build.native import C_SOURCES, zig_cc
+from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
 from drive_rattle_cosim.regression import read_opt, reference_files
-from drive_rattle_fmi.native_fmu import C_SOURCES, fmi_headers_dir, zig_cc
 
 HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
 MODELS = ("GearMeshRattle", "Driveline")
@@ -89,7 +91,7 @@ def run_fmpy(fmu: Path, rows) -> list[list]:
         unit.set(dict(zip(input_names, rows[0][1:], strict=True)))
         s.exitInitializationMode()
         table = [record(rows[0][0])]
-        for row, following in zip(rows, rows[1:], strict=False):
+        for row, following in itertools.pairwise(rows):
             unit.set(dict(zip(input_names, row[1:], strict=True)))
             s.doStep(row[0], following[0] - row[0])
             table.append(record(following[0]))
@@ -102,13 +104,14 @@ def run_fmpy(fmu: Path, rows) -> list[list]:
 @pytest.fixture(scope="module")
 def linux_host(tmp_path_factory) -> Path:
     exe = tmp_path_factory.mktemp("fmu_host") / "fmu_host"
-    cc = subprocess.run([gcc(), *STRICT, "-I", str(fmi_headers_dir()), "-o", str(exe),
+    cc = subprocess.run([gcc(), *STRICT, "-I", str(fmi2_headers()), "-o", str(exe),
                          str(HOST_SOURCE), "-ldl"], capture_output=True, text=True, timeout=120)
     assert cc.returncode == 0, f"gcc failed:\n{cc.stderr}"
     return exe
 
 
-def run_linux_host(host: Path, fmu: Path, unpacked: Path, work: Path) -> subprocess.CompletedProcess:
+def run_linux_host(host: Path, fmu: Path, unpacked: Path,
+                   work: Path) -> subprocess.CompletedProcess:
     model = interface(fmu)[0]
     args = host_arguments(fmu, str(unpacked / "binaries" / "linux64" / f"{model}.so"),
                           (unpacked / "resources").as_uri(), str(reference_files(model)[0]),
@@ -186,7 +189,7 @@ def wine_env(tmp_path_factory) -> dict:
 def win64_host(tmp_path_factory) -> Path:
     wine()
     exe = tmp_path_factory.mktemp("fmu_host_win64") / "fmu_host.exe"
-    cc = subprocess.run([*zig_cc("x86_64-windows-gnu"), *STRICT, "-I", str(fmi_headers_dir()),
+    cc = subprocess.run([*zig_cc("x86_64-windows-gnu"), *STRICT, "-I", str(fmi2_headers()),
                          "-o", str(exe), str(HOST_SOURCE)], capture_output=True, text=True,
                         timeout=900, cwd=exe.parent)
     assert cc.returncode == 0, f"cross-compiling fmu_host.c failed:\n{cc.stderr}"

@@ -1,7 +1,7 @@
 """Probe slave for the native status shim (tests/fmi/test_native_shim.py).
 
 Integer parameter ``mode`` selects what it reports through the status protocol of
-``drive_rattle_fmi.native`` (it never raises, except in mode 5):
+``drive_rattle_build.shim`` (it never raises, except in mode 5):
 
 0. nothing (normal run, y = 2 u)
 1. Error from exit_initialization_mode
@@ -19,7 +19,7 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, 
 from pythonfmu.enums import Fmi2Status
 
 PERCENT = "%s %d 100%"
-WARNING, ERROR = 1, 3
+WARNING, ERROR = Fmi2Status.warning, Fmi2Status.error
 
 
 class ShimProbe(Fmi2Slave):

@@ -17,14 +17,13 @@ the Python specs is rendered here, never copied by hand:
   ``<SourceFiles>``; the interface is checked against ``modelDescription_templates/``.
 
 ``build_native(out_dir)`` compiles, packs and validates both FMUs into ``out_dir``
-(``dist/native`` from ``python build_fmu.py``).  Build time only: it needs pythonfmu (for the
-slave classes), fmpy (the FMI 2.0 headers and validate_fmu), a C compiler for linux64 and the
-``ziglang`` package for win64.
+(``dist/native`` from ``drive-rattle-build`` / ``python build_fmu.py``).  Build time only: it
+needs pythonfmu (for the slave classes), fmpy (the FMI 2.0 headers and validate_fmu), a C
+compiler for linux64 and the ``ziglang`` package for win64.
 """
 
 from __future__ import annotations
 
-import importlib
 import os
 import shutil
 import subprocess
@@ -32,19 +31,25 @@ import sys
 import tempfile
 import uuid
 import zipfile
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from xml.etree import ElementTree
 from xml.etree.ElementTree import Element, SubElement
 
 from drive_rattle import driveline, geometry, hertz, lubrication, mesh, parameters, roots, stepper
+from drive_rattle.interface import MODELS
 from drive_rattle.kernel_layout import c_name
-from drive_rattle.kernel_layout import write_header as write_kernel_header
+from drive_rattle_fmi import slave as slave_module
+from drive_rattle_fmi.model_description import model_description
 
-from . import slave as slave_module
+from . import kernel, templates
+from .compiler import BuildError, c_compiler
+from .documentation import html_page
+from .fmu import slave_class, validate
+from .paths import DIST
+from .paths import NATIVE as NATIVE_DIR
+from .shim import fmi2_headers
 
-#: The C sources of the native FMUs (their own folder in the repository).
-NATIVE_DIR = Path(__file__).resolve().parents[1] / "native"
 #: Compiled, in this order; every one is listed in <SourceFiles>.
 C_SOURCES = ("fmi2_native.c", "rattle_model.c", "rattle_pytext.c", "rattle_files.c",
              "rattle_kernel.c", "rattle_native_tables.c")
@@ -60,9 +65,10 @@ PLATFORMS = {"linux64": (".so", None), "win64": (".dll", "x86_64-windows-gnu")}
 #: The file in resources/ that identifies the FMU (the native counterpart of pythonfmu's
 #: slavemodule.txt): its model identifier on the first line.
 RESOURCE_MARKER = "model_identifier.txt"
-MODELS = ("GearMeshRattle", "Driveline")
 UNITS = {"GearMeshRattle": "RN_UNIT_MESH", "Driveline": "RN_UNIT_DRIVELINE"}
-GENERATION_TOOL = "drive-rattle build_fmu.py (native C)"
+GENERATION_TOOL = "drive-rattle-build (native C)"
+#: Where the native FMUs go, below the output folder.
+NATIVE_SUBDIR = "native"
 
 #: Output groups: when an output is read after a step, only its group is computed ("compute
 #: what is read"): the wheel's angle and speed, the outputs that are copies of the state and
@@ -76,7 +82,7 @@ MESH_STATE = ("wheel.tau_mesh", "pinion.tau_mesh", "mesh.W_peak", "mesh.delta_pe
 #: Constants of the Python modules the C code reads: (C name, value).
 CONSTANTS = (
     ("RN_DEG", parameters.DEG),
-    ("RN_MAX_PAIR_SLOTS", parameters.MAX_PAIR_SLOTS),
+    ("RN_MAX_PAIR_SLOTS", geometry.MAX_PAIR_SLOTS),
     ("RN_BREAKPOINT_TOLERANCE", geometry.BREAKPOINT_TOLERANCE),
     ("RN_MAX_CHEBYSHEV_TERMS", hertz.MAX_CHEBYSHEV_TERMS),
     ("RN_CHEBYSHEV_TOLERANCE", hertz.CHEBYSHEV_TOLERANCE),
@@ -133,14 +139,6 @@ def _c_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def slave_class(name: str):
-    """The pythonfmu slave class of the FMU ``name`` (fmu_src/<name>.py)."""
-    src = str(NATIVE_DIR.parent)
-    if src not in sys.path:
-        sys.path.insert(0, src)
-    return getattr(importlib.import_module(name), name)
-
-
 def _variables(slave) -> list[dict]:
     """The public variables of a slave instance in value-reference order, with their specs."""
     cls = type(slave)
@@ -151,8 +149,8 @@ def _variables(slave) -> list[dict]:
         if var.value_reference != vr:
             raise RuntimeError(f"{var.name}: value reference {var.value_reference} != {vr}")
         name = var.name
-        kind = slave._kinds[name]
-        entry = {"name": name, "vr": vr, "kind": kind, "unit": "", "start": None,
+        fmi_type = slave._fmi_types[name]
+        entry = {"name": name, "vr": vr, "fmi_type": fmi_type, "unit": "", "start": None,
                  "min": None, "max": None, "min_exclusive": False, "max_exclusive": False,
                  "choices": (), "allowed": "", "group": 0}
         if name in slave._param_specs:
@@ -174,7 +172,7 @@ def _variables(slave) -> list[dict]:
             else:
                 group = GROUP_STATE
             entry.update(causality="output", unit=spec.unit,
-                         start=0.0 if kind == "Real" else 0, group=group)
+                         start=0.0 if fmi_type == "Real" else 0, group=group)
         out.append(entry)
     return out
 
@@ -196,7 +194,7 @@ def render_tables(slave, guid: str) -> tuple[str, str]:
         macros[macro] = v["name"]
     outputs = [v["vr"] for v in variables if v["causality"] == "output"]
     by_name = sorted(variables, key=lambda v: v["name"])  # Python's str order (code points)
-    h = [f"/* GENERATED by drive_rattle_fmi/native_fmu.py for {name} -- do not edit. */",
+    h = [f"/* GENERATED by drive_rattle_build/native.py for {name} -- do not edit. */",
          "#ifndef RATTLE_NATIVE_TABLES_H", "#define RATTLE_NATIVE_TABLES_H", "",
          f"#define {UNITS[name]} 1",
          f"#define RN_MODEL_IDENTIFIER {_c_string(name)}",
@@ -226,10 +224,10 @@ def render_tables(slave, guid: str) -> tuple[str, str]:
           "/* every variable, by name in Python's sort order (the FMU state's JSON) */",
           "extern const unsigned RN_SORTED_VR[RN_N_VARIABLES];", "", "#endif", ""]
 
-    kinds = {"Real": "RN_REAL", "Integer": "RN_INTEGER", "Boolean": "RN_BOOLEAN",
+    fmi_types = {"Real": "RN_REAL", "Integer": "RN_INTEGER", "Boolean": "RN_BOOLEAN",
              "String": "RN_STRING"}
     causalities = {"parameter": "RN_PARAMETER", "input": "RN_INPUT", "output": "RN_OUTPUT"}
-    c = [f"/* GENERATED by drive_rattle_fmi/native_fmu.py for {name} -- do not edit. */",
+    c = [f"/* GENERATED by drive_rattle_build/native.py for {name} -- do not edit. */",
          '#include "rattle_native.h"', ""]
     for v in variables:
         if v["choices"]:
@@ -238,12 +236,13 @@ def render_tables(slave, guid: str) -> tuple[str, str]:
     c += ["", "const RnVariable RN_VARIABLES[RN_N_VARIABLES] = {"]
     for v in variables:
         start = v["start"]
-        start_real = float(start) if v["kind"] == "Real" else 0.0
-        start_int = int(start) if v["kind"] in ("Integer", "Boolean") else 0
-        start_string = _c_string(start) if v["kind"] == "String" else "NULL"
+        start_real = float(start) if v["fmi_type"] == "Real" else 0.0
+        start_int = int(start) if v["fmi_type"] in ("Integer", "Boolean") else 0
+        start_string = _c_string(start) if v["fmi_type"] == "String" else "NULL"
         choices = f"CHOICES_{v['vr']}" if v["choices"] else "NULL"
         c.append(
-            f"    {{{_c_string(v['name'])}, {kinds[v['kind']]}, {causalities[v['causality']]}, "
+            f"    {{{_c_string(v['name'])}, {fmi_types[v['fmi_type']]}, "
+            f"{causalities[v['causality']]}, "
             f"{_c_string(v['unit'])}, {_c_number(start_real)}, {start_int}LL, {start_string}, "
             f"{int(v['min'] is not None)}, {int(v['max'] is not None)}, "
             f"{int(v['min_exclusive'])}, {int(v['max_exclusive'])}, "
@@ -260,8 +259,6 @@ def render_tables(slave, guid: str) -> tuple[str, str]:
 def native_model_description(slave, guid: str) -> Element:
     """The native FMU's modelDescription: the pythonfmu FMU's, rendered from the same slave,
     with its GUID, no execution tool needed and the C sources listed."""
-    from .model_description import model_description
-
     root = model_description(slave)
     root.set("guid", guid)
     root.set("generationTool", GENERATION_TOOL)
@@ -286,21 +283,12 @@ def interface_of(root: Element, reference: Element) -> Element:
     return copy
 
 
-def fmi_headers_dir() -> Path:
-    """The folder of the FMI 2.0 headers shipped with fmpy."""
-    import fmpy
-
-    folder = Path(fmpy.__file__).resolve().parent / "c-code"
-    missing = [h for h in FMI_HEADERS if not (folder / h).is_file()]
-    if missing:
-        raise RuntimeError(f"fmpy's FMI 2.0 headers {missing} are missing from {folder}")
-    return folder
 
 
 def stage_sources(slave, guid: str, folder: Path) -> list[Path]:
     """The C sources, headers and generated tables of one FMU in ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
-    write_kernel_header()  # the kernel's generated layout, current
+    kernel.update_header()  # the kernel's generated layout, current
     header, source = render_tables(slave, guid)
     (folder / "rattle_native_tables.h").write_text(header, encoding="utf-8")
     (folder / "rattle_native_tables.c").write_text(source, encoding="utf-8")
@@ -308,7 +296,7 @@ def stage_sources(slave, guid: str, folder: Path) -> list[Path]:
         if name not in GENERATED:
             shutil.copy2(NATIVE_DIR / name, folder / name)
     for name in FMI_HEADERS:
-        shutil.copy2(fmi_headers_dir() / name, folder / name)
+        shutil.copy2(fmi2_headers() / name, folder / name)
     return sorted(folder.iterdir())
 
 
@@ -370,8 +358,6 @@ def package_native(name: str, out_dir: Path, cc: str | Sequence[str] = "gcc",
     """Build ``out_dir/<name>.fmu``: sources, binaries for ``platforms``, modelDescription,
     resources (the marker and ``reference_files`` under resources/regression/) and
     documentation.  Returns its path."""
-    from .documentation import html_page
-
     cls = slave_class(name)
     slave = cls(instance_name="native-build")
     guid = "{" + str(uuid.uuid4()) + "}"
@@ -408,37 +394,39 @@ def package_native(name: str, out_dir: Path, cc: str | Sequence[str] = "gcc",
     return fmu
 
 
-def check_interface(fmu: Path, template: Path) -> None:
-    """RuntimeError unless the native FMU's interface is the committed template's (the
+def check_interface(fmu: Path) -> None:
+    """BuildError unless the native FMU's interface is the committed template's (the
     pythonfmu FMU's, apart from the generation tool, execution tool and source files)."""
-    from .model_description import model_description, normalised_xml
-
     with zipfile.ZipFile(fmu) as z:
         root = ElementTree.fromstring(z.read("modelDescription.xml"))
     name = root.find("CoSimulation").get("modelIdentifier")
     reference = model_description(slave_class(name)(instance_name="native-check"))
-    text = normalised_xml(interface_of(root, reference))
-    if not template.is_file() or template.read_text(encoding="utf-8") != text:
-        raise RuntimeError(
-            f"native {name}: the interface differs from {template}; the native FMUs render "
-            "it from the same specs as the pythonfmu FMUs, so this is a build defect")
+    if not templates.matches_template(name, interface_of(root, reference)):
+        raise BuildError(
+            f"native {name}: the interface differs from {templates.template_path(name)}; the "
+            "native FMUs render it from the same specs as the pythonfmu FMUs, so this is a "
+            "build defect")
 
 
-def build_native(out_dir: Path, cc: str | Sequence[str] = "gcc",
-                 templates: Path | None = None,
-                 validate: Callable[[Path], None] | None = None,
-                 references: Callable[[str], list[Path]] | None = None,
-                 platforms: Sequence[str] = ("linux64", "win64"),
+def build_native(out_dir: Path = DIST / NATIVE_SUBDIR, use_fmutool: bool = True,
+                 platforms: Sequence[str] = tuple(PLATFORMS),
                  models: Sequence[str] = MODELS) -> list[Path]:
-    """Build, check against ``templates`` (the folder of the committed modelDescriptions) and
-    ``validate`` (a callable raising on problems) the native FMUs into ``out_dir``."""
+    """Build the native FMUs into ``out_dir``, hold each against its committed template and
+    validate it (fmpy's validate_fmu, ``fmutool -check`` with ``use_fmutool``).  BuildError
+    with the reason on any failure."""
+    from drive_rattle_cosim.regression import reference_files
+
     fmus = []
-    for name in models:
-        refs = references(name) if references is not None else []
-        fmu = package_native(name, out_dir, cc, platforms, refs)
-        if templates is not None:
-            check_interface(fmu, Path(templates) / f"{name}.xml")
-        if validate is not None:
-            validate(fmu)
-        fmus.append(fmu)
+    try:
+        for name in models:
+            refs = reference_files(name)
+            refs = refs if all(f.is_file() for f in refs) else []  # as the pythonfmu FMU
+            fmu = package_native(name, Path(out_dir), c_compiler(), platforms, refs)
+            check_interface(fmu)
+            validate(fmu, use_fmutool)
+            fmus.append(fmu)
+    except RuntimeError as err:
+        if isinstance(err, BuildError):
+            raise
+        raise BuildError(str(err)) from None
     return fmus

@@ -5,7 +5,7 @@ Rattle is chaotic: a run is judged by statistics, never by its trajectory, and a
 means something only with its scatter.  ``windowed_statistics`` drops a stated start
 transient, cuts the rest of the record into equal windows, computes ``rattle_statistics`` in
 each, and reports every figure as mean +- standard deviation (and min/max) over the windows.
-The spectral figures come from the line search of ``drive_rattle.spectral_lines``.
+The spectral figures come from the line search of ``drive_rattle_cosim.spectral_lines``.
 docs/analysis.md describes the method.
 """
 

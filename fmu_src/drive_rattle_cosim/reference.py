@@ -20,11 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .driveline import Driveline, DrivelineParameters, EngineOrderKinematics
-from .geometry import COAST, DRIVE
-from .interface import coupled_start_inputs
-from .parameters import MeshParameters
-from .stepper import WheelStepper
+from drive_rattle.driveline import DrivelineModel, DrivelineParameters, EngineOrderKinematics
+from drive_rattle.geometry import COAST, DRIVE
+from drive_rattle.interface import coupled_start_inputs
+from drive_rattle.parameters import MeshParameters
+from drive_rattle.stepper import WheelStepper
+
 from .system import communication_points
 
 
@@ -56,7 +57,7 @@ def solve(mesh_params: MeshParameters | None = None,
     mesh_in, start = coupled_start_inputs(mp, dp, 0.0)
     wheel = WheelStepper(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"],
                          mesh_in["wheel.tau_load"])
-    shaft = Driveline(dp, 0.0, start["wheel.phi"], start["wheel.w"]).shaft
+    shaft = DrivelineModel(dp, 0.0, start["wheel.phi"], start["wheel.w"]).shaft
     mesh = wheel.mesh
     J, Jv = mp.J_wheel, dp.J_vehicle
     k, c = dp.k_shaft, dp.c_shaft

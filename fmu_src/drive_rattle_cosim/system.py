@@ -2,23 +2,26 @@
 FMU co-simulation (Jacobi: every unit steps from the outputs of the last communication point).
 
 This is the in-process twin of the FMU co-simulation: the co-simulation harness must reproduce
-it bit for bit, which tests the FMI layer without any tolerance.
+it bit for bit, which tests the FMI layer without any tolerance.  The units exchange their
+signals along ``drive_rattle.interface.CONNECTIONS``, as the harness does.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .driveline import Driveline, DrivelineParameters
-from .interface import (
+from drive_rattle.driveline import DrivelineModel, DrivelineParameters
+from drive_rattle.interface import (
+    DRIVELINE,
     DRIVELINE_OUTPUTS,
+    MESH,
     MESH_INPUTS,
     MESH_OUTPUTS,
     coupled_start_inputs,
-    mesh_outputs,
+    inputs_of,
 )
-from .parameters import MeshParameters
-from .stepper import WheelStepper
+from drive_rattle.parameters import MeshParameters
+from drive_rattle.stepper import WheelStepper
 
 #: Signals recorded by :func:`simulate`, with units: the units' public inputs and outputs.
 SIGNALS = {
@@ -61,7 +64,8 @@ def simulate(mesh_params: MeshParameters | None = None,
     communication step ``step`` [s]; record ``signals`` (default all) at every point.
 
     ``stepper`` builds the mesh's stepper: the pure-Python ``WheelStepper`` (default, the
-    reference twin) or e.g. ``kernel.new_stepper`` for the same numbers faster."""
+    reference twin, the only one that reports the onsets) or e.g. ``kernel.new_stepper`` for
+    the same numbers faster."""
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
@@ -69,30 +73,25 @@ def simulate(mesh_params: MeshParameters | None = None,
     # outputs run to its fixed point (the FMUs' input start values for the default system).
     mesh_in, wheel = coupled_start_inputs(mp, dp, start_time)
     mesh = stepper(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"])
-    drive = Driveline(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"])
+    drive = DrivelineModel(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"])
     rec = Record(signals={n: [] for n in names})
     points = communication_points(start_time, step, stop_time)
     for k, t in enumerate(points):
-        d = drive.outputs()
-        _record(rec, t, names, d, mesh)
+        outputs = {MESH: mesh.outputs(), DRIVELINE: drive.outputs()}
+        rec.time.append(t)
+        values = {**outputs[MESH], **outputs[DRIVELINE]}
+        for n in names:
+            rec.signals[n].append(values[n])
         if k == len(points) - 1:
             break
         h = points[k + 1] - t
-        wheel_phi, wheel_w = mesh.state.phi, mesh.state.w
-        result = mesh.step(h, d["pinion.phi"], d["pinion.w"], d["pinion.a"],
-                           d["wheel.tau_load"])
+        m, d = inputs_of(MESH, outputs), inputs_of(DRIVELINE, outputs)
+        result = mesh.step(h, m["pinion.phi"], m["pinion.w"], m["pinion.a"],
+                           m["wheel.tau_load"])
         for ev in result.events:
             if ev.kind == "onset":
                 rec.onset_times.append(t + ev.time)
                 rec.onset_speeds.append(ev.speed)
                 rec.onset_flanks.append(ev.flank)
-        drive.step(t, h, wheel_phi, wheel_w)
+        drive.step(h, d["wheel.phi"], d["wheel.w"], t=t)
     return rec
-
-
-def _record(rec: Record, t: float, names, driveline_outputs: dict,
-            mesh: WheelStepper) -> None:
-    rec.time.append(t)
-    values = {**mesh_outputs(mesh), **driveline_outputs}
-    for n in names:
-        rec.signals[n].append(values[n])

@@ -7,7 +7,8 @@ logging on and as a printf *format* string, and checks nothing a master passes: 
 ("The native shim") lists what crashed, leaked or corrupted the host, and how the shim stops
 each.  Its sources are not shipped, so it cannot be rebuilt; the shim stands in front of it.
 
-``native/rattle_fmi_shim.c`` is compiled into ``binaries/linux64/<modelIdentifier>.so``; it
+``fmu_src/native/rattle_fmi_shim.c`` is compiled (against the official FMI 2.0 headers that
+fmpy ships, :func:`fmi2_headers`) into ``binaries/linux64/<modelIdentifier>.so``; it
 loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
 and forwards every FMI 2.0 call to it, adding:
 
@@ -39,7 +40,7 @@ and forwards every FMI 2.0 call to it, adding:
   an invalid read under valgrind, now and then "corrupted double-linked list").  Both
   libraries stay loaded until the process ends.
 
-Status protocol (Python side)::
+Status protocol (Python side, ``drive_rattle_fmi.slave``)::
 
     self._fmi_status = ctypes.c_int(0)      # keep alive as long as the slave
     self._fmi_message = ""
@@ -73,14 +74,29 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import subprocess
 import tempfile
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
+from .compiler import compile_library
+from .paths import NATIVE
+
 #: The C source of the shim.
-SHIM_SOURCE: Path = Path(__file__).resolve().parents[1] / "native" / "rattle_fmi_shim.c"
+SHIM_SOURCE: Path = NATIVE / "rattle_fmi_shim.c"
+
+
+def fmi2_headers() -> Path:
+    """The folder of the official FMI 2.0 headers (``fmi2Functions.h`` and the two it
+    includes), as fmpy ships them; the shim and the C test host compile against them instead
+    of retyped copies."""
+    import fmpy
+
+    folder = Path(fmpy.__file__).resolve().parent / "c-code"
+    if not (folder / "fmi2Functions.h").is_file():
+        raise RuntimeError(f"fmpy's FMI 2.0 headers are missing: no {folder / 'fmi2Functions.h'}"
+                           " (reinstall fmpy)")
+    return folder
 
 _PLATFORM_DIR = "binaries/linux64"
 _INNER_SUFFIX = "_pythonfmu"
@@ -116,9 +132,9 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
     _check_vr("vr_message", vr_message)
     if vr_last_successful_time is not None:
         _check_vr("vr_last_successful_time", vr_last_successful_time)
-    out_path = Path(out_path)
-    cmd = [
-        cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
+    flags = [
+        "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
+        "-I", str(fmi2_headers()),
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
@@ -127,16 +143,9 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         *([f'-DRATTLE_GUID="{guid}"'] if guid is not None else []),
         *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
           if model_identifier is not None else []),
-        "-o", str(out_path), str(SHIM_SOURCE), "-ldl",
     ]
-    try:
-        result = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    except OSError as exc:
-        raise RuntimeError(f"cannot run the C compiler {cc!r}: {exc}") from exc
-    if result.returncode != 0:
-        raise RuntimeError(
-            f"compiling {SHIM_SOURCE.name} failed (exit {result.returncode}):\n{result.stderr}")
-    return out_path
+    return compile_library(cc, flags, [SHIM_SOURCE], Path(out_path), SHIM_SOURCE.name,
+                           libs=["-ldl"])
 
 
 def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:

@@ -6,24 +6,28 @@ from __future__ import annotations
 
 import html
 
+from drive_rattle.interface import MODELS
 from drive_rattle.parameters import specs
+
+from .compiler import BuildError
+from .paths import FMI_DOCS
 
 
 def interface_rows(slave_cls) -> list[tuple[str, str, str, str, str, str]]:
     """``(name, causality, type, unit, start/limits, description)`` for every public variable."""
     rows = []
     for _attr, spec in specs(slave_cls.PARAMETERS):
-        limits = spec.allowed() if spec.kind in ("Real", "Integer") else ""
-        start = repr(spec.default) if spec.kind != "Boolean" else str(spec.default).lower()
+        limits = spec.allowed() if spec.fmi_type in ("Real", "Integer") else ""
+        start = repr(spec.default) if spec.fmi_type != "Boolean" else str(spec.default).lower()
         allowed = f"{start}; {limits}".rstrip("; ")
-        rows.append((spec.name, "parameter", spec.kind, spec.unit, allowed, spec.description))
+        rows.append((spec.name, "parameter", spec.fmi_type, spec.unit, allowed, spec.description))
     for spec in slave_cls.INPUTS:
         allowed = repr(spec.start)
         if spec.minimum is not None:
             allowed += f"; [{spec.minimum:g}, {spec.maximum:g}] {spec.unit}"
-        rows.append((spec.name, "input", spec.kind, spec.unit, allowed, spec.description))
+        rows.append((spec.name, "input", spec.fmi_type, spec.unit, allowed, spec.description))
     for spec in slave_cls.OUTPUTS:
-        rows.append((spec.name, "output", spec.kind, spec.unit, "", spec.description))
+        rows.append((spec.name, "output", spec.fmi_type, spec.unit, "", spec.description))
     return rows
 
 
@@ -81,3 +85,17 @@ result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
 <code>python3</code> is first on <code>PATH</code>). Do not unpack the FMU under a path that
 needs escaping beyond what the shim decodes (any %XX is decoded).</p>
 """
+
+
+def interface_docs(text: str, slave_classes: dict) -> str:
+    """``text`` (docs/fmi.md) with each ``<!-- BEGIN <Model> interface -->`` ...
+    ``<!-- END ... -->`` block replaced by the interface table of ``slave_classes[<Model>]``.
+    BuildError when a marker is missing."""
+    for name in MODELS:
+        begin, end = f"<!-- BEGIN {name} interface -->", f"<!-- END {name} interface -->"
+        head, _, rest = text.partition(begin)
+        _, _, tail = rest.partition(end)
+        if not rest:
+            raise BuildError(f"{FMI_DOCS} lacks the marker {begin}")
+        text = f"{head}{begin}\n{markdown_interface(slave_classes[name])}{end}{tail}"
+    return text

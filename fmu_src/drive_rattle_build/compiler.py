@@ -1,0 +1,90 @@
+"""The C compiler of the build: ``$CC``, gcc or cc on ``PATH``, else the clang of the
+``ziglang`` package (a dependency of the project, so a fresh clone builds without a system
+compiler)."""
+
+from __future__ import annotations
+
+import atexit
+import os
+import platform
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+
+class BuildError(RuntimeError):
+    """The build cannot go on; the message says why and what to do."""
+
+
+#: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline x86-64
+#: (instructions every x86-64 host has) with glibc, whose libm is the one CPython uses (the
+#: kernel's results are bit-identical to the Python core's only with the same libm).
+ZIG_TARGET = {"x86_64": "x86_64-linux-gnu"}
+_ZIG_WRAPPER: list[str] = []
+
+
+def c_compiler() -> str:
+    """The C compiler of the build, as one executable: ``$CC`` if set, else ``gcc`` or ``cc``
+    on ``PATH``, else the clang of the ``ziglang`` package (``python -m ziglang cc``, through a
+    small wrapper script).  BuildError when none works."""
+    requested = os.environ.get("CC")
+    if requested:
+        found = shutil.which(requested)
+        if found is None:
+            raise BuildError(f"CC = {requested!r} is not an executable on PATH; allowed: a C "
+                             "compiler such as gcc, or unset CC to use gcc or ziglang's clang")
+        return found
+    for name in ("gcc", "cc"):
+        found = shutil.which(name)
+        if found:
+            return found
+    if _ZIG_WRAPPER:
+        return _ZIG_WRAPPER[0]
+    try:
+        import ziglang  # noqa: F401  (only its presence: it runs as python -m ziglang)
+    except ImportError:
+        raise BuildError(
+            "no C compiler: gcc (or cc) is not on PATH and the ziglang package is not "
+            "installed. Install one: `pip install ziglang` (a dependency of this project: "
+            "reinstall it with `pip install -e .`) or your system's gcc (Debian/Ubuntu: "
+            "`apt-get install gcc`), or set CC to a C compiler") from None
+    folder = Path(tempfile.mkdtemp(prefix="drive_rattle_cc_"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    target = ZIG_TARGET.get(platform.machine())
+    args = ["-target", target] if target else []
+    wrapper = folder / "zig-cc"
+    wrapper.write_text(
+        "#!/bin/sh\n# ziglang's C compiler (drive-rattle build: no gcc on PATH)\n"
+        f"exec {shlex.join([sys.executable, '-m', 'ziglang', 'cc', *args])} \"$@\"\n",
+        encoding="utf-8")
+    wrapper.chmod(0o755)
+    probe = subprocess.run([str(wrapper), "--version"], capture_output=True, text=True)
+    if probe.returncode != 0:
+        raise BuildError(f"no working C compiler: gcc is not on PATH and ziglang's clang "
+                         f"fails:\n{probe.stderr}")
+    _ZIG_WRAPPER.append(str(wrapper))
+    return str(wrapper)
+
+
+def compile_library(cc: str, flags, sources, out_path: Path, what: str, libs=()) -> Path:
+    """Compile ``sources`` with ``cc`` and ``flags``, linked with ``libs``, into the shared
+    library ``out_path``,
+    written atomically (a temporary file renamed into place).  RuntimeError with the command
+    and the compiler's output when the compiler is missing or fails."""
+    out = Path(out_path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+    cmd = [cc, *flags, "-o", str(tmp), *(str(s) for s in sources), *libs]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    except OSError as exc:
+        raise RuntimeError(f"cannot run the C compiler {cc!r}: {exc}") from exc
+    if proc.returncode != 0:
+        tmp.unlink(missing_ok=True)
+        raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
+                           f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+    os.replace(tmp, out)
+    return out

@@ -1,0 +1,26 @@
+"""Where the build finds its sources and puts its results (a source checkout: the build runs
+from the repository, not from an installed wheel)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+#: The repository root.
+ROOT = Path(__file__).resolve().parents[2]
+#: The Python sources: the runtime packages, the slave modules and the C sources.
+SOURCE = ROOT / "fmu_src"
+#: The C sources: the kernel, its generated layout header and the native status shim.
+NATIVE = SOURCE / "native"
+#: The packages copied whole into every FMU (standard library only; docs/architecture.md).
+RUNTIME_PACKAGES = ("drive_rattle", "drive_rattle_fmi")
+#: The committed normalised modelDescriptions (a checked output of the build).
+TEMPLATES = ROOT / "modelDescription_templates"
+#: The default output folder.
+DIST = ROOT / "dist"
+#: The documentation page whose interface tables the build generates.
+FMI_DOCS = ROOT / "docs" / "fmi.md"
+
+
+def slave_module(model: str) -> Path:
+    """The slave module of ``model`` (class = file stem = the FMU's model identifier)."""
+    return SOURCE / f"{model}.py"
