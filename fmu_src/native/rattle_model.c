@@ -702,7 +702,7 @@ static int exact_ellipse(double rho, Ellipse* out, RnError* err)
     double y_hi = -1e-9;
     double y;
     if (ellipse_residual(&target, y_hi) < 0.0) {
-        if (!brent(ellipse_residual, &target, y_lo, y_hi, NULL, NULL, 1e-15, RN_BRENT_RTOL, &y,
+        if (!brent(ellipse_residual, &target, y_lo, y_hi, NULL, NULL, RN_HERTZ_ROOT_XTOL, RN_BRENT_RTOL, &y,
                    err))
             return 0;
     }
@@ -898,7 +898,7 @@ static double hc_restitution(double alpha, RnError* err, int* ok)
     double hi = py_min(1.0, 1.0 / alpha) * (1.0 - 1e-15);
     if (hc_balance(alpha, hi) >= 0.0) return hi;
     double root;
-    if (!brent(hc_balance_fn, &alpha, 0.0, hi, NULL, NULL, 1e-16, RN_BRENT_RTOL, &root, err)) {
+    if (!brent(hc_balance_fn, &alpha, 0.0, hi, NULL, NULL, RN_RESTITUTION_XTOL, RN_BRENT_RTOL, &root, err)) {
         *ok = 0;
         return 0.0;
     }
@@ -945,7 +945,7 @@ static int hunt_crossley_factor(double e, double v, double* out, RnError* err)
     if (!ok) return 0;
     HcCtx ctx = {e, err, 1};
     double alpha;
-    if (!brent(hc_factor_fn, &ctx, 0.0, hi, NULL, NULL, 1e-15, RN_BRENT_RTOL, &alpha, err)
+    if (!brent(hc_factor_fn, &ctx, 0.0, hi, NULL, NULL, RN_HERTZ_ROOT_XTOL, RN_BRENT_RTOL, &alpha, err)
         || !ctx.ok)
         return 0;
     *out = alpha / v;
@@ -1037,12 +1037,14 @@ static int pack_model(const RnValue* values, double* M, RnError* err)
     M[M_BREAKPOINT_TOLERANCE] = RN_BREAKPOINT_TOLERANCE;
     M[M_GRAZING_SAMPLES] = (double)RN_GRAZING_SAMPLES;
     M[M_BRENT_MAX_ITERATIONS] = (double)RN_ROOTS_MAX_ITERATIONS;
-    M[M_BRENT_RTOL] = RN_BRENT_RTOL;
+    M[M_BRENT_RTOL] = RN_EVENT_RTOL;
     M[M_EVENT_XTOL] = RN_EVENT_XTOL;
+    M[M_ENGAGEMENT_MIN_FRACTION] = RN_ENGAGEMENT_MIN_FRACTION;
     M[M_LAMBDA_BOUNDARY] = RN_LAMBDA_BOUNDARY;
     M[M_LAMBDA_FULL_FILM] = RN_LAMBDA_FULL_FILM;
     M[M_CONTACT_RATE_SAFETY] = RN_CONTACT_RATE_SAFETY;
     M[M_MAX_CONTACT_SUBSTEPS] = (double)RN_MAX_CONTACT_SUBSTEPS;
+    M[M_GRID_SLACK] = RN_GRID_SLACK;
     return 1;
 }
 
@@ -1315,7 +1317,7 @@ static int equilibrium_state(const RnValue* values, const double* M, double phi_
         double r_0 = equilibrium_residual(&r, 0.0);
         if ((r_0 >= 0.0) == (flank == RK_DRIVE))
             delta = 0.0;
-        else if (!brent(equilibrium_residual, &r, 0.0, hi, &r_0, &r_hi, 1e-18, RN_BRENT_RTOL,
+        else if (!brent(equilibrium_residual, &r, 0.0, hi, &r_0, &r_hi, RN_EQUILIBRIUM_XTOL, RN_BRENT_RTOL,
                         &delta, err)) {
             if (r.code == RK_ERR_OK) return 0;
         }

@@ -15,11 +15,10 @@ from xml.etree import ElementTree
 import pytest
 from fmpy.validation import validate_fmu
 
+from drive_rattle.interface import MODELS
 from drive_rattle_build.native import C_SOURCES, FMI_HEADERS, HEADERS, RESOURCE_MARKER, interface_of
+from drive_rattle_build.templates import normalised_xml
 from drive_rattle_cosim.regression import reference_files
-from drive_rattle_fmi.model_description import normalised_xml
-
-MODELS = ("GearMeshRattle", "Driveline")
 
 
 def description(fmu: Path) -> ElementTree.Element:

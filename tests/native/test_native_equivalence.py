@@ -25,8 +25,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from drive_rattle import MeshModel, MeshParameters, WheelStepper
-from drive_rattle.driveline import Driveline, DrivelineParameters
-from drive_rattle.interface import mesh_outputs
+from drive_rattle.driveline import DrivelineModel, DrivelineParameters
+from drive_rattle.interface import MODELS
 from drive_rattle.kernel_layout import MODEL_SIZE, pack_model
 from drive_rattle.parameters import specs
 from drive_rattle_cosim.harness import CoSimulation
@@ -34,7 +34,6 @@ from drive_rattle_cosim.regression import _read_csv, read_opt, reference_files, 
 
 from ..adversarial.raw_fmi import OK, Model, state_payload, unpack
 
-MODELS = ("GearMeshRattle", "Driveline")
 H = 1e-4
 
 
@@ -137,7 +136,7 @@ START = {
        st.floats(-2.0, 2.0))
 def test_mesh_start_and_outputs_bit_for_bit(unpacked, changes, phi_p, w_p, tau_load):
     """The static flank equilibrium (or the free start with its check) and every output at
-    the start, against WheelStepper and interface.mesh_outputs; a refused start has Python's
+    the start, against WheelStepper.outputs(); a refused start has Python's
     message."""
     model = unpacked["GearMeshRattle"]
     try:
@@ -156,7 +155,7 @@ def test_mesh_start_and_outputs_bit_for_bit(unpacked, changes, phi_p, w_p, tau_l
         return
     event(f"started, in contact: {params.init_in_contact}, flank {python.state.flank}")
     assert status == OK, inst.log
-    expected = mesh_outputs(python)
+    expected = python.outputs()
     for name, value in expected.items():
         assert bits(inst.get_named(name)) == bits(value), name
     inst.free()
@@ -180,7 +179,7 @@ def test_driveline_bit_for_bit(unpacked, changes, phi_w, w_w, h):
     inst, status = initialized(model, {**params.to_public(), "wheel.phi": phi_w,
                                        "wheel.w": w_w})
     assert status == OK, inst.log
-    python = Driveline(params, 0.0, phi_w, w_w)
+    python = DrivelineModel(params, 0.0, phi_w, w_w)
     for k in range(20):
         for name, value in python.outputs().items():
             assert bits(inst.get_named(name)) == bits(value), (k, name)
@@ -188,7 +187,7 @@ def test_driveline_bit_for_bit(unpacked, changes, phi_w, w_w, h):
         inst.set_named({"wheel.phi": phi})
         status = inst.step(k * h, h)
         try:
-            python.step(k * h, h, phi, w_w)
+            python.step(h, phi, w_w, t=k * h)
         except ValueError as err:
             assert status == 3 and inst.messages(status=3)[-1] == f"doStep: {err}"
             event("step refused")

@@ -23,13 +23,13 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
+from drive_rattle.interface import MODELS
 from drive_rattle_build.native import C_SOURCES, zig_cc
 from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
 from drive_rattle_cosim.regression import read_opt, reference_files
 
 HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
-MODELS = ("GearMeshRattle", "Driveline")
 STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror"]
 
 
