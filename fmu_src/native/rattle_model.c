@@ -122,7 +122,7 @@ static void settled_warning(RnInstance* inst, const char* const* names, const ch
 }
 
 /* ------------------------------------------------------------------ snapshot checks */
-/* slave.check_snapshot_fields: kinds "f" (finite float), "f+" (>= 0), "n" (integer in
+/* snapshots.check_fields: kinds "f" (finite float), "f+" (>= 0), "n" (integer in
  * [0, 2^53]), "flank" (-1, 0, 1), "any"; a kind starting with '=' is a scalar entry. */
 typedef struct {
     const char* key;
