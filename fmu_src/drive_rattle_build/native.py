@@ -51,9 +51,10 @@ from .paths import NATIVE as NATIVE_DIR
 from .shim import fmi2_headers
 
 #: Compiled, in this order; every one is listed in <SourceFiles>.
-C_SOURCES = ("fmi2_native.c", "rattle_model.c", "rattle_pytext.c", "rattle_files.c",
-             "rattle_kernel.c", "rattle_native_tables.c")
-HEADERS = ("rattle_native.h", "rattle_kernel_layout.h", "rattle_native_tables.h")
+C_SOURCES = ("fmi2_native.c", "rattle_fmi_common.c", "rattle_model.c", "rattle_pytext.c",
+             "rattle_files.c", "rattle_kernel.c", "rattle_native_tables.c")
+HEADERS = ("rattle_native.h", "rattle_fmi_common.h", "rattle_kernel_layout.h",
+           "rattle_native_tables.h")
 #: The FMI 2.0 headers, as the standard ships them (fmpy bundles them).
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = ("rattle_native_tables.h", "rattle_native_tables.c")

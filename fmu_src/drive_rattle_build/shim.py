@@ -84,6 +84,8 @@ from .paths import NATIVE
 
 #: The C source of the shim.
 SHIM_SOURCE: Path = NATIVE / "rattle_fmi_shim.c"
+#: What the shim shares with the native FMUs' glue (the state envelope, UTF-8), compiled with it.
+COMMON_SOURCE: Path = NATIVE / "rattle_fmi_common.c"
 
 
 def fmi2_headers() -> Path:
@@ -134,7 +136,7 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         _check_vr("vr_last_successful_time", vr_last_successful_time)
     flags = [
         "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
-        "-I", str(fmi2_headers()),
+        "-I", str(fmi2_headers()), "-I", str(NATIVE),
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
@@ -144,8 +146,8 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
           if model_identifier is not None else []),
     ]
-    return compile_library(cc, flags, [SHIM_SOURCE], Path(out_path), SHIM_SOURCE.name,
-                           libs=["-ldl"])
+    return compile_library(cc, flags, [SHIM_SOURCE, COMMON_SOURCE], Path(out_path),
+                           SHIM_SOURCE.name, libs=["-ldl"])
 
 
 def _model_identifier(fmu: zipfile.ZipFile) -> tuple[str, str | None]:

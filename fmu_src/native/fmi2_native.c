@@ -368,7 +368,7 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
     }
     decoded = location_to_path(location, why, why_size);
     if (decoded == NULL) return NULL;
-    rn_printable(shown, sizeof shown, decoded);
+    rattle_printable(shown, sizeof shown, decoded);
     real = rn_realpath(decoded, reason, sizeof reason);
     free(decoded);
     if (real == NULL || !rn_is_dir(real)) {
@@ -377,7 +377,7 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
         free(real);
         return NULL;
     }
-    rn_printable(shown, sizeof shown, real);
+    rattle_printable(shown, sizeof shown, real);
     if (strlen(real) > (size_t)RN_MAX_PATH_BYTES - 64) {
         snprintf(why, why_size, "names a path of %zu bytes; allowed: at most %d", strlen(real),
                  RN_MAX_PATH_BYTES - 64);
@@ -402,7 +402,7 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
     rn_text_free(&file);
     if (strcmp(module, RN_MODEL_IDENTIFIER) != 0) {
         char other[64];
-        rn_printable(other, sizeof other, module);
+        rattle_printable(other, sizeof other, module);
         snprintf(why, why_size, "names '%s', the resources of FMU '%s', not of %s", shown, other,
                  RN_MODEL_IDENTIFIER);
         free(real);
@@ -417,9 +417,6 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
  * pythonfmu FMUs' shim lays out its states (magic, GUID), so states of either flavour are
  * told apart by their GUID. */
 #define STATE_MAGIC "RTLSTATE"
-#define STATE_SERIAL_MAGIC "RTLSTSER"
-#define STATE_ENVELOPE_VERSION 1u
-#define STATE_HEADER 96u
 
 struct RnState {
     char magic[8];
@@ -431,27 +428,6 @@ struct RnState {
     RnState* prev;
 };
 
-static uint64_t fnv1a64(const unsigned char* p, size_t n)
-{
-    uint64_t h = 14695981039346656037ull;
-    for (size_t i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
-static void put_le(unsigned char* p, uint64_t v, int bytes)
-{
-    for (int i = 0; i < bytes; i++) p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint64_t get_le(const unsigned char* p, int bytes)
-{
-    uint64_t v = 0;
-    for (int i = bytes - 1; i >= 0; i--) v = (v << 8) | p[i];
-    return v;
-}
 
 static RnState* own_state(Inst* inst, fmi2FMUstate state, const char* function)
 {
@@ -469,7 +445,7 @@ static RnState* own_state(Inst* inst, fmi2FMUstate state, const char* function)
         char other[65], shown[80];
         memcpy(other, st->guid, 64);
         other[64] = '\0';
-        rn_printable(shown, sizeof shown, other);
+        rattle_printable(shown, sizeof shown, other);
         refuse(inst, function, "the FMU state belongs to the FMU with GUID %s, not to this one "
                                "(%s); nothing changed", shown, RN_GUID);
         return NULL;
@@ -903,8 +879,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                         "string (FMI 2.0, 2.1.5)", instanceName == NULL ? "NULL" : "blank");
         return NULL;
     }
-    rn_printable(name, sizeof name, instanceName);
-    bad = rn_utf8_error_at(instanceName);
+    rattle_printable(name, sizeof name, instanceName);
+    bad = rattle_utf8_error_at(instanceName);
     if (bad != (size_t)-1) {
         instantiate_log(functions, name, fmi2Error, "instanceName '%s' is not valid UTF-8 "
                         "(byte 0x%02X at offset %zu); allowed: UTF-8 text", name,
@@ -920,7 +896,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     }
     if (fmuGUID == NULL || strcmp(fmuGUID, RN_GUID) != 0) {
         char guid[128];
-        rn_printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
+        rattle_printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
         instantiate_log(functions, name, fmi2Error, "GUID %s does not match this FMU's %s", guid,
                         RN_GUID);
         return NULL;
@@ -928,7 +904,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     resources = resolve_resources(fmuResourceLocation, why, sizeof why);
     if (resources == NULL) {
         char location[512];
-        rn_printable(location, sizeof location,
+        rattle_printable(location, sizeof location,
                      fmuResourceLocation != NULL ? fmuResourceLocation : "(null)");
         instantiate_log(functions, name, fmi2Error, "fmuResourceLocation '%s' %s", location,
                         why);
@@ -979,7 +955,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         if (categories[i] == NULL)
             return refuse(inst, "fmi2SetDebugLogging", "category %zu of %zu is NULL; nothing "
                           "changed", i, nCategories);
-        bad = rn_utf8_error_at(categories[i]);
+        bad = rattle_utf8_error_at(categories[i]);
         if (bad != (size_t)-1)
             return refuse(inst, "fmi2SetDebugLogging", "category %zu is not valid UTF-8 (offset "
                           "%zu); nothing changed", i, bad);
@@ -1241,7 +1217,7 @@ static fmi2Status set_values(Inst* inst, const char* function, int fmi_type,
             if (s == NULL)
                 return refuse(inst, function, "value %zu (value reference %u) is NULL; nothing "
                               "of this call was stored", i, (unsigned)vr[i]);
-            bad = rn_utf8_error_at(s);
+            bad = rattle_utf8_error_at(s);
             if (bad != (size_t)-1)
                 return refuse(inst, function, "value %zu (value reference %u) is not valid "
                               "UTF-8 (byte 0x%02X at offset %zu); nothing of this call was "
@@ -1471,7 +1447,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_
     if (inst == NULL) return fmi2Error;
     if (size == NULL) return refuse(inst, "fmi2SerializedFMUstateSize", "size is NULL");
     if ((st = own_state(inst, state, "fmi2SerializedFMUstateSize")) == NULL) return fmi2Error;
-    *size = STATE_HEADER + st->n;
+    *size = RATTLE_STATE_HEADER + st->n;
     return fmi2OK;
 }
 
@@ -1485,18 +1461,11 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte s
     if ((st = own_state(inst, state, "fmi2SerializeFMUstate")) == NULL) return fmi2Error;
     if (serializedState == NULL) return refuse(inst, "fmi2SerializeFMUstate", "the buffer is NULL");
     size_t n = st->n;
-    if (size < STATE_HEADER || size - STATE_HEADER < n)
-        return refuse(inst, "fmi2SerializeFMUstate", "the buffer of %zu bytes is too small: this "
-                      "state needs %zu bytes (fmi2SerializedFMUstateSize); nothing written",
-                      size, (size_t)(STATE_HEADER + n));
-    memset(out, 0, STATE_HEADER);
-    memcpy(out, STATE_SERIAL_MAGIC, 8);
-    put_le(out + 8, STATE_ENVELOPE_VERSION, 4);
-    put_le(out + 16, n, 8);
-    memcpy(out + STATE_HEADER, st->payload, n);
-    put_le(out + 24, fnv1a64(out + STATE_HEADER, n), 8);
-    memcpy(out + 32, RN_GUID, strlen(RN_GUID) < 63 ? strlen(RN_GUID) : 63);
-    memset(out + STATE_HEADER + n, 0, size - STATE_HEADER - n);
+    char why[200];
+    if (!rattle_state_fits(size, n, why, sizeof why))
+        return refuse(inst, "fmi2SerializeFMUstate", "%s", why);
+    memcpy(out + RATTLE_STATE_HEADER, st->payload, n);
+    rattle_state_seal(out, size, n, RN_GUID);
     return fmi2OK;
 }
 
@@ -1507,42 +1476,19 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     Inst* inst = c;
     const unsigned char* in = (const unsigned char*)serializedState;
     RnState* reuse = NULL;
-    uint64_t n, version;
-    char guid[65];
+    uint64_t n;
     if (inst == NULL) return fmi2Error;
     if (state == NULL) return refuse(inst, function, "the FMUstate pointer is NULL");
     if (serializedState == NULL && size > 0) return refuse(inst, function, "the buffer is NULL");
-    if (size < STATE_HEADER || memcmp(in, STATE_SERIAL_MAGIC, 8) != 0)
-        return refuse(inst, function, "the %zu bytes are not a serialized state of a "
-                      "drive-rattle FMU (no \"" STATE_SERIAL_MAGIC "\" header); nothing changed",
-                      size);
-    version = get_le(in + 8, 4);
-    if (version != STATE_ENVELOPE_VERSION)
-        return refuse(inst, function, "the serialized state has envelope version %llu; this "
-                      "FMU reads version %u; nothing changed", (unsigned long long)version,
-                      STATE_ENVELOPE_VERSION);
-    memcpy(guid, in + 32, 64);
-    guid[64] = '\0';
-    if (strcmp(guid, RN_GUID) != 0) {
-        char shown[80];
-        rn_printable(shown, sizeof shown, guid);
-        return refuse(inst, function, "the serialized state belongs to the FMU with GUID %s, "
-                      "not to this one (%s); nothing changed", shown, RN_GUID);
-    }
-    n = get_le(in + 16, 8);
-    if (n > size - STATE_HEADER)
-        return refuse(inst, function, "the serialized state is truncated: %zu bytes, its header "
-                      "announces %llu; nothing changed", size,
-                      (unsigned long long)(STATE_HEADER + n));
-    if (fnv1a64(in + STATE_HEADER, (size_t)n) != get_le(in + 24, 8))
-        return refuse(inst, function, "the serialized state is corrupt (checksum mismatch); "
-                      "nothing changed");
+    char why[300];
+    if (!rattle_state_open(in, size, RN_GUID, &n, why, sizeof why))
+        return refuse(inst, function, "%s", why);
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
     /* pythonfmu holds the parsed state (an empty dict where it does not parse) and dumps it
      * again when it is serialized */
     RnText canonical;
     rn_text_init(&canonical);
-    RnJson* parsed = rn_json_parse((const char*)in + STATE_HEADER, (size_t)n);
+    RnJson* parsed = rn_json_parse((const char*)in + RATTLE_STATE_HEADER, (size_t)n);
     if (parsed != NULL) {
         json_dump(&canonical, parsed);
         rn_json_free(parsed);

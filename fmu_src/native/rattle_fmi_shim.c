@@ -33,7 +33,7 @@
  *     path it cannot misread, or /proc/self/fd/<n> of the opened folder where the path holds
  *     "%20" or is not UTF-8 (see resolve_resources);
  *   - FMU states are the shim's: each wraps pythonfmu's state with the FMU's GUID; serialized
- *     states carry an envelope (GUID, version, length, checksum; see the STATE_ section);
+ *     states carry an envelope (GUID, version, length, checksum; rattle_fmi_common.h);
  *   - an embedded interpreter that cannot start, or a slave that cannot be imported, is
  *     reported through the host's logger whatever the debug-logging setting (start_python);
  *   - pythonfmu's own log messages reach the host as "%s" arguments; after pythonfmu returned
@@ -83,6 +83,7 @@
  * compiler checks each definition below against the standard's signature.  Their callback
  * struct has non-const members (FMI 2.0.1 and later), so the shim can build its own copy. */
 #include "fmi2Functions.h"
+#include "rattle_fmi_common.h"
 
 /* Every function the shim exports, once: used for the table of the wrapped library's
  * functions and the dlsym loop (fmi2Functions.h declares the exports). */
@@ -421,47 +422,6 @@ static void inner_logger(fmi2ComponentEnvironment env, fmi2String instanceName, 
 
 /* ------------------------------------------------------------------ argument checks */
 
-/* Offset of the first byte of `s` that is not valid UTF-8 (RFC 3629: no overlong forms, no
- * surrogates, at most U+10FFFF -- what Python's decoder accepts), or (size_t)-1 if valid. */
-static size_t utf8_error_at(const char* text)
-{
-    const unsigned char* s = (const unsigned char*)text;
-    size_t i = 0;
-    while (s[i] != 0) {
-        unsigned c = s[i];
-        size_t n;
-        unsigned min, cp;
-        if (c < 0x80) { i++; continue; }
-        if (c >= 0xC2 && c <= 0xDF) { n = 1; min = 0x80; cp = c & 0x1F; }
-        else if (c >= 0xE0 && c <= 0xEF) { n = 2; min = 0x800; cp = c & 0x0F; }
-        else if (c >= 0xF0 && c <= 0xF4) { n = 3; min = 0x10000; cp = c & 0x07; }
-        else return i;
-        for (size_t k = 1; k <= n; k++) {
-            if ((s[i + k] & 0xC0) != 0x80) return i;
-            cp = (cp << 6) | (s[i + k] & 0x3F);
-        }
-        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return i;
-        i += n + 1;
-    }
-    return (size_t)-1;
-}
-
-/* A copy of `text` for messages: bytes that are not UTF-8 become '?', at most `size` - 1. */
-static void printable(char* out, size_t size, const char* text)
-{
-    size_t j = 0;
-    const char* p = text;
-    while (*p != '\0' && j + 1 < size) {
-        size_t bad = utf8_error_at(p);
-        if (bad == 0) { out[j++] = '?'; p++; continue; }
-        size_t good = bad == (size_t)-1 ? strlen(p) : bad;
-        if (good > size - 1 - j) good = size - 1 - j;
-        memcpy(out + j, p, good);
-        j += good;
-        p += good;
-    }
-    out[j] = '\0';
-}
 
 /* Value references the host may not use: the hidden variables of the status protocol. */
 static int hidden_vr(fmi2ValueReference vr)
@@ -686,7 +646,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
     }
     decoded = location_to_path(location, why, why_size);
     if (decoded == NULL) return NULL;
-    printable(shown, sizeof shown, decoded);
+    rattle_printable(shown, sizeof shown, decoded);
     real = realpath(decoded, NULL);
     if (real == NULL || stat(real, &st) != 0 || !S_ISDIR(st.st_mode)) {
         snprintf(why, why_size, "names '%s', which %s; allowed: this FMU's resources folder",
@@ -696,7 +656,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
         return NULL;
     }
     free(decoded);
-    printable(shown, sizeof shown, real);
+    rattle_printable(shown, sizeof shown, real);
     if (strlen(real) > PATH_BUFFER - 16) {
         snprintf(why, why_size, "names a path of %zu bytes; allowed: at most %d",
                  strlen(real), PATH_BUFFER - 16);
@@ -718,7 +678,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
 #ifdef RATTLE_MODEL_IDENTIFIER
     if (strcmp(module, RATTLE_MODEL_IDENTIFIER) != 0) {
         char other[64];
-        printable(other, sizeof other, module);
+        rattle_printable(other, sizeof other, module);
         snprintf(why, why_size, "names '%s', the resources of FMU '%s', not of %s", shown,
                  other, RATTLE_MODEL_IDENTIFIER);
         free(real);
@@ -732,7 +692,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
         free(real);
         return NULL;
     }
-    if (strstr(real, "%20") == NULL && utf8_error_at(real) == (size_t)-1) return real;
+    if (strstr(real, "%20") == NULL && rattle_utf8_error_at(real) == (size_t)-1) return real;
 
     *fd = open(real, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     free(real);
@@ -771,45 +731,8 @@ struct ShimState {
     ShimState* prev;
 };
 
-/* Serialized states: an envelope of STATE_HEADER bytes, then pythonfmu's serialization of the
- * slave's state (JSON).  Little-endian:
- *   0  8  "RTLSTSER"
- *   8  4  envelope version (STATE_ENVELOPE_VERSION)
- *  12  4  0 (reserved)
- *  16  8  payload length n
- *  24  8  FNV-1a 64 of the payload
- *  32 64  the FMU's GUID, NUL-padded
- *  96  n  payload
- * The host's buffer may be larger than the reported size (FMI 2.0 allows it): the rest is
- * zeroed and ignored when the state is read back. */
-#define STATE_SERIAL_MAGIC "RTLSTSER"
-#define STATE_ENVELOPE_VERSION 1u
-#define STATE_HEADER 96u
-
-static uint64_t fnv1a64(const unsigned char* p, size_t n)
-{
-    uint64_t h = 14695981039346656037ull;
-    size_t i;
-    for (i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
-static void put_le(unsigned char* p, uint64_t v, int bytes)
-{
-    int i;
-    for (i = 0; i < bytes; i++) p[i] = (unsigned char)(v >> (8 * i));
-}
-
-static uint64_t get_le(const unsigned char* p, int bytes)
-{
-    uint64_t v = 0;
-    int i;
-    for (i = bytes - 1; i >= 0; i--) v = (v << 8) | p[i];
-    return v;
-}
+/* Serialized states: the envelope of rattle_fmi_common.h around pythonfmu's serialization of
+ * the slave's state (JSON). */
 
 /* `state` as a state of this FMU, or NULL with the refusal logged. */
 static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* function)
@@ -827,7 +750,7 @@ static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* funct
     }
     if (strcmp(st->guid, RATTLE_GUID) != 0) {
         char other[64];
-        printable(other, sizeof other, st->guid);
+        rattle_printable(other, sizeof other, st->guid);
         refuse(s, function, "the FMU state belongs to the FMU with GUID %s, not to this one "
                             "(%s); nothing changed", other, RATTLE_GUID);
         return NULL;
@@ -976,8 +899,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                         "string (FMI 2.0, 2.1.5)", instanceName == NULL ? "NULL" : "blank");
         return NULL;
     }
-    printable(name, sizeof name, instanceName);
-    bad = utf8_error_at(instanceName);
+    rattle_printable(name, sizeof name, instanceName);
+    bad = rattle_utf8_error_at(instanceName);
     if (bad != (size_t)-1) {
         instantiate_log(functions, name, fmi2Error, "instanceName '%s' is not valid UTF-8 "
                         "(byte 0x%02X at offset %zu); allowed: UTF-8 text", name,
@@ -995,7 +918,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
      * built with (pythonfmu does not). */
     if (RATTLE_GUID[0] != '\0' && (fmuGUID == NULL || strcmp(fmuGUID, RATTLE_GUID) != 0)) {
         char guid[128];
-        printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
+        rattle_printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
         instantiate_log(functions, name, fmi2Error, "GUID %s does not match this FMU's %s",
                         guid, RATTLE_GUID);
         return NULL;
@@ -1007,7 +930,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     path = resolve_resources(fmuResourceLocation, &fd, why, sizeof why);
     if (path == NULL) {
         char location[512];
-        printable(location, sizeof location,
+        rattle_printable(location, sizeof location,
                   fmuResourceLocation != NULL ? fmuResourceLocation : "(null)");
         instantiate_log(functions, name, fmi2Error, "fmuResourceLocation '%s' %s", location,
                         why);
@@ -1116,7 +1039,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         if (categories[i] == NULL)
             return refuse(s, "fmi2SetDebugLogging", "category %zu of %zu is NULL; nothing "
                           "changed", i, nCategories);
-        bad = utf8_error_at(categories[i]);
+        bad = rattle_utf8_error_at(categories[i]);
         if (bad != (size_t)-1)
             return refuse(s, "fmi2SetDebugLogging", "category %zu is not valid UTF-8 (offset "
                           "%zu); nothing changed", i, bad);
@@ -1223,7 +1146,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         if (value[i] == NULL)
             return refuse(s, "fmi2SetString", "value %zu (value reference %u) is NULL; nothing "
                           "of this call was stored", i, (unsigned)vr[i]);
-        bad = utf8_error_at(value[i]);
+        bad = rattle_utf8_error_at(value[i]);
         if (bad != (size_t)-1)
             return refuse(s, "fmi2SetString", "value %zu (value reference %u) is not valid "
                           "UTF-8 (byte 0x%02X at offset %zu); nothing of this call was stored",
@@ -1289,7 +1212,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_
     if (size == NULL) return refuse(s, "fmi2SerializedFMUstateSize", "size is NULL");
     if ((st = own_state(s, state, "fmi2SerializedFMUstateSize")) == NULL) return fmi2Error;
     status = payload_size(s, st, &n);
-    if (status <= fmi2Warning) *size = STATE_HEADER + n;
+    if (status <= fmi2Warning) *size = RATTLE_STATE_HEADER + n;
     return status;
 }
 
@@ -1300,6 +1223,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte s
     ShimState* st;
     size_t n;
     fmi2Status status;
+    char why[200];
     unsigned char* out = (unsigned char*)serializedState;
     if (s == NULL) return REFUSED(c);
     if ((st = own_state(s, state, "fmi2SerializeFMUstate")) == NULL) return fmi2Error;
@@ -1307,21 +1231,14 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte s
         return refuse(s, "fmi2SerializeFMUstate", "the buffer is NULL");
     status = payload_size(s, st, &n);
     if (status > fmi2Warning) return status;
-    if (size < STATE_HEADER || size - STATE_HEADER < n)
-        return refuse(s, "fmi2SerializeFMUstate", "the buffer of %zu bytes is too small: this "
-                      "state needs %zu bytes (fmi2SerializedFMUstateSize); nothing written",
-                      size, STATE_HEADER + n);
+    if (!rattle_state_fits(size, n, why, sizeof why))
+        return refuse(s, "fmi2SerializeFMUstate", "%s", why);
     /* pythonfmu copies exactly n bytes here: never more than its serialization holds. */
     status = after_call(s, inner_api.fmi2SerializeFMUstate(s->inner, st->inner,
-                                                           serializedState + STATE_HEADER, n));
+                                                           serializedState + RATTLE_STATE_HEADER,
+                                                           n));
     if (status > fmi2Warning) return status;
-    memset(out, 0, STATE_HEADER);
-    memcpy(out, STATE_SERIAL_MAGIC, 8);
-    put_le(out + 8, STATE_ENVELOPE_VERSION, 4);
-    put_le(out + 16, n, 8);
-    put_le(out + 24, fnv1a64(out + STATE_HEADER, n), 8);
-    memcpy(out + 32, RATTLE_GUID, strlen(RATTLE_GUID) < 63 ? strlen(RATTLE_GUID) : 63);
-    memset(out + STATE_HEADER + n, 0, size - STATE_HEADER - n);
+    rattle_state_seal(out, size, n, RATTLE_GUID);
     return status;
 }
 
@@ -1333,39 +1250,17 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     const unsigned char* in = (const unsigned char*)serializedState;
     ShimState* reuse = NULL;
     fmi2FMUstate fresh = NULL;
-    uint64_t n, version;
-    char guid[65];
+    uint64_t n;
+    char why[300];
     fmi2Status st;
     if (s == NULL) return REFUSED(c);
     if (state == NULL) return refuse(s, function, "the FMUstate pointer is NULL");
     if (serializedState == NULL && size > 0) return refuse(s, function, "the buffer is NULL");
-    if (size < STATE_HEADER || memcmp(in, STATE_SERIAL_MAGIC, 8) != 0)
-        return refuse(s, function, "the %zu bytes are not a serialized state of a drive-rattle "
-                      "FMU (no \"" STATE_SERIAL_MAGIC "\" header); nothing changed", size);
-    version = get_le(in + 8, 4);
-    if (version != STATE_ENVELOPE_VERSION)
-        return refuse(s, function, "the serialized state has envelope version %llu; this FMU "
-                      "reads version %u; nothing changed", (unsigned long long)version,
-                      STATE_ENVELOPE_VERSION);
-    memcpy(guid, in + 32, 64);
-    guid[64] = '\0';
-    if (strcmp(guid, RATTLE_GUID) != 0) {
-        char shown[80];
-        printable(shown, sizeof shown, guid);
-        return refuse(s, function, "the serialized state belongs to the FMU with GUID %s, not "
-                      "to this one (%s); nothing changed", shown, RATTLE_GUID);
-    }
-    n = get_le(in + 16, 8);
-    if (n > size - STATE_HEADER)
-        return refuse(s, function, "the serialized state is truncated: %zu bytes, its header "
-                      "announces %llu; nothing changed", size,
-                      (unsigned long long)(STATE_HEADER + n));
-    if (fnv1a64(in + STATE_HEADER, (size_t)n) != get_le(in + 24, 8))
-        return refuse(s, function, "the serialized state is corrupt (checksum mismatch); "
-                      "nothing changed");
+    if (!rattle_state_open(in, size, RATTLE_GUID, &n, why, sizeof why))
+        return refuse(s, function, "%s", why);
     if (*state != NULL && (reuse = own_state(s, *state, function)) == NULL) return fmi2Error;
     st = after_call(s, inner_api.fmi2DeSerializeFMUstate(
-                           s->inner, serializedState + STATE_HEADER, (size_t)n, &fresh));
+                           s->inner, serializedState + RATTLE_STATE_HEADER, (size_t)n, &fresh));
     if (st > fmi2Warning) {
         free_inner_state(s, &fresh);
         return st;

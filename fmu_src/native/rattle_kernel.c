@@ -391,6 +391,24 @@ static double brent(Fail* f, RootFn fn, void* ctx, double a, double b, double fa
     return b;
 }
 
+/* roots.brent for callers outside the stepper (the native FMUs' start and contact-law fit,
+ * rattle_model.c): RK_ERR_OK with the root in *root, or RK_ERR_NO_BRACKET with (a, fa, b, fb)
+ * in err_values. */
+EXPORT int rk_brent(RootFn fn, void* ctx, double a, double b, double fa, double fb,
+                    double xtol, double rtol, int64_t max_iter, double* root,
+                    double* err_values)
+{
+    Fail f;
+    f.code = RK_ERR_OK;
+    if (setjmp(f.jb) != 0) {
+        for (int i = 0; i < RK_ERROR_VALUES; i++)
+            err_values[i] = f.values[i];
+        return f.code;
+    }
+    *root = brent(&f, fn, ctx, a, b, fa, fb, xtol, rtol, max_iter);
+    return RK_ERR_OK;
+}
+
 /* ------------------------------------------------------------------ hertz.py */
 /* chebyshev_value: Clenshaw's recurrence for sum_j c_j T_j(t). */
 static inline double chebyshev_value(const double* c, int n, double t)

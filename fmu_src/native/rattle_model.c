@@ -371,92 +371,25 @@ static double py_mod(double v, double w)
     return mod;
 }
 
-/* roots.brent (bracketing root finder: bisection safeguarding secant and inverse quadratic
- * steps); fa/fb computed when not given.  0 with the ValueError in err if [a, b] does not
- * bracket a root. */
+/* roots.brent, the kernel's (rk_brent); fa/fb computed when not given.  0 with the ValueError
+ * in err if [a, b] does not bracket a root. */
 typedef double (*RootFn)(void* ctx, double x);
+int rk_brent(RootFn fn, void* ctx, double a, double b, double fa, double fb, double xtol,
+             double rtol, int64_t max_iter, double* root, double* err_values);
+static void kernel_refusal(int code, const double* v, RnError* err);
 
 static int brent(RootFn f, void* ctx, double a, double b, const double* fa_given,
                  const double* fb_given, double xtol, double rtol, double* root, RnError* err)
 {
     double fa = fa_given == NULL ? f(ctx, a) : *fa_given;
     double fb = fb_given == NULL ? f(ctx, b) : *fb_given;
-    if (fa == 0.0) {
-        *root = a;
-        return 1;
-    }
-    if (fb == 0.0) {
-        *root = b;
-        return 1;
-    }
-    if ((fa > 0.0) == (fb > 0.0)) {
-        RnText* t = rn_error_value(err);
-        rn_puts(t, "brent: f(");
-        rn_put_repr(t, a);
-        rn_puts(t, ") = ");
-        rn_put_repr(t, fa);
-        rn_puts(t, " and f(");
-        rn_put_repr(t, b);
-        rn_puts(t, ") = ");
-        rn_put_repr(t, fb);
-        rn_puts(t, " do not bracket a root");
+    double err_values[RK_ERROR_VALUES];
+    int code = rk_brent(f, ctx, a, b, fa, fb, xtol, rtol, RN_ROOTS_MAX_ITERATIONS, root,
+                        err_values);
+    if (code != RK_ERR_OK) {
+        kernel_refusal(code, err_values, err);
         return 0;
     }
-    double c = a, fc = fa;
-    double d = b - a, e = b - a;
-    for (int it = 0; it < RN_ROOTS_MAX_ITERATIONS; it++) {
-        if ((fb > 0.0) == (fc > 0.0)) {
-            c = a;
-            fc = fa;
-            d = e = b - a;
-        }
-        if (fabs(fc) < fabs(fb)) {
-            double na = b, nfa = fb, nb = c, nfb = fc;
-            a = na;
-            fa = nfa;
-            b = nb;
-            fb = nfb;
-            c = na;
-            fc = nfa;
-        }
-        double tol = 2.0 * rtol * fabs(b) + 0.5 * xtol;
-        double m = 0.5 * (c - b);
-        if (fabs(m) <= tol || fb == 0.0) {
-            *root = b;
-            return 1;
-        }
-        if (fabs(e) >= tol && fabs(fa) > fabs(fb)) {
-            double s = fb / fa;
-            double p, q;
-            if (a == c) {
-                p = 2.0 * m * s;
-                q = 1.0 - s;
-            }
-            else {
-                q = fa / fc;
-                double r = fb / fc;
-                p = s * (2.0 * m * q * (q - r) - (b - a) * (r - 1.0));
-                q = (q - 1.0) * (r - 1.0) * (s - 1.0);
-            }
-            if (p > 0.0)
-                q = -q;
-            else
-                p = -p;
-            if (2.0 * p < py_min(3.0 * m * q - fabs(tol * q), fabs(e * q))) {
-                e = d;
-                d = p / q;
-            }
-            else
-                d = e = m;
-        }
-        else
-            d = e = m;
-        a = b;
-        fa = fb;
-        b += fabs(d) > tol ? d : copysign(tol, m);
-        fb = f(ctx, b);
-    }
-    *root = b;
     return 1;
 }
 
@@ -702,7 +635,8 @@ static int exact_ellipse(double rho, Ellipse* out, RnError* err)
     double y_hi = -1e-9;
     double y;
     if (ellipse_residual(&target, y_hi) < 0.0) {
-        if (!brent(ellipse_residual, &target, y_lo, y_hi, NULL, NULL, RN_HERTZ_ROOT_XTOL, RN_BRENT_RTOL, &y,
+        if (!brent(ellipse_residual, &target, y_lo, y_hi, NULL, NULL, RN_HERTZ_ROOT_XTOL,
+                   RN_BRENT_RTOL, &y,
                    err))
             return 0;
     }
@@ -898,7 +832,8 @@ static double hc_restitution(double alpha, RnError* err, int* ok)
     double hi = py_min(1.0, 1.0 / alpha) * (1.0 - 1e-15);
     if (hc_balance(alpha, hi) >= 0.0) return hi;
     double root;
-    if (!brent(hc_balance_fn, &alpha, 0.0, hi, NULL, NULL, RN_RESTITUTION_XTOL, RN_BRENT_RTOL, &root, err)) {
+    if (!brent(hc_balance_fn, &alpha, 0.0, hi, NULL, NULL, RN_RESTITUTION_XTOL, RN_BRENT_RTOL,
+               &root, err)) {
         *ok = 0;
         return 0.0;
     }
@@ -945,7 +880,8 @@ static int hunt_crossley_factor(double e, double v, double* out, RnError* err)
     if (!ok) return 0;
     HcCtx ctx = {e, err, 1};
     double alpha;
-    if (!brent(hc_factor_fn, &ctx, 0.0, hi, NULL, NULL, RN_HERTZ_ROOT_XTOL, RN_BRENT_RTOL, &alpha, err)
+    if (!brent(hc_factor_fn, &ctx, 0.0, hi, NULL, NULL, RN_HERTZ_ROOT_XTOL, RN_BRENT_RTOL,
+               &alpha, err)
         || !ctx.ok)
         return 0;
     *out = alpha / v;
@@ -1317,7 +1253,8 @@ static int equilibrium_state(const RnValue* values, const double* M, double phi_
         double r_0 = equilibrium_residual(&r, 0.0);
         if ((r_0 >= 0.0) == (flank == RK_DRIVE))
             delta = 0.0;
-        else if (!brent(equilibrium_residual, &r, 0.0, hi, &r_0, &r_hi, RN_EQUILIBRIUM_XTOL, RN_BRENT_RTOL,
+        else if (!brent(equilibrium_residual, &r, 0.0, hi, &r_0, &r_hi, RN_EQUILIBRIUM_XTOL,
+                        RN_BRENT_RTOL,
                         &delta, err)) {
             if (r.code == RK_ERR_OK) return 0;
         }
@@ -2001,7 +1938,7 @@ static int read_speed_table(const char* path, size_t* n_out, double** times_out,
                                      rn_error_value(err));
     if (raw == NULL) return 0;
     rn_error_clear(err);
-    size_t bad = rn_utf8_error_at_n(raw, n);
+    size_t bad = rattle_utf8_error_at_n(raw, n);
     if (bad != (size_t)-1) {
         RnText* t = rn_error_value(err);
         RnText shown;

@@ -28,6 +28,7 @@
 #include <stdint.h>
 
 #include "fmi2Functions.h"
+#include "rattle_fmi_common.h"
 
 /* ------------------------------------------------------------------ variables */
 enum { RN_REAL, RN_INTEGER, RN_BOOLEAN, RN_STRING };
@@ -95,13 +96,9 @@ int rn_parse_python_float(const char* text, size_t n, double* out);
 /* Locale-independent strtod of a complete decimal literal (JSON); 1 on success. */
 int rn_strtod(const char* text, size_t n, double* out);
 
-/* UTF-8 (RFC 3629, as Python decodes it): offset of the first invalid byte, or (size_t)-1. */
-size_t rn_utf8_error_at(const char* s);
-size_t rn_utf8_error_at_n(const char* s, size_t n);
-/* Number of code points of valid UTF-8 text. */
+/* Number of code points of valid UTF-8 text (validity and printable copies:
+ * rattle_fmi_common.h). */
 size_t rn_utf8_length(const char* s, size_t n);
-/* A copy of `text` with bytes that are not UTF-8 as '?', at most size - 1 bytes. */
-void rn_printable(char* out, size_t size, const char* text);
 
 /* ------------------------------------------------------------------ JSON (Python's json) */
 typedef enum { RJ_NULL, RJ_FALSE, RJ_TRUE, RJ_INT, RJ_BIGINT, RJ_FLOAT, RJ_STRING, RJ_ARRAY,

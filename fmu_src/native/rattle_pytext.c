@@ -312,60 +312,6 @@ int rn_strtod(const char* text, size_t n, double* out)
 }
 
 /* ------------------------------------------------------------------ UTF-8 */
-/* Decodes one code point at s (n bytes available); returns its length, 0 if not UTF-8.
- * `surrogates` accepts the 3-byte forms of U+D800..U+DFFF (WTF-8, used internally for the
- * lone surrogates json.loads can produce). */
-static size_t utf8_decode(const unsigned char* s, size_t n, unsigned* cp, int surrogates)
-{
-    unsigned c = s[0];
-    size_t len;
-    unsigned min, v;
-    if (c < 0x80) {
-        *cp = c;
-        return 1;
-    }
-    if (c >= 0xC2 && c <= 0xDF) {
-        len = 2;
-        min = 0x80;
-        v = c & 0x1F;
-    }
-    else if (c >= 0xE0 && c <= 0xEF) {
-        len = 3;
-        min = 0x800;
-        v = c & 0x0F;
-    }
-    else if (c >= 0xF0 && c <= 0xF4) {
-        len = 4;
-        min = 0x10000;
-        v = c & 0x07;
-    }
-    else
-        return 0;
-    if (len > n) return 0;
-    for (size_t k = 1; k < len; k++) {
-        if ((s[k] & 0xC0) != 0x80) return 0;
-        v = (v << 6) | (s[k] & 0x3F);
-    }
-    if (v < min || v > 0x10FFFF || (!surrogates && v >= 0xD800 && v <= 0xDFFF)) return 0;
-    *cp = v;
-    return len;
-}
-
-size_t rn_utf8_error_at_n(const char* text, size_t n)
-{
-    const unsigned char* s = (const unsigned char*)text;
-    size_t i = 0;
-    while (i < n) {
-        unsigned cp;
-        size_t len = utf8_decode(s + i, n - i, &cp, 0);
-        if (len == 0) return i;
-        i += len;
-    }
-    return (size_t)-1;
-}
-
-size_t rn_utf8_error_at(const char* text) { return rn_utf8_error_at_n(text, strlen(text)); }
-
 size_t rn_utf8_length(const char* text, size_t n)
 {
     const unsigned char* s = (const unsigned char*)text;
@@ -373,26 +319,6 @@ size_t rn_utf8_length(const char* text, size_t n)
     for (size_t i = 0; i < n; i++)
         if ((s[i] & 0xC0) != 0x80) count++;
     return count;
-}
-
-void rn_printable(char* out, size_t size, const char* text)
-{
-    size_t j = 0;
-    const char* p = text;
-    while (*p != '\0' && j + 1 < size) {
-        size_t bad = rn_utf8_error_at(p);
-        if (bad == 0) {
-            out[j++] = '?';
-            p++;
-            continue;
-        }
-        size_t good = bad == (size_t)-1 ? strlen(p) : bad;
-        if (good > size - 1 - j) good = size - 1 - j;
-        memcpy(out + j, p, good);
-        j += good;
-        p += good;
-    }
-    out[j] = '\0';
 }
 
 static void put_utf8(RnText* t, unsigned cp)
@@ -453,7 +379,7 @@ void rn_put_repr_strn(RnText* t, const char* text, size_t n)
     size_t i = 0;
     while (i < n) {
         unsigned cp;
-        size_t len = utf8_decode(s + i, n - i, &cp, 1);
+        size_t len = rattle_utf8_decode(s + i, n - i, &cp, 1);
         if (len == 0) { /* not UTF-8: the byte, as Python shows a surrogateescape'd byte */
             rn_printf(t, "\\udc%02x", (unsigned)s[i]);
             i++;
@@ -498,7 +424,7 @@ static size_t space_at(const unsigned char* s, size_t n)
     if (s[0] == ' ' || (s[0] >= 0x09 && s[0] <= 0x0D) || (s[0] >= 0x1C && s[0] <= 0x1F))
         return 1;
     unsigned cp;
-    size_t len = utf8_decode(s, n, &cp, 0);
+    size_t len = rattle_utf8_decode(s, n, &cp, 0);
     if (len > 1 && (cp == 0x85 || cp == 0xA0 || cp == 0x1680 || (cp >= 0x2000 && cp <= 0x200A)
                     || cp == 0x2028 || cp == 0x2029 || cp == 0x202F || cp == 0x205F
                     || cp == 0x3000))
@@ -533,7 +459,7 @@ int rn_parse_python_float(const char* text, size_t n, double* out)
                 continue;
             }
             unsigned cp;
-            size_t len = utf8_decode(s + i, b - i, &cp, 0);
+            size_t len = rattle_utf8_decode(s + i, b - i, &cp, 0);
             i += len ? len : 1;
             last = i;
         }
@@ -914,7 +840,7 @@ RnJson* rn_json_parse(const char* data, size_t n)
 {
     Parser p;
     RnJson* j;
-    if (rn_utf8_error_at_n(data, n) != (size_t)-1) return NULL; /* bytes.decode('utf-8') */
+    if (rattle_utf8_error_at_n(data, n) != (size_t)-1) return NULL; /* bytes.decode('utf-8') */
     j = malloc(sizeof *j);
     if (j == NULL) return NULL;
     p.s = data;
@@ -1050,7 +976,7 @@ void rn_json_put_string(RnText* t, const char* text)
     rn_puts(t, "\"");
     while (i < n) {
         unsigned cp;
-        size_t len = utf8_decode(s + i, n - i, &cp, 1);
+        size_t len = rattle_utf8_decode(s + i, n - i, &cp, 1);
         if (len == 0) {
             cp = 0xDC00 + s[i]; /* not reached: stored strings are UTF-8 */
             len = 1;

@@ -1,0 +1,60 @@
+/*
+ * rattle_fmi_common.h - what both FMI layers do the same way, written once: the status shim of
+ * the pythonfmu FMUs (rattle_fmi_shim.c) and the glue of the native FMUs (fmi2_native.c) both
+ * compile rattle_fmi_common.c.
+ *
+ * Serialized FMU states: an envelope of RATTLE_STATE_HEADER bytes, then the unit's state
+ * (JSON).  Little-endian:
+ *   0  8  "RTLSTSER"
+ *   8  4  envelope version (RATTLE_STATE_ENVELOPE_VERSION)
+ *  12  4  0 (reserved)
+ *  16  8  payload length n
+ *  24  8  FNV-1a 64 of the payload
+ *  32 64  the FMU's GUID, NUL-padded
+ *  96  n  payload
+ * The host's buffer may be larger than the reported size (FMI 2.0 allows it): the rest is
+ * zeroed and ignored when the state is read back.
+ */
+#ifndef RATTLE_FMI_COMMON_H
+#define RATTLE_FMI_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Internal to the FMU's binary: never exported to the host (nor interposed by a namesake). */
+#if defined(__GNUC__) && !defined(_WIN32)
+#define RATTLE_INTERNAL __attribute__((visibility("hidden")))
+#else
+#define RATTLE_INTERNAL
+#endif
+
+#define RATTLE_STATE_SERIAL_MAGIC "RTLSTSER"
+#define RATTLE_STATE_ENVELOPE_VERSION 1u
+#define RATTLE_STATE_HEADER 96u
+
+/* 1 when a state of n payload bytes fits a buffer of `size` bytes; else 0 with the refusal's
+ * text in why. */
+RATTLE_INTERNAL int rattle_state_fits(size_t size, size_t n, char* why, size_t why_size);
+/* Writes the envelope around the n payload bytes already at out + RATTLE_STATE_HEADER and
+ * zeroes the rest of the `size` bytes (rattle_state_fits(size, n) must hold). */
+RATTLE_INTERNAL void rattle_state_seal(unsigned char* out, size_t size, size_t n,
+                                       const char* guid);
+/* 1 with the payload length in *n when the `size` bytes at `in` are an intact state of the
+ * FMU `guid`; else 0 with the refusal's text in why. */
+RATTLE_INTERNAL int rattle_state_open(const unsigned char* in, size_t size, const char* guid,
+                                     uint64_t* n, char* why, size_t why_size);
+
+/* UTF-8 as Python's decoder accepts it (RFC 3629: no overlong forms, no surrogates, at most
+ * U+10FFFF). */
+/* Decodes one code point at s (n bytes available); returns its length, 0 if not UTF-8.
+ * `surrogates` accepts the 3-byte forms of U+D800..U+DFFF (WTF-8, used internally for the
+ * lone surrogates json.loads can produce). */
+RATTLE_INTERNAL size_t rattle_utf8_decode(const unsigned char* s, size_t n, unsigned* cp,
+                                          int surrogates);
+/* Offset of the first byte that is not valid UTF-8, or (size_t)-1 if all are. */
+RATTLE_INTERNAL size_t rattle_utf8_error_at_n(const char* text, size_t n);
+RATTLE_INTERNAL size_t rattle_utf8_error_at(const char* text);
+/* A copy of `text` for messages: bytes that are not UTF-8 become '?', at most `size` - 1. */
+RATTLE_INTERNAL void rattle_printable(char* out, size_t size, const char* text);
+
+#endif
