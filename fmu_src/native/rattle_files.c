@@ -144,17 +144,6 @@ int rn_first_line(const char* path, char* out, size_t size)
     return 0;
 }
 
-int rn_path_is_absolute(const char* path)
-{
-#if defined(_WIN32)
-    if ((path[0] == '\\' && path[1] == '\\') || (path[0] == '/' && path[1] == '/')) return 1;
-    return ((path[0] >= 'A' && path[0] <= 'Z') || (path[0] >= 'a' && path[0] <= 'z'))
-           && path[1] == ':' && (path[2] == '\\' || path[2] == '/');
-#else
-    return path[0] == '/';
-#endif
-}
-
 /* str(pathlib.Path(text)) on POSIX: empty and "." parts dropped, a root of exactly two
  * slashes kept, "" -> ".".  (On Windows: '\\' and '/' both separate, '\\' joins.) */
 void rn_path_normalise(RnText* out, const char* text)

@@ -2,6 +2,7 @@
 #include "rattle_fmi_common.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* ------------------------------------------------------------------ the state envelope */
@@ -161,4 +162,114 @@ void rattle_printable(char* out, size_t size, const char* text)
         p += good;
     }
     out[j] = '\0';
+}
+
+/* ------------------------------------------------------------------ resource location */
+static char* copy_string(const char* s)
+{
+    size_t n = strlen(s) + 1;
+    char* p = malloc(n);
+    if (p != NULL) memcpy(p, s, n);
+    return p;
+}
+
+int rattle_path_is_absolute(const char* path)
+{
+#if defined(_WIN32)
+    if ((path[0] == '\\' && path[1] == '\\') || (path[0] == '/' && path[1] == '/')) return 1;
+    return ((path[0] >= 'A' && path[0] <= 'Z') || (path[0] >= 'a' && path[0] <= 'z'))
+           && path[1] == ':' && (path[2] == '\\' || path[2] == '/');
+#else
+    return path[0] == '/';
+#endif
+}
+
+static int hex_value(char ch)
+{
+    if (ch >= '0' && ch <= '9') return ch - '0';
+    if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
+    if (ch >= 'A' && ch <= 'F') return ch - 'A' + 10;
+    return -1;
+}
+
+static int prefix_nocase(const char* s, const char* prefix)
+{
+    for (; *prefix != '\0'; s++, prefix++) {
+        char a = *s, b = *prefix;
+        if (a >= 'A' && a <= 'Z') a = (char)(a - 'A' + 'a');
+        if (a != b) return 0;
+    }
+    return 1;
+}
+
+/* The local path a resource location names (malloc'ed), or NULL with the reason: "file:///p",
+ * "file://localhost/p", "file:/p" with every %XX decoded (%00 refused), or an absolute path
+ * taken as it is (on Windows "file:///C:/p" is C:/p). */
+char* rattle_location_to_path(const char* location, char* why, size_t why_size)
+{
+    const char* p;
+    char* out;
+    char* q;
+    size_t scheme = 0;
+    if (prefix_nocase(location, "file:")) {
+        p = location + 5;
+        if (p[0] == '/' && p[1] == '/') {
+            p += 2;
+            if (prefix_nocase(p, "localhost/"))
+                p += 9;
+            else if (p[0] != '/') {
+                snprintf(why, why_size, "names a file on another host; allowed: a local "
+                                        "file:// URI or an absolute path");
+                return NULL;
+            }
+        }
+        if (p[0] != '/') {
+            snprintf(why, why_size, "is a relative file URI; allowed: file:///<absolute path>");
+            return NULL;
+        }
+#if defined(_WIN32)
+        if (((p[1] >= 'A' && p[1] <= 'Z') || (p[1] >= 'a' && p[1] <= 'z')) && p[2] == ':')
+            p++; /* /C:/... */
+#endif
+    }
+    else {
+        while ((location[scheme] >= 'a' && location[scheme] <= 'z')
+               || (location[scheme] >= 'A' && location[scheme] <= 'Z')
+               || (scheme > 0 && ((location[scheme] >= '0' && location[scheme] <= '9')
+                                  || strchr("+-.", location[scheme]) != NULL)))
+            scheme++;
+        if (scheme > 1 && location[scheme] == ':') {
+            snprintf(why, why_size, "has the URI scheme '%.*s', which this FMU cannot read; "
+                                    "allowed: file:// URIs and absolute paths",
+                     (int)(scheme > 32 ? 32 : scheme), location);
+            return NULL;
+        }
+        if (!rattle_path_is_absolute(location)) {
+            snprintf(why, why_size, "is %s; allowed: a file:// URI or an absolute path",
+                     location[0] == '\0' ? "empty" : "a relative path");
+            return NULL;
+        }
+        return copy_string(location);
+    }
+    out = malloc(strlen(p) + 1);
+    if (out == NULL) {
+        snprintf(why, why_size, "cannot be decoded: out of memory");
+        return NULL;
+    }
+    for (q = out; *p != '\0'; p++) {
+        int hi, lo;
+        if (p[0] == '%' && (hi = hex_value(p[1])) >= 0 && (lo = hex_value(p[2])) >= 0) {
+            if ((hi | lo) == 0) {
+                free(out);
+                snprintf(why, why_size, "holds %%00, which no path can contain");
+                return NULL;
+            }
+            *q++ = (char)(hi * 16 + lo);
+            p += 2;
+        }
+        else
+            *q++ = *p;
+    }
+    *q = '\0';
+    return out;
 }

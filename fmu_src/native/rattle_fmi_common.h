@@ -26,6 +26,15 @@
 #define RATTLE_INTERNAL __attribute__((visibility("hidden")))
 #else
 #define RATTLE_INTERNAL
+/* An absolute path: "/..." (on Windows also "C:\\...", "C:/...", "\\\\server\\..."). */
+RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
+/* The local path a resource location names (malloc'ed), or NULL with the reason in why:
+ * "file:///p", "file://localhost/p", "file:/p" with every %XX decoded (%00 refused; a
+ * malformed escape stays literal; '?' and '#' belong to the path), or an absolute path taken
+ * as it is. */
+RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
+                                              size_t why_size);
+
 #endif
 
 #define RATTLE_STATE_SERIAL_MAGIC "RTLSTSER"
@@ -56,5 +65,14 @@ RATTLE_INTERNAL size_t rattle_utf8_error_at_n(const char* text, size_t n);
 RATTLE_INTERNAL size_t rattle_utf8_error_at(const char* text);
 /* A copy of `text` for messages: bytes that are not UTF-8 become '?', at most `size` - 1. */
 RATTLE_INTERNAL void rattle_printable(char* out, size_t size, const char* text);
+
+/* An absolute path: "/..." (on Windows also "C:\\...", "C:/...", "\\\\server\\..."). */
+RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
+/* The local path a resource location names (malloc'ed), or NULL with the reason in why:
+ * "file:///p", "file://localhost/p", "file:/p" with every %XX decoded (%00 refused; a
+ * malformed escape stays literal; '?' and '#' belong to the path), or an absolute path taken
+ * as it is. */
+RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
+                                              size_t why_size);
 
 #endif

@@ -522,84 +522,6 @@ static Shim* usable(fmi2Component c, const char* function)
 
 /* ------------------------------------------------------------------ resource location */
 
-static int hex_value(char ch)
-{
-    if (ch >= '0' && ch <= '9') return ch - '0';
-    if (ch >= 'a' && ch <= 'f') return ch - 'a' + 10;
-    if (ch >= 'A' && ch <= 'F') return ch - 'A' + 10;
-    return -1;
-}
-
-/* The local path a resource location names, malloc'ed, or NULL with the reason in `why`.
- * Accepted: "file:///p", "file://localhost/p", "file:/p" with every %XX decoded (pythonfmu
- * itself decodes only %20), and a plain absolute path "/p" (taken as it is).  A malformed
- * escape stays literal; "%00" is refused ('?' and '#' belong to the path: resource URIs carry
- * no query). */
-static char* location_to_path(const char* location, char* why, size_t why_size)
-{
-    const char* p;
-    char* out;
-    char* q;
-    size_t scheme = 0;
-
-    if (strncasecmp(location, "file:", 5) == 0) {
-        p = location + 5;
-        if (p[0] == '/' && p[1] == '/') { /* authority */
-            p += 2;
-            if (strncasecmp(p, "localhost/", 10) == 0) p += 9;
-            else if (p[0] != '/') {
-                snprintf(why, why_size, "names a file on another host; allowed: a local "
-                                        "file:// URI or an absolute path");
-                return NULL;
-            }
-        }
-        if (p[0] != '/') {
-            snprintf(why, why_size, "is a relative file URI; allowed: file:///<absolute path>");
-            return NULL;
-        }
-    } else {
-        while ((location[scheme] >= 'a' && location[scheme] <= 'z')
-               || (location[scheme] >= 'A' && location[scheme] <= 'Z')
-               || (scheme > 0 && ((location[scheme] >= '0' && location[scheme] <= '9')
-                                  || strchr("+-.", location[scheme]) != NULL)))
-            scheme++;
-        if (scheme > 1 && location[scheme] == ':') {
-            snprintf(why, why_size, "has the URI scheme '%.*s', which this FMU cannot read; "
-                                    "allowed: file:// URIs and absolute paths",
-                     (int)(scheme > 32 ? 32 : scheme), location);
-            return NULL;
-        }
-        if (location[0] != '/') {
-            snprintf(why, why_size, "is %s; allowed: a file:// URI or an absolute path",
-                     location[0] == '\0' ? "empty" : "a relative path");
-            return NULL;
-        }
-        return copy_string(location);
-    }
-
-    out = malloc(strlen(p) + 1);
-    if (out == NULL) {
-        snprintf(why, why_size, "cannot be decoded: out of memory");
-        return NULL;
-    }
-    for (q = out; *p != '\0'; p++) {
-        int hi, lo;
-        if (p[0] == '%' && (hi = hex_value(p[1])) >= 0 && (lo = hex_value(p[2])) >= 0) {
-            if ((hi | lo) == 0) {
-                free(out);
-                snprintf(why, why_size, "holds %%00, which no path can contain");
-                return NULL;
-            }
-            *q++ = (char)(hi * 16 + lo);
-            p += 2;
-        } else {
-            *q++ = *p;
-        }
-    }
-    *q = '\0';
-    return out;
-}
-
 /* The first line of a small text file (without the line end) into `out`; 0 on success. */
 static int first_line(const char* path, char* out, size_t size)
 {
@@ -644,7 +566,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
         snprintf(why, why_size, "is NULL; allowed: the URI of this FMU's resources folder");
         return NULL;
     }
-    decoded = location_to_path(location, why, why_size);
+    decoded = rattle_location_to_path(location, why, why_size);
     if (decoded == NULL) return NULL;
     rattle_printable(shown, sizeof shown, decoded);
     real = realpath(decoded, NULL);

@@ -2127,7 +2127,7 @@ static void resolve_speed_table(const RnInstance* inst, const char* name, RnText
     RnText rel;
     rn_text_init(&rel);
     rn_path_normalise(&rel, name);
-    if (!rn_path_is_absolute(name) && inst->resources != NULL) {
+    if (!rattle_path_is_absolute(name) && inst->resources != NULL) {
         RnText joined;
         rn_text_init(&joined);
         rn_puts(&joined, inst->resources);

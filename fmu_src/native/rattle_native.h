@@ -146,8 +146,6 @@ int rn_first_line(const char* path, char* out, size_t size);
  * or NULL with the message of drive_rattle.driveline.read_bounded_file in `err`. */
 char* rn_read_bounded_file(const char* path, size_t limit, const char* parameter, size_t* n,
                            RnText* err);
-/* "/" or "\\" between two path parts, and whether a path is absolute. */
-int rn_path_is_absolute(const char* path);
 /* str(Path(text)): redundant separators and "." parts dropped (pathlib's normalisation). */
 void rn_path_normalise(RnText* out, const char* text);
 
