@@ -36,7 +36,7 @@ from pathlib import Path
 from xml.etree import ElementTree
 from xml.etree.ElementTree import Element, SubElement
 
-from drive_rattle import driveline, geometry, hertz, lubrication, mesh, parameters, roots, stepper
+from drive_rattle import driveline, geometry, hertz, lubrication, mesh, roots, stepper
 from drive_rattle.interface import MODELS
 from drive_rattle.kernel_layout import c_name
 from drive_rattle_fmi import slave as slave_module
@@ -82,7 +82,6 @@ MESH_STATE = ("wheel.tau_mesh", "pinion.tau_mesh", "mesh.W_peak", "mesh.delta_pe
 
 #: Constants of the Python modules the C code reads: (C name, value).
 CONSTANTS = (
-    ("RN_DEG", parameters.DEG),
     ("RN_MAX_PAIR_SLOTS", geometry.MAX_PAIR_SLOTS),
     ("RN_BREAKPOINT_TOLERANCE", geometry.BREAKPOINT_TOLERANCE),
     ("RN_MAX_CHEBYSHEV_TERMS", hertz.MAX_CHEBYSHEV_TERMS),

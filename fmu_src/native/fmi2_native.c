@@ -779,36 +779,13 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 {
     char name[256];
     char why[1536];
-    size_t bad;
     Inst* inst;
     char* resources;
     (void)visible;
     if (functions == NULL) return NULL; /* nobody to tell */
-    if (instanceName == NULL || instanceName[strspn(instanceName, " \t\r\n")] == '\0') {
-        instantiate_log(functions, "", fmi2Error, "instanceName is %s; allowed: a non-empty "
-                        "string (FMI 2.0, 2.1.5)", instanceName == NULL ? "NULL" : "blank");
-        return NULL;
-    }
-    rattle_printable(name, sizeof name, instanceName);
-    bad = rattle_utf8_error_at(instanceName);
-    if (bad != (size_t)-1) {
-        instantiate_log(functions, name, fmi2Error, "instanceName '%s' is not valid UTF-8 "
-                        "(byte 0x%02X at offset %zu); allowed: UTF-8 text", name,
-                        (unsigned)(unsigned char)instanceName[bad], bad);
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        instantiate_log(functions, name, fmi2Error, "fmuType = %d (%s) is not supported: this "
-                        "FMU is for co-simulation only; allowed: fmi2CoSimulation (1)",
-                        (int)fmuType, fmuType == fmi2ModelExchange ? "fmi2ModelExchange"
-                                                                   : "not an fmi2Type");
-        return NULL;
-    }
-    if (fmuGUID == NULL || strcmp(fmuGUID, RN_GUID) != 0) {
-        char guid[128];
-        rattle_printable(guid, sizeof guid, fmuGUID != NULL ? fmuGUID : "(null)");
-        instantiate_log(functions, name, fmi2Error, "GUID %s does not match this FMU's %s", guid,
-                        RN_GUID);
+    if (!rattle_check_instantiate(instanceName, (int)fmuType, fmuGUID, RN_GUID, name,
+                                  sizeof name, why, sizeof why)) {
+        instantiate_log(functions, name, fmi2Error, "%s", why);
         return NULL;
     }
     resources = resolve_resources(fmuResourceLocation, why, sizeof why);

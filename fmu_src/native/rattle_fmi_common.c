@@ -1,6 +1,8 @@
 /* rattle_fmi_common.c - see rattle_fmi_common.h. */
 #include "rattle_fmi_common.h"
 
+#include "fmi2Functions.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -272,4 +274,41 @@ char* rattle_location_to_path(const char* location, char* why, size_t why_size)
     }
     *q = '\0';
     return out;
+}
+
+/* ------------------------------------------------------------------ fmi2Instantiate */
+int rattle_check_instantiate(const char* instanceName, int fmuType, const char* fmuGUID,
+                             const char* guid, char* name, size_t name_size, char* why,
+                             size_t why_size)
+{
+    size_t bad;
+    name[0] = '\0';
+    if (instanceName == NULL || instanceName[strspn(instanceName, " \t\r\n")] == '\0') {
+        snprintf(why, why_size, "instanceName is %s; allowed: a non-empty string (FMI 2.0, "
+                 "2.1.5)", instanceName == NULL ? "NULL" : "blank");
+        return 0;
+    }
+    rattle_printable(name, name_size, instanceName);
+    bad = rattle_utf8_error_at(instanceName);
+    if (bad != (size_t)-1) {
+        snprintf(why, why_size, "instanceName '%s' is not valid UTF-8 (byte 0x%02X at offset "
+                 "%zu); allowed: UTF-8 text", name, (unsigned)(unsigned char)instanceName[bad],
+                 bad);
+        return 0;
+    }
+    if (fmuType != fmi2CoSimulation) {
+        snprintf(why, why_size, "fmuType = %d (%s) is not supported: this FMU is for "
+                 "co-simulation only; allowed: fmi2CoSimulation (1)", fmuType,
+                 fmuType == fmi2ModelExchange ? "fmi2ModelExchange" : "not an fmi2Type");
+        return 0;
+    }
+    /* FMI 2.0 2.1.5: the FMU checks that the master's modelDescription is the one it was
+     * built with (pythonfmu does not). */
+    if (guid[0] != '\0' && (fmuGUID == NULL || strcmp(fmuGUID, guid) != 0)) {
+        char shown[128];
+        rattle_printable(shown, sizeof shown, fmuGUID != NULL ? fmuGUID : "(null)");
+        snprintf(why, why_size, "GUID %s does not match this FMU's %s", shown, guid);
+        return 0;
+    }
+    return 1;
 }

@@ -35,6 +35,13 @@ RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
 RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
                                               size_t why_size);
 
+/* fmi2Instantiate's argument checks that both FMI layers make: instanceName (non-blank,
+ * UTF-8), fmuType (co-simulation only) and fmuGUID (equal to `guid`, unless that is "").  1,
+ * or 0 with the refusal in why; `name` gets a printable copy of instanceName either way. */
+RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
+                                             const char* fmuGUID, const char* guid, char* name,
+                                             size_t name_size, char* why, size_t why_size);
+
 #endif
 
 #define RATTLE_STATE_SERIAL_MAGIC "RTLSTSER"
@@ -74,5 +81,12 @@ RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
  * as it is. */
 RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
                                               size_t why_size);
+
+/* fmi2Instantiate's argument checks that both FMI layers make: instanceName (non-blank,
+ * UTF-8), fmuType (co-simulation only) and fmuGUID (equal to `guid`, unless that is "").  1,
+ * or 0 with the refusal in why; `name` gets a printable copy of instanceName either way. */
+RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
+                                             const char* fmuGUID, const char* guid, char* name,
+                                             size_t name_size, char* why, size_t why_size);
 
 #endif

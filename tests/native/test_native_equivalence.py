@@ -21,7 +21,7 @@ import types
 import zipfile
 
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from drive_rattle import MeshModel, MeshParameters, WheelStepper
@@ -89,6 +89,11 @@ GEOMETRY = {
 
 @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
 @given(st.fixed_dictionaries({}, optional=GEOMETRY))
+# found by hypothesis: the compiler folded pow(x, 2.0) into x * x, which glibc's pow (Python's
+# x ** 2) rounds differently here (s_start, then the whole contact-law fit)
+@example(changes={"z_pinion": 12, "z_wheel": 84, "alpha_n": 0.5, "beta": 0.0, "b": 0.0625,
+                  "addendum": 1.341866295794147, "m_n": 0.007151094753194949,
+                  "crowning": 0.001, "backlash": 0.0})
 def test_model_array_bit_for_bit(mesh_library, changes):
     """Geometry, contact law (exact elliptical Hertz fit or equivalent sphere), Hunt-Crossley
     factor, arms and constants: the C array equals kernel_layout.pack_model's, bit for bit;
