@@ -54,18 +54,6 @@ int rk_mesh_torques(const double* model, double flank, double phi_p, double w_p,
 /* ------------------------------------------------------------------ Python semantics */
 static double py_max(double a, double b) { return b > a ? b : a; } /* max(a, b) */
 
-/* x ** y as CPython computes it: libm's pow.  Called through a volatile pointer so that the
- * compiler cannot fold a constant exponent (pow(x, 2.0) into x * x, which rounds differently
- * from glibc's pow in rare cases: found by tests/native's hypothesis test of the model array). */
-static double py_pow(double x, double y)
-{
-    double (*volatile libm_pow)(double, double) = pow;
-    return libm_pow(x, y);
-}
-
-/* math.degrees(x): x * (180 / pi), as CPython computes it */
-static double py_degrees(double x) { return x * (180.0 / PI); }
-
 static void put_tuple(RnText* t, const double* v, int n)
 {
     rn_puts(t, "(");
@@ -358,6 +346,7 @@ static int first_step_differs(const Boundary* b, int settle, const double* value
 }
 
 #if defined(RN_UNIT_MESH)
+
 /* ================================================================== GearMeshRattle */
 static const unsigned MOTION_VRS[3] = {RN_VR_PINION_PHI, RN_VR_PINION_W, RN_VR_PINION_A};
 static const unsigned START_VRS[3] = {RN_VR_PINION_PHI, RN_VR_PINION_W, RN_VR_WHEEL_TAU_LOAD};
@@ -370,6 +359,18 @@ int rn_unit_is_motion_input(unsigned vr)
 
 /* ------------------------------------------------------------------ Python semantics */
 static double py_min(double a, double b) { return b < a ? b : a; } /* min(a, b) */
+
+/* x ** y as CPython computes it: libm's pow.  Called through a volatile pointer so that the
+ * compiler cannot fold a constant exponent (pow(x, 2.0) into x * x, which rounds differently
+ * from glibc's pow in rare cases: found by tests/native's hypothesis test of the model array). */
+static double py_pow(double x, double y)
+{
+    double (*volatile libm_pow)(double, double) = pow;
+    return libm_pow(x, y);
+}
+
+/* math.degrees(x): x * (180 / pi), as CPython computes it */
+static double py_degrees(double x) { return x * (180.0 / PI); }
 
 /* a % b of floats (CPython's float_rem) */
 static double py_mod(double v, double w)
