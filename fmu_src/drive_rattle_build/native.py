@@ -431,8 +431,8 @@ def build_native(out_dir: Path = DIST / NATIVE_SUBDIR, use_fmutool: bool = True,
             check_interface(fmu)
             validate(fmu, use_fmutool)
             fmus.append(fmu)
-    except RuntimeError as err:
-        if isinstance(err, BuildError):
-            raise
+    except BuildError:
+        raise
+    except RuntimeError as err:  # a compiler's or a check's failure, with its reason
         raise BuildError(str(err)) from None
     return fmus
