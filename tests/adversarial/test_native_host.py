@@ -1,6 +1,7 @@
-"""A native host: native_host.c, compiled here with gcc, loads the built GearMeshRattle with
-dlopen as system-simulation tools do, runs the paper scenario for 0.1 s with kinematic inputs
-and must match the fmpy run of the same inputs bit for bit (docs/native_host.md)."""
+"""A native host: tests/native/fmu_host.c, compiled here with gcc, loads the built pythonfmu
+GearMeshRattle (libpython preloaded, FMU_HOST_ALLOW_PYTHON set) with dlopen as
+system-simulation tools do, runs the paper scenario for 0.1 s with kinematic inputs and must
+match the fmpy run of the same inputs bit for bit (docs/native_host.md)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
 from drive_rattle_cosim.system import communication_points
 
-HOST_SOURCE = Path(__file__).with_name("native_host.c")
+HOST_SOURCE = Path(__file__).resolve().parents[1] / "native" / "fmu_host.c"
 STOP, STEP = 0.1, 1e-4
 INPUTS = ("pinion.phi", "pinion.w", "pinion.a", "wheel.tau_load")
 OUTPUTS = {  # recorded output -> FMI type
@@ -78,7 +79,7 @@ def write_inputs(path: Path, rows) -> None:
 
 
 def run_fmpy(fmu: Path, rows) -> list[list]:
-    """The same call sequence as native_host.c, through fmpy in this process."""
+    """The same call sequence as fmu_host.c, through fmpy in this process."""
     unit = Unit(fmu, "fmpy_reference")
     try:
         s = unit.slave
@@ -127,7 +128,7 @@ def bits(table) -> list[list[str]]:
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory) -> Path:
-    exe = tmp_path_factory.mktemp("native_host") / "native_host"
+    exe = tmp_path_factory.mktemp("fmu_host") / "fmu_host"
     cc = subprocess.run([shutil.which("gcc"), *GCC_FLAGS, "-I", str(fmi2_headers()), "-o",
                          str(exe), str(HOST_SOURCE), "-ldl"],
                         capture_output=True, text=True, timeout=120)
@@ -139,7 +140,7 @@ def host(tmp_path_factory) -> Path:
 def native_env() -> dict:
     # What a system-simulation tool's process has: no PYTHONPATH/PYTHONHOME, nothing inherited.
     return {"PATH": f"{BINDIR}:/usr/bin:/bin", "LD_PRELOAD": str(libpython()),
-            "LANG": "C.UTF-8"}
+            "LANG": "C.UTF-8", "FMU_HOST_ALLOW_PYTHON": "1"}
 
 
 @pytest.fixture(scope="module")
@@ -259,9 +260,9 @@ def test_native_host_never_fails_silently(case, reasons, host, native_env, fmus,
     ]
     run = subprocess.run(command, env=env, capture_output=True, text=True, timeout=300)
     assert run.returncode == 1, (run.returncode, run.stderr[-3000:])
-    assert "native_host: fmi2Instantiate returned NULL" in run.stderr
+    assert "fmu_host: fmi2Instantiate returned NULL" in run.stderr
     # What the host's logger printed ("[Fatal] <category>: <message>", messages may span lines)
-    logged = run.stderr.split("native_host: fmi2Instantiate returned NULL")[0]
+    logged = run.stderr.split("fmu_host: fmi2Instantiate returned NULL")[0]
     logged = logged[logged.index("[Fatal]"):]
     for reason in reasons:
         assert reason in logged, (reason, run.stderr[-3000:])
