@@ -26,22 +26,6 @@
 #define RATTLE_INTERNAL __attribute__((visibility("hidden")))
 #else
 #define RATTLE_INTERNAL
-/* An absolute path: "/..." (on Windows also "C:\\...", "C:/...", "\\\\server\\..."). */
-RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
-/* The local path a resource location names (malloc'ed), or NULL with the reason in why:
- * "file:///p", "file://localhost/p", "file:/p" with every %XX decoded (%00 refused; a
- * malformed escape stays literal; '?' and '#' belong to the path), or an absolute path taken
- * as it is. */
-RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
-                                              size_t why_size);
-
-/* fmi2Instantiate's argument checks that both FMI layers make: instanceName (non-blank,
- * UTF-8), fmuType (co-simulation only) and fmuGUID (equal to `guid`, unless that is "").  1,
- * or 0 with the refusal in why; `name` gets a printable copy of instanceName either way. */
-RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
-                                             const char* fmuGUID, const char* guid, char* name,
-                                             size_t name_size, char* why, size_t why_size);
-
 #endif
 
 #define RATTLE_STATE_SERIAL_MAGIC "RTLSTSER"
@@ -61,10 +45,9 @@ RATTLE_INTERNAL int rattle_state_open(const unsigned char* in, size_t size, cons
                                      uint64_t* n, char* why, size_t why_size);
 
 /* UTF-8 as Python's decoder accepts it (RFC 3629: no overlong forms, no surrogates, at most
- * U+10FFFF). */
-/* Decodes one code point at s (n bytes available); returns its length, 0 if not UTF-8.
- * `surrogates` accepts the 3-byte forms of U+D800..U+DFFF (WTF-8, used internally for the
- * lone surrogates json.loads can produce). */
+ * U+10FFFF).  rattle_utf8_decode decodes one code point at s (n bytes available) and returns
+ * its length, 0 if not UTF-8; `surrogates` accepts the 3-byte forms of U+D800..U+DFFF (WTF-8,
+ * used internally for the lone surrogates json.loads can produce). */
 RATTLE_INTERNAL size_t rattle_utf8_decode(const unsigned char* s, size_t n, unsigned* cp,
                                           int surrogates);
 /* Offset of the first byte that is not valid UTF-8, or (size_t)-1 if all are. */

@@ -502,7 +502,8 @@ static Shim* usable(fmi2Component c, const char* function)
     if (s == NULL) return NULL;
     if (s->inner_dead) {
         shim_log(s, fmi2Fatal,
-                 "%s refused: this instance returned fmi2Fatal before and cannot be used", function);
+                 "%s refused: this instance returned fmi2Fatal before and cannot be used",
+                 function);
         return NULL;
     }
     return s;

@@ -1432,7 +1432,8 @@ int rn_unit_step(RnInstance* inst, double t, double h, RnError* err)
             m->last[R_PINION_W] = saved_pinion[1];
         }
         double advised = RN_DEFAULT_STEP_SIZE;
-        if (err->type == NULL && h > advised && strstr(rn_text_str(&err->text), "h_comm_max") == NULL) {
+        if (err->type == NULL && h > advised
+            && strstr(rn_text_str(&err->text), "h_comm_max") == NULL) {
             RnText* txt = &err->text;
             rn_puts(txt, ". The communication step ");
             rn_put_repr(txt, h);
