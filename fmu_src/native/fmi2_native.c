@@ -49,23 +49,12 @@ const char* const RN_MODE_NAMES[4] = RN_MODE_NAME_LIST;
 typedef RnInstance Inst;
 
 /* ------------------------------------------------------------------ logging */
-static const char* status_category(int code)
-{
-    switch (code) {
-    case fmi2OK: return "logAll";
-    case fmi2Warning: return "logStatusWarning";
-    case fmi2Discard: return "logStatusDiscard";
-    case fmi2Error: return "logStatusError";
-    default: return "logStatusFatal";
-    }
-}
-
 /* The message to the host's logger, verbatim (never as a format string). */
 static void host_message(const Inst* inst, int status, const char* message)
 {
     if (inst->host.logger != NULL)
         inst->host.logger(inst->host.componentEnvironment, inst->name, (fmi2Status)status,
-                          status_category(status), "%s", message);
+                          rattle_status_category(status), "%s", message);
 }
 
 void rn_report(Inst* inst, int status, const char* message)
@@ -751,26 +740,9 @@ const char* fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 
 const char* fmi2GetVersion(void) { return fmi2Version; }
 
-static void instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
-                            fmi2Status status, const char* fmt, ...)
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-static void instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
-                            fmi2Status status, const char* fmt, ...)
-{
-    char text[3072];
-    int n;
-    va_list ap;
-    if (functions->logger == NULL) return;
-    n = snprintf(text, sizeof text, PREFIX "fmi2Instantiate: ");
-    va_start(ap, fmt);
-    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-    va_end(ap);
-    functions->logger(functions->componentEnvironment, name, status, status_category(status),
-                      "%s", text);
-}
+/* fmi2Instantiate's refusals go to the host's logger before any instance exists. */
+#define instantiate_log(functions, name, status, ...)                                          \
+    rattle_instantiate_log(functions, name, status, PREFIX, __VA_ARGS__)
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,

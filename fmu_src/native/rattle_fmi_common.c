@@ -3,6 +3,7 @@
 
 #include "fmi2Functions.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -311,4 +312,31 @@ int rattle_check_instantiate(const char* instanceName, int fmuType, const char* 
         return 0;
     }
     return 1;
+}
+
+/* ------------------------------------------------------------------ logging */
+const char* rattle_status_category(int status)
+{
+    switch (status) {
+    case fmi2OK: return "logAll";
+    case fmi2Warning: return "logStatusWarning";
+    case fmi2Discard: return "logStatusDiscard";
+    case fmi2Error: return "logStatusError";
+    default: return "logStatusFatal";
+    }
+}
+
+void rattle_instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
+                            fmi2Status status, const char* prefix, const char* fmt, ...)
+{
+    char text[3072];
+    int n;
+    va_list ap;
+    if (functions->logger == NULL) return;
+    n = snprintf(text, sizeof text, "%sfmi2Instantiate: ", prefix);
+    va_start(ap, fmt);
+    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
+    va_end(ap);
+    functions->logger(functions->componentEnvironment, name, status,
+                      rattle_status_category(status), "%s", text);
 }

@@ -21,6 +21,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "fmi2Functions.h"
+
 /* Internal to the FMU's binary: never exported to the host (nor interposed by a namesake). */
 #if defined(__GNUC__) && !defined(_WIN32)
 #define RATTLE_INTERNAL __attribute__((visibility("hidden")))
@@ -71,5 +73,17 @@ RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
 RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
                                              const char* fmuGUID, const char* guid, char* name,
                                              size_t name_size, char* why, size_t why_size);
+
+/* The log category of a status (the modelDescription's <LogCategories>). */
+RATTLE_INTERNAL const char* rattle_status_category(int status);
+/* A refusal of fmi2Instantiate to the host's logger, before any instance exists:
+ * "<prefix>fmi2Instantiate: <message>", passed verbatim (never as a format string). */
+RATTLE_INTERNAL void rattle_instantiate_log(const fmi2CallbackFunctions* functions,
+                                            const char* name, fmi2Status status,
+                                            const char* prefix, const char* fmt, ...)
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
 
 #endif

@@ -363,17 +363,6 @@ static void host_message(const Shim* s, fmi2Status status, const char* category,
                        message);
 }
 
-static const char* status_category(int code)
-{
-    switch (code) {
-    case fmi2OK: return "logAll";
-    case fmi2Warning: return "logStatusWarning";
-    case fmi2Discard: return "logStatusDiscard";
-    case fmi2Error: return "logStatusError";
-    default: return "logStatusFatal";
-    }
-}
-
 /* The shim's own messages (formatted here, then passed on verbatim). */
 static void shim_log(const Shim* s, fmi2Status status, const char* fmt, ...)
 {
@@ -382,7 +371,7 @@ static void shim_log(const Shim* s, fmi2Status status, const char* fmt, ...)
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    host_message(s, status, status_category(status), text);
+    host_message(s, status, rattle_status_category(status), text);
 }
 
 /* A refused call: the reason to the host's logger, fmi2Error back. */
@@ -490,7 +479,7 @@ static fmi2Status after_call(Shim* s, fmi2Status st)
                  "(the slave reported this status, but reading its message failed)");
         return fmi2Fatal;
     }
-    host_message(s, (fmi2Status)code, status_category(code),
+    host_message(s, (fmi2Status)code, rattle_status_category(code),
                  (message != NULL && message[0] != '\0') ? message : "(no message)");
     return st > (fmi2Status)code ? st : (fmi2Status)code;
 }
@@ -789,20 +778,8 @@ static int fetch_status_address(Shim* s)
 }
 
 /* fmi2Instantiate's refusals go to the host's logger before any instance exists. */
-static void instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
-                            fmi2Status status, const char* fmt, ...)
-{
-    char text[3072];
-    int n;
-    va_list ap;
-    if (functions->logger == NULL) return;
-    n = snprintf(text, sizeof text, "rattle FMI shim: fmi2Instantiate: ");
-    va_start(ap, fmt);
-    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-    va_end(ap);
-    functions->logger(functions->componentEnvironment, name, status, status_category(status),
-                      "%s", text);
-}
+#define instantiate_log(functions, name, status, ...)                                          \
+    rattle_instantiate_log(functions, name, status, "rattle FMI shim: ", __VA_ARGS__)
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
@@ -900,7 +877,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     if (s->host_logging && s->collected[0] != '\0')
-        host_message(s, s->collected_status, status_category(s->collected_status),
+        host_message(s, s->collected_status, rattle_status_category(s->collected_status),
                      s->collected);
     if (!s->host_logging) inner_api.fmi2SetDebugLogging(s->inner, fmi2False, 0, NULL);
     if (!fetch_status_address(s)) {
