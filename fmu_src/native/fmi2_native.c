@@ -1384,8 +1384,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown;
     (void)dvUnknown;
     if (inst == NULL) return fmi2Error;
-    return refuse(inst, "fmi2GetDirectionalDerivative", "not provided by this FMU "
-                  "(providesDirectionalDerivative = false)");
+    return refuse(inst, "fmi2GetDirectionalDerivative", "%s",
+                  RATTLE_NO_DIRECTIONAL_DERIVATIVES);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -1394,9 +1394,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     Inst* inst = c;
     (void)vr, (void)nvr, (void)order, (void)value;
     if (inst == NULL) return fmi2Error;
-    return refuse(inst, "fmi2SetRealInputDerivatives", "not provided by this FMU "
-                  "(canInterpolateInputs = false): set pinion.a as an input instead; nothing "
-                  "stored");
+    return refuse(inst, "fmi2SetRealInputDerivatives", "%s",
+                  RATTLE_NO_INPUT_DERIVATIVES);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
@@ -1405,34 +1404,23 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     Inst* inst = c;
     (void)vr, (void)nvr, (void)order, (void)value;
     if (inst == NULL) return fmi2Error;
-    return refuse(inst, "fmi2GetRealOutputDerivatives", "not provided by this FMU "
-                  "(maxOutputDerivativeOrder = 0)");
+    return refuse(inst, "fmi2GetRealOutputDerivatives", "%s",
+                  RATTLE_NO_OUTPUT_DERIVATIVES);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
     Inst* inst = c;
     if (inst == NULL) return fmi2Error;
-    return refuse(inst, "fmi2CancelStep", "no asynchronous step to cancel: every fmi2DoStep of "
-                  "this FMU completes within the call (canRunAsynchronuously = false)");
-}
-
-static const char* status_kind_name(int kind)
-{
-    switch (kind) {
-    case fmi2DoStepStatus: return "fmi2DoStepStatus";
-    case fmi2PendingStatus: return "fmi2PendingStatus";
-    case fmi2LastSuccessfulTime: return "fmi2LastSuccessfulTime";
-    case fmi2Terminated: return "fmi2Terminated";
-    default: return "not an fmi2StatusKind";
-    }
+    return refuse(inst, "fmi2CancelStep", "%s",
+                  RATTLE_NO_ASYNCHRONOUS_STEP);
 }
 
 static fmi2Status status_refused(Inst* inst, const char* function, int kind, const char* allowed)
 {
-    return refuse(inst, function, "status kind %d (%s) is not answered here: this FMU completes "
-                  "every step within fmi2DoStep (never fmi2Pending); allowed: %s", kind,
-                  status_kind_name(kind), allowed);
+    char why[400];
+    rattle_status_refusal(why, sizeof why, kind, allowed);
+    return refuse(inst, function, "%s", why);
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)

@@ -340,3 +340,22 @@ void rattle_instantiate_log(const fmi2CallbackFunctions* functions, const char* 
     functions->logger(functions->componentEnvironment, name, status,
                       rattle_status_category(status), "%s", text);
 }
+
+/* ------------------------------------------------------------------ status inquiries */
+static const char* status_kind_name(int kind)
+{
+    switch (kind) {
+    case fmi2DoStepStatus: return "fmi2DoStepStatus";
+    case fmi2PendingStatus: return "fmi2PendingStatus";
+    case fmi2LastSuccessfulTime: return "fmi2LastSuccessfulTime";
+    case fmi2Terminated: return "fmi2Terminated";
+    default: return "not an fmi2StatusKind";
+    }
+}
+
+void rattle_status_refusal(char* why, size_t why_size, int kind, const char* allowed)
+{
+    snprintf(why, why_size, "status kind %d (%s) is not answered here: this FMU completes every "
+             "step within fmi2DoStep (never fmi2Pending); allowed: %s", kind,
+             status_kind_name(kind), allowed);
+}

@@ -86,4 +86,19 @@ RATTLE_INTERNAL void rattle_instantiate_log(const fmi2CallbackFunctions* functio
 #endif
     ;
 
+/* The refusals of what these FMUs do not provide (the modelDescription says so). */
+#define RATTLE_NO_DIRECTIONAL_DERIVATIVES                                                      \
+    "not provided by this FMU (providesDirectionalDerivative = false)"
+#define RATTLE_NO_INPUT_DERIVATIVES                                                            \
+    "not provided by this FMU (canInterpolateInputs = false): set pinion.a as an input "      \
+    "instead; nothing stored"
+#define RATTLE_NO_OUTPUT_DERIVATIVES "not provided by this FMU (maxOutputDerivativeOrder = 0)"
+#define RATTLE_NO_ASYNCHRONOUS_STEP                                                            \
+    "no asynchronous step to cancel: every fmi2DoStep of this FMU completes within the call "  \
+    "(canRunAsynchronuously = false)"
+/* The refusal of a status inquiry that FMI 2.0 does not define for the function called, or
+ * that only means something after fmi2Pending (never returned): `allowed` names what is. */
+RATTLE_INTERNAL void rattle_status_refusal(char* why, size_t why_size, int kind,
+                                           const char* allowed);
+
 #endif

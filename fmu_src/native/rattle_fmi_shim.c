@@ -1156,8 +1156,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     (void)vUnknown_ref, (void)nUnknown, (void)vKnown_ref, (void)nKnown, (void)dvKnown;
     (void)dvUnknown;
     if (s == NULL) return REFUSED(c);
-    return refuse(s, "fmi2GetDirectionalDerivative", "not provided by this FMU "
-                  "(providesDirectionalDerivative = false)");
+    return refuse(s, "fmi2GetDirectionalDerivative", "%s",
+                  RATTLE_NO_DIRECTIONAL_DERIVATIVES);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -1166,9 +1166,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     Shim* s = usable(c, "fmi2SetRealInputDerivatives");
     (void)vr, (void)nvr, (void)order, (void)value;
     if (s == NULL) return REFUSED(c);
-    return refuse(s, "fmi2SetRealInputDerivatives", "not provided by this FMU "
-                  "(canInterpolateInputs = false): set pinion.a as an input instead; nothing "
-                  "stored");
+    return refuse(s, "fmi2SetRealInputDerivatives", "%s",
+                  RATTLE_NO_INPUT_DERIVATIVES);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[],
@@ -1177,8 +1176,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     Shim* s = usable(c, "fmi2GetRealOutputDerivatives");
     (void)vr, (void)nvr, (void)order, (void)value;
     if (s == NULL) return REFUSED(c);
-    return refuse(s, "fmi2GetRealOutputDerivatives", "not provided by this FMU "
-                  "(maxOutputDerivativeOrder = 0)");
+    return refuse(s, "fmi2GetRealOutputDerivatives", "%s",
+                  RATTLE_NO_OUTPUT_DERIVATIVES);
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
@@ -1198,19 +1197,8 @@ fmi2Status fmi2CancelStep(fmi2Component c)
 {
     Shim* s = usable(c, "fmi2CancelStep");
     if (s == NULL) return REFUSED(c);
-    return refuse(s, "fmi2CancelStep", "no asynchronous step to cancel: every fmi2DoStep of "
-                  "this FMU completes within the call (canRunAsynchronuously = false)");
-}
-
-static const char* status_kind_name(int kind)
-{
-    switch (kind) {
-    case fmi2DoStepStatus: return "fmi2DoStepStatus";
-    case fmi2PendingStatus: return "fmi2PendingStatus";
-    case fmi2LastSuccessfulTime: return "fmi2LastSuccessfulTime";
-    case fmi2Terminated: return "fmi2Terminated";
-    default: return "not an fmi2StatusKind";
-    }
+    return refuse(s, "fmi2CancelStep", "%s",
+                  RATTLE_NO_ASYNCHRONOUS_STEP);
 }
 
 /* The refusal of a status inquiry FMI 2.0 does not define for this function, or that only
@@ -1218,9 +1206,9 @@ static const char* status_kind_name(int kind)
 static fmi2Status status_refused(const Shim* s, const char* function, int kind,
                                  const char* allowed)
 {
-    return refuse(s, function, "status kind %d (%s) is not answered here: this FMU completes "
-                  "every step within fmi2DoStep (never fmi2Pending); allowed: %s", kind,
-                  status_kind_name(kind), allowed);
+    char why[400];
+    rattle_status_refusal(why, sizeof why, kind, allowed);
+    return refuse(s, function, "%s", why);
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Status* value)
