@@ -311,15 +311,11 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
 }
 
 /* ------------------------------------------------------------------ FMU states */
-/* An FMU state: the slave's state as the JSON of the pythonfmu FMUs (payload), with the FMU's
- * GUID, on the list of the instance that made it.  The first 72 bytes are laid out as the
- * pythonfmu FMUs' shim lays out its states (magic, GUID), so states of either flavour are
- * told apart by their GUID. */
-#define STATE_MAGIC "RTLSTATE"
-
+/* An FMU state: the slave's state as the JSON of the pythonfmu FMUs (payload), tagged with the
+ * FMU's GUID as the shim tags its states (rattle_fmi_common.h), on the list of the instance
+ * that made it. */
 struct RnState {
-    char magic[8];
-    char guid[64];
+    RattleStateTag tag; /* first: the host's pointer is checked through it */
     char* payload;
     size_t n;
     Inst* owner;
@@ -327,37 +323,21 @@ struct RnState {
     RnState* prev;
 };
 
-
 static RnState* own_state(Inst* inst, fmi2FMUstate state, const char* function)
 {
-    RnState* st = state;
-    if (st == NULL) {
-        refuse(inst, function, "the FMU state is NULL");
+    char why[300];
+    if (!rattle_state_is_ours(state, RN_GUID, why, sizeof why)) {
+        refuse(inst, function, "%s", why);
         return NULL;
     }
-    if (memcmp(st->magic, STATE_MAGIC, 8) != 0) {
-        refuse(inst, function, "not an FMU state of this FMU (made by fmi2GetFMUstate or "
-                               "fmi2DeSerializeFMUstate of %s); nothing changed", RN_GUID);
-        return NULL;
-    }
-    if (strncmp(st->guid, RN_GUID, sizeof st->guid) != 0) {
-        char other[65], shown[80];
-        memcpy(other, st->guid, 64);
-        other[64] = '\0';
-        rattle_printable(shown, sizeof shown, other);
-        refuse(inst, function, "the FMU state belongs to the FMU with GUID %s, not to this one "
-                               "(%s); nothing changed", shown, RN_GUID);
-        return NULL;
-    }
-    return st;
+    return state;
 }
 
 static RnState* new_state(Inst* inst, char* payload, size_t n)
 {
     RnState* st = calloc(1, sizeof *st);
     if (st == NULL) return NULL;
-    memcpy(st->magic, STATE_MAGIC, 8);
-    snprintf(st->guid, sizeof st->guid, "%s", RN_GUID);
+    rattle_state_tag(&st->tag, RN_GUID);
     st->payload = payload;
     st->n = n;
     st->owner = inst;
@@ -375,7 +355,7 @@ static void delete_state(RnState* st)
     else if (owner != NULL)
         owner->states = st->next;
     if (st->next != NULL) st->next->prev = st->prev;
-    memset(st->magic, 0, sizeof st->magic);
+    rattle_state_untag(&st->tag);
     free(st->payload);
     free(st);
 }

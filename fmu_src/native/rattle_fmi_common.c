@@ -31,6 +31,40 @@ static uint64_t get_le(const unsigned char* p, int bytes)
     return v;
 }
 
+#define STATE_MAGIC "RTLSTATE"
+
+void rattle_state_tag(RattleStateTag* tag, const char* guid)
+{
+    memcpy(tag->magic, STATE_MAGIC, 8);
+    snprintf(tag->guid, sizeof tag->guid, "%s", guid);
+}
+
+void rattle_state_untag(RattleStateTag* tag) { memset(tag->magic, 0, sizeof tag->magic); }
+
+int rattle_state_is_ours(const void* state, const char* guid, char* why, size_t why_size)
+{
+    const RattleStateTag* tag = state;
+    if (tag == NULL) {
+        snprintf(why, why_size, "the FMU state is NULL");
+        return 0;
+    }
+    if (memcmp(tag->magic, STATE_MAGIC, 8) != 0) {
+        snprintf(why, why_size, "not an FMU state of this FMU (made by fmi2GetFMUstate or "
+                 "fmi2DeSerializeFMUstate of %s); nothing changed", guid[0] ? guid : "this FMU");
+        return 0;
+    }
+    if (strncmp(tag->guid, guid, sizeof tag->guid) != 0) {
+        char other[sizeof tag->guid + 1], shown[80];
+        memcpy(other, tag->guid, sizeof tag->guid);
+        other[sizeof tag->guid] = '\0';
+        rattle_printable(shown, sizeof shown, other);
+        snprintf(why, why_size, "the FMU state belongs to the FMU with GUID %s, not to this one "
+                 "(%s); nothing changed", shown, guid);
+        return 0;
+    }
+    return 1;
+}
+
 int rattle_state_fits(size_t size, size_t n, char* why, size_t why_size)
 {
     if (size >= RATTLE_STATE_HEADER && size - RATTLE_STATE_HEADER >= n) return 1;

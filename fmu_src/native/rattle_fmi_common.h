@@ -34,6 +34,20 @@
 #define RATTLE_STATE_ENVELOPE_VERSION 1u
 #define RATTLE_STATE_HEADER 96u
 
+/* The identity at the start of every FMU state these FMUs hand out, laid out alike in both
+ * flavours, so that states of either are told apart by their GUID. */
+typedef struct {
+    char magic[8];
+    char guid[64];
+} RattleStateTag;
+RATTLE_INTERNAL void rattle_state_tag(RattleStateTag* tag, const char* guid);
+/* Clears the tag of a state about to be freed (a dangling pointer then fails the check). */
+RATTLE_INTERNAL void rattle_state_untag(RattleStateTag* tag);
+/* 1 when `state` (an fmi2FMUstate from the host) carries the tag of the FMU `guid` ("" when
+ * the FMU has none); else 0 with the refusal in why. */
+RATTLE_INTERNAL int rattle_state_is_ours(const void* state, const char* guid, char* why,
+                                         size_t why_size);
+
 /* 1 when a state of n payload bytes fits a buffer of `size` bytes; else 0 with the refusal's
  * text in why. */
 RATTLE_INTERNAL int rattle_state_fits(size_t size, size_t n, char* why, size_t why_size);

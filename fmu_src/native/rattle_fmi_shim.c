@@ -632,11 +632,8 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
  * the host did not).  A state of another FMU, or anything else, is refused by its magic and
  * GUID (a pointer that is not a state at all -- dangling, or NULL-like garbage -- FMI does
  * not allow). */
-#define STATE_MAGIC "RTLSTATE"
-
 struct ShimState {
-    char magic[8];
-    char guid[64];
+    RattleStateTag tag; /* first: the host's pointer is checked through it */
     fmi2FMUstate inner;
     Shim* owner;
     ShimState* next;
@@ -649,25 +646,12 @@ struct ShimState {
 /* `state` as a state of this FMU, or NULL with the refusal logged. */
 static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* function)
 {
-    ShimState* st = state;
-    if (st == NULL) {
-        refuse(s, function, "the FMU state is NULL");
+    char why[300];
+    if (!rattle_state_is_ours(state, RATTLE_GUID, why, sizeof why)) {
+        refuse(s, function, "%s", why);
         return NULL;
     }
-    if (memcmp(st->magic, STATE_MAGIC, 8) != 0) {
-        refuse(s, function, "not an FMU state of this FMU (made by fmi2GetFMUstate or "
-                            "fmi2DeSerializeFMUstate of %s); nothing changed",
-               RATTLE_GUID[0] ? RATTLE_GUID : "this FMU");
-        return NULL;
-    }
-    if (strcmp(st->guid, RATTLE_GUID) != 0) {
-        char other[64];
-        rattle_printable(other, sizeof other, st->guid);
-        refuse(s, function, "the FMU state belongs to the FMU with GUID %s, not to this one "
-                            "(%s); nothing changed", other, RATTLE_GUID);
-        return NULL;
-    }
-    return st;
+    return state;
 }
 
 static void free_inner_state(Shim* s, fmi2FMUstate* inner)
@@ -681,8 +665,7 @@ static ShimState* new_state(Shim* s, fmi2FMUstate inner)
 {
     ShimState* st = calloc(1, sizeof *st);
     if (st == NULL) return NULL;
-    memcpy(st->magic, STATE_MAGIC, 8);
-    snprintf(st->guid, sizeof st->guid, "%s", RATTLE_GUID);
+    rattle_state_tag(&st->tag, RATTLE_GUID);
     st->inner = inner;
     st->owner = s;
     st->next = s->states;
@@ -699,7 +682,7 @@ static void delete_state(Shim* s, ShimState* st)
     if (st->prev != NULL) st->prev->next = st->next;
     else if (owner != NULL) owner->states = st->next;
     if (st->next != NULL) st->next->prev = st->prev;
-    memset(st->magic, 0, sizeof st->magic);
+    rattle_state_untag(&st->tag);
     free(st);
 }
 
