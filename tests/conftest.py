@@ -8,6 +8,8 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 * ``fmi``: tests/fmi -- the slave classes instantiated directly and the native shim;
 * ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native -- the built FMUs (both
   flavours) in fmpy, the other masters and native hosts;
+* ``sanitize``: tests/sanitize -- the C built and run under AddressSanitizer and
+  UndefinedBehaviorSanitizer;
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
 
 ``slow`` (tests that take more than about 10 s) is set on the tests themselves.
@@ -23,7 +25,7 @@ from drive_rattle_build.native import build_native
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
 LAYERS = {"core": "core", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
-          "adversarial": "fmu", "native": "fmu"}
+          "adversarial": "fmu", "native": "fmu", "sanitize": "sanitize"}
 
 
 def pytest_collection_modifyitems(config, items):

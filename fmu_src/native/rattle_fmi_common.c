@@ -273,7 +273,8 @@ char* rattle_location_to_path(const char* location, char* why, size_t why_size)
         while ((location[scheme] >= 'a' && location[scheme] <= 'z')
                || (location[scheme] >= 'A' && location[scheme] <= 'Z')
                || (scheme > 0 && ((location[scheme] >= '0' && location[scheme] <= '9')
-                                  || strchr("+-.", location[scheme]) != NULL)))
+                                  || location[scheme] == '+' || location[scheme] == '-'
+                                  || location[scheme] == '.')))
             scheme++;
         if (scheme > 1 && location[scheme] == ':') {
             snprintf(why, why_size, "has the URI scheme '%.*s', which this FMU cannot read; "
