@@ -1,42 +1,31 @@
-"""Physics core of the transmission drive-rattle model (Theodossiades et al., ENOC 2008): the
-runtime that ships inside the FMUs (the whole package is copied into each; standard library
-only).
+"""The transmission drive-rattle model (Theodossiades et al., ENOC 2008) from Python: the
+parameter and interface specs (the one source of every variable's name, unit and limits) and
+the two units of the model library (``fmu_src/rattle_model``, C) through a thin ctypes binding.
 
-Pure Python on plain SI floats; knows nothing of FMI.  See docs/model.md, and
-docs/architecture.md for where it sits.
+The runtime of the pythonfmu FMUs (standard library only; the package is copied whole into
+each, with the compiled library).  See docs/model.md, and docs/architecture.md for where it
+sits.
 """
 
-# Every module is imported here, eagerly: all pythonfmu FMUs of a process share one
-# interpreter, and a host that unpacks one of our FMUs, runs it and deletes its folder (fmpy's
-# simulate_fmu does) would otherwise leave a package whose remaining submodules cannot be found
-# when the other FMU is instantiated.
-from . import (  # noqa: F401
-    driveline,
-    hertz,
-    interface,
-    kernel,
-    kernel_layout,
-    lubrication,
-    roots,
-    snapshots,
-)
-from .driveline import DrivelineModel, DrivelineParameters
-from .geometry import COAST, DRIVE, MAX_PAIR_SLOTS, HelicalPairGeometry
-from .mesh import MeshLoads, MeshModel, PairLoad
-from .parameters import MeshParameters, ParameterSpec, specs
-from .stepper import (
-    ContactEvent,
-    PinionState,
-    StepResult,
-    WheelSnapshot,
-    WheelState,
-    WheelStepper,
-    WheelStepperBase,
+from . import interface, library, parameters, units  # noqa: F401
+from .interface import MAX_PAIR_SLOTS
+from .library import DRIVELINE, MESH, LibraryError, ModelError
+from .parameters import DrivelineParameters, MeshParameters, ParameterSpec, specs
+from .units import (
+    DrivelineUnit,
+    Event,
+    MeshUnit,
+    StepReport,
+    Unit,
+    coupled_start_inputs,
+    input_starts,
 )
 
+#: The flanks: +1 drive (the pinion leads), -1 coast.
+DRIVE, COAST = 1, -1
+
 __all__ = [
-    "COAST", "DRIVE", "MAX_PAIR_SLOTS", "ContactEvent", "DrivelineModel", "DrivelineParameters",
-    "HelicalPairGeometry", "MeshLoads", "MeshModel", "MeshParameters", "PairLoad",
-    "ParameterSpec", "PinionState", "StepResult", "WheelSnapshot", "WheelState", "WheelStepper",
-    "WheelStepperBase", "specs",
+    "COAST", "DRIVE", "DRIVELINE", "MAX_PAIR_SLOTS", "MESH", "DrivelineParameters",
+    "DrivelineUnit", "Event", "LibraryError", "MeshParameters", "MeshUnit", "ModelError",
+    "ParameterSpec", "StepReport", "Unit", "coupled_start_inputs", "input_starts", "specs",
 ]

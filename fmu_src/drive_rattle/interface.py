@@ -2,53 +2,47 @@
 declaration per signal (public name, unit, description, FMI type), the units' names, the one
 list of the connections between them, and the inputs' start values.
 
-The FMU slaves register exactly these signals, the modelDescription and the documentation
-tables are generated from them, the co-simulation harness, the SSP system and the in-process
-twin couple the units by ``CONNECTIONS``, and the build makes one FMU per name of ``MODELS``.
-The names are public API: they change only on purpose.  The output values themselves are
-computed by the unit models (``WheelStepper.outputs``, ``DrivelineModel.outputs``).
+The model library's C tables, the FMU slaves' registration, the modelDescription and the
+documentation tables are generated from them; the co-simulation harness, the SSP system and the
+in-process twin couple the units by ``CONNECTIONS``, and the build makes one FMU per name of
+``MODELS``.  The names are public API: they change only on purpose.  The values are computed
+by the model library; the inputs' start values too (``units.input_starts``: what the partner
+outputs at t = 0 in the default system).
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import NamedTuple
-
-from .driveline import DrivelineModel, DrivelineParameters
-from .geometry import MAX_PAIR_SLOTS
-from .parameters import MeshParameters
-from .stepper import WheelStepper
 
 #: The units' names: the model identifiers of the FMUs (and their slave classes' names).
 MESH, DRIVELINE = "GearMeshRattle", "Driveline"
 #: Every unit of the system, in build order.
 MODELS = (MESH, DRIVELINE)
+#: The units' default experiment: the communication step every master should use (accuracy
+#: against the step: docs/tools.md), and the horizon of a run of one unit alone.
+DEFAULT_EXPERIMENT = {"startTime": 0.0, "stopTime": 2.0, "stepSize": 1e-4}
+#: Pair slots of the mesh's outputs pair[k].W: tooth pairs are numbered in mesh order and a
+#: pair's slot is its number modulo this (a geometry needing more slots is refused).
+MAX_PAIR_SLOTS = 8
 
 
 @dataclass(frozen=True)
 class SignalSpec:
-    """Declaration of one input or output."""
+    """Declaration of one input or output (an input's range is checked by the model library
+    at every step: beyond it doStep refuses)."""
 
     name: str
     unit: str  # SI unit ("1" dimensionless)
     description: str
     fmi_type: str = "Real"  # FMI type: Real or Integer
     display_unit: str | None = None
-    start: float = 0.0  # start value of inputs (see coupled_start_inputs)
-    minimum: float | None = None  # accepted range of inputs (beyond it doStep refuses)
+    minimum: float | None = None  # accepted range of inputs
     maximum: float | None = None
 
-    def check(self, value: float) -> None:
-        """Raise ValueError naming the input unless ``value`` is finite and in range."""
-        if not math.isfinite(value):
-            raise ValueError(
-                f"input '{self.name}' = {value!r} is not finite; allowed: finite numbers")
-        if (self.minimum is not None and value < self.minimum) or (
-                self.maximum is not None and value > self.maximum):
-            raise ValueError(
-                f"input '{self.name}' = {value!r} is out of range; allowed: "
-                f"[{self.minimum:g}, {self.maximum:g}] {self.unit}")
+    def allowed(self) -> str:
+        """The accepted range of an input, as the messages say it."""
+        return f"[{self.minimum:g}, {self.maximum:g}] {self.unit}"
 
 
 #: Input ranges.  Angles are bounded so that the relative approach of the flanks keeps its
@@ -172,49 +166,3 @@ def inputs_of(unit: str, outputs: dict[str, dict[str, float]]) -> dict[str, floa
     """The inputs of ``unit`` from the outputs of every unit (``{unit: {output: value}}``)
     along ``CONNECTIONS``."""
     return {c.input: outputs[c.source][c.output] for c in CONNECTIONS if c.target == unit}
-
-
-# ---------------------------------------------------------------------- input start values
-#: Rounds of the start-value exchange before it must have reached its fixed point.
-START_EXCHANGE_ROUNDS = 8
-
-
-def coupled_start_inputs(mesh_params: MeshParameters | None = None,
-                         driveline_params: DrivelineParameters | None = None,
-                         start_time: float = 0.0) -> tuple[dict[str, float], dict[str, float]]:
-    """``(mesh inputs, driveline inputs)`` at ``start_time`` [s] of the coupled system: what
-    each unit's partner outputs there once both are initialized (SI units).
-
-    The initialization the co-simulation harness performs, run to its fixed point: the
-    Driveline's input-shaft kinematics and load torque (which do not depend on the wheel
-    beyond rounding), the mesh's wheel state for them (static flank equilibrium with
-    ``init.in_contact``), the Driveline built behind that wheel, until nothing changes.  At
-    the fixed point a unit initialized with its inputs at these values outputs exactly its
-    partner's values, so masters that exchange nothing during initialization start the pair
-    consistent.  These are the inputs' start values of the FMUs for the default parameters."""
-    mp = mesh_params or MeshParameters()
-    dp = driveline_params or DrivelineParameters()
-    wheel = {"wheel.phi": 0.0, "wheel.w": 0.0}
-    for _ in range(START_EXCHANGE_ROUNDS):
-        drive = DrivelineModel(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"]).outputs()
-        mesh_inputs = inputs_of(MESH, {DRIVELINE: drive})
-        phi, w = WheelStepper(mp, mesh_inputs["pinion.phi"], mesh_inputs["pinion.w"],
-                              mesh_inputs["wheel.tau_load"]).wheel_angle_speed()
-        new_wheel = inputs_of(DRIVELINE, {MESH: {"wheel.phi": phi, "wheel.w": w}})
-        if new_wheel == wheel:
-            return mesh_inputs, wheel
-        wheel = new_wheel
-    raise ValueError(
-        f"the start values of the coupled inputs do not settle within "
-        f"{START_EXCHANGE_ROUNDS} exchanges (last wheel state {wheel}); check the parameters")
-
-
-def _with_starts(signals: tuple[SignalSpec, ...], starts: dict[str, float]):
-    return tuple(replace(s, start=starts[s.name]) for s in signals)
-
-
-# Every input starts at what its partner outputs at t = 0 in the default scenario (computed
-# from the core's defaults, never copied: they follow any change of the physics defaults).
-_MESH_STARTS, _DRIVELINE_STARTS = coupled_start_inputs()
-MESH_INPUTS = _with_starts(MESH_INPUTS, _MESH_STARTS)
-DRIVELINE_INPUTS = _with_starts(DRIVELINE_INPUTS, _DRIVELINE_STARTS)

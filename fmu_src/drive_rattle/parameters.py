@@ -1,9 +1,12 @@
-"""Parameter declarations: the single source of truth for every model parameter.
+"""Parameter declarations: the single source of truth for every parameter of the two units.
 
 Each parameter is declared once, as a field of a frozen dataclass whose metadata holds a
-:class:`ParameterSpec` (public name, unit, description, default, limits).  The FMU
-registration, the modelDescription, the documentation tables and the validation below are
-all generated from these declarations, so they cannot drift apart.
+:class:`ParameterSpec` (public name, unit, description, default, limits).  The C tables of the
+model library (``fmu_src/rattle_model/rm_tables.c``), the FMUs' registration and
+modelDescription, and the documentation tables are all generated from these declarations, so
+they cannot drift apart.  The checks themselves (ranges, choices, the geometry's combination
+checks) are the model library's: a parameter set is validated by the library when it is
+constructed, with the library's message.
 
 Values are plain SI floats (angles in rad, lengths in m).  Display units (deg, mm, um, rpm)
 are metadata for the FMI layer only.
@@ -16,7 +19,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from .geometry import HelicalPairGeometry
+from . import library, units
 
 
 @dataclass(frozen=True)
@@ -64,8 +67,9 @@ class ParameterSpec:
         unit = "" if self.unit in ("", "1") else f" {self.unit}"
         return f"{left}{lo}, {hi}{right}{unit}"
 
-    def check(self, value: Any) -> Any:
-        """Return ``value`` converted to the parameter's type, or raise ValueError naming it."""
+    def convert(self, value: Any) -> Any:
+        """``value`` converted to the parameter's type, or ValueError naming it; the range is
+        the model library's to check (:meth:`ParameterSet.__post_init__`)."""
         fmi_type = self.fmi_type
         if fmi_type == "String":
             if not isinstance(value, str):
@@ -74,31 +78,20 @@ class ParameterSpec:
         if fmi_type == "Boolean":
             if isinstance(value, bool) or value in (0, 1):
                 return bool(value)
-            raise self._error(value)
+            raise self._error(value, "must be true or false")
         if fmi_type == "Integer":
             if isinstance(value, bool) or not _is_integral(value):
                 raise self._error(value, "must be an integer")
             value = int(value)
-            if self.choices is not None and value not in self.choices:
-                raise self._error(value)
-        else:
-            if isinstance(value, bool):
-                raise self._error(value, "must be a real number")
-            try:
-                value = float(value)
-            except (TypeError, ValueError):
-                raise self._error(value, "must be a real number") from None
-            if not math.isfinite(value):
-                raise self._error(value, "must be finite")
-        if self.minimum is not None and (
-            value < self.minimum or (self.min_exclusive and value == self.minimum)
-        ):
-            raise self._error(value)
-        if self.maximum is not None and (
-            value > self.maximum or (self.max_exclusive and value == self.maximum)
-        ):
-            raise self._error(value)
-        return value
+            if not -(2**31) <= value < 2**31:
+                raise self._error(value, "must be a 32-bit integer")
+            return value
+        if isinstance(value, bool):
+            raise self._error(value, "must be a real number")
+        try:
+            return float(value)
+        except (TypeError, ValueError, OverflowError):
+            raise self._error(value, "must be a real number") from None
 
     def _error(self, value: Any, reason: str = "is out of range") -> ValueError:
         return ValueError(
@@ -131,15 +124,17 @@ def specs(cls_or_obj: Any) -> Iterator[tuple[str, ParameterSpec]]:
 
 
 class ParameterSet:
-    """Mixin: range validation on construction and construction from public names."""
+    """Mixin: values converted to their types and validated by the model library on
+    construction (ranges, choices and the combination checks, with the library's message), and
+    construction from public names."""
+
+    #: The unit kind of the model library (``library.MESH`` or ``library.DRIVELINE``).
+    KIND: int = -1
 
     def __post_init__(self) -> None:
         for attr, spec in specs(self):
-            object.__setattr__(self, attr, spec.check(getattr(self, attr)))
-        self._check_combination()
-
-    def _check_combination(self) -> None:
-        """Cross-parameter checks; overridden where parameters constrain each other."""
+            object.__setattr__(self, attr, spec.convert(getattr(self, attr)))
+        units.check_parameters(self.KIND, self.to_public())
 
     @classmethod
     def from_public(cls, values: Mapping[str, Any]):
@@ -159,6 +154,11 @@ class ParameterSet:
     def with_public(self, **changes: Any):
         """Copy with some parameters changed, given by attribute name."""
         return replace(self, **changes)
+
+    def derived(self) -> dict[str, float]:
+        """Derived quantities of the parameter set, SI units (the model library's
+        ``rm_describe``: the pair's geometry, the contact law, the wheel's normal mass, ...)."""
+        return units.describe(self.KIND, self.to_public())
 
 
 DEG = math.pi / 180.0
@@ -221,13 +221,13 @@ class MeshParameters(ParameterSet):
         minimum=1e8, maximum=1e13)
     nu_pinion: float = declare(
         "material.nu_pinion", 0.30, "1", "Poisson's ratio of the pinion",
-        minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
+        minimum=0.0, maximum=0.5)
     E_wheel: float = declare(
         "material.E_wheel", 210e9, "Pa", "Young's modulus of the wheel",
         minimum=1e8, maximum=1e13)
     nu_wheel: float = declare(
         "material.nu_wheel", 0.30, "1", "Poisson's ratio of the wheel",
-        minimum=0.0, maximum=0.5, min_exclusive=True, max_exclusive=True)
+        minimum=0.0, maximum=0.5)
     density: float = declare(
         "material.rho", 7850.0, "kg/m3",
         "density of the tooth material (mass of the equivalent ellipsoid, eq. 7)",
@@ -313,10 +313,6 @@ class MeshParameters(ParameterSet):
         "solver.h_max", 1e-5, "s",
         "largest integration substep while teeth are in contact (free flight is exact)",
         minimum=1e-8, maximum=1e-2)
-    compiled: bool = declare(
-        "solver.compiled", True, "",
-        "run the compiled kernel (C, bit-identical to the Python core, ~50x faster per step) when "
-        "it is available; false = the pure-Python core")
     h_comm_max: float = declare(
         "solver.h_comm_max", 1.0, "s",
         "largest communication step accepted: a guard against absurd steps (a step costs "
@@ -324,13 +320,139 @@ class MeshParameters(ParameterSet):
         "against the step is in docs/tools.md",
         minimum=1e-7, maximum=1.0)
 
-    def _check_combination(self) -> None:
-        # Geometry-dependent limits (undercut, contact ratio, pair slots) live with the
-        # geometry that defines them; building it here makes every invalid set fail early,
-        # and the set keeps it (``geometry``): it is built once per parameter set.
-        object.__setattr__(self, "_geometry", HelicalPairGeometry(self))
+    # --- how the unit reads its inputs (docs/tools.md: held inputs, first step) -------------
+    settle_first_step: bool = declare(
+        "init.settle_first_step", True, "",
+        "when the pinion inputs or wheel.tau_load of the first doStep differ from those at the "
+        "end of initialization (a master that exchanges no values during initialization), "
+        "first settle the wheel in the static flank equilibrium for them, as init.in_contact "
+        "does at initialization (only with init.in_contact); false = step from the "
+        "initialized wheel state")
+    continue_when_held: bool = declare(
+        "inputs.continue_when_held", True, "",
+        "when the master holds pinion.phi, pinion.w, pinion.a (set none of them since the "
+        "last step, or set the last step's values again; e.g. fmpy simulate of this FMU "
+        "alone), the pinion runs on at constant "
+        "speed from where the last step left it (at the first step: from pinion.phi at "
+        "pinion.w; pinion.a unused); false = take held values literally (the pinion jumps "
+        "back to the held angle at every step)")
 
-    @property
-    def geometry(self) -> HelicalPairGeometry:
-        """The pair's geometry, built and checked when the parameters were validated."""
-        return self._geometry
+    KIND = library.MESH
+
+
+RPM = 2.0 * math.pi / 60.0
+#: Number of engine-order slots of the input-shaft kinematics.
+N_ORDERS = 4
+
+
+def _order(k: int, default: float):
+    return declare(f"engine.order[{k}]", default, "1",
+                   f"engine order number of fluctuation slot {k} (cycles per revolution)",
+                   minimum=0.1, maximum=100.0)
+
+
+def _amplitude(k: int, default: float):
+    return declare(f"engine.amplitude[{k}]", default, "rad/s2",
+                   f"angular-acceleration amplitude of engine-order slot {k} (0 = off)",
+                   minimum=0.0, maximum=1e6)
+
+
+def _phase(k: int):
+    return declare(f"engine.phase[{k}]", 0.0, "rad",
+                   f"phase of the acceleration cosine of engine-order slot {k}",
+                   minimum=-2.0 * math.pi, maximum=2.0 * math.pi, display_unit="deg")
+
+
+@dataclass(frozen=True)
+class DrivelineParameters(ParameterSet):
+    """Parameters of the driveline (defaults: MODEL_NOTES section 3, creep rattle)."""
+
+    # --- input shaft kinematics ---------------------------------------------------------
+    w_mean: float = declare(
+        "engine.w_mean", 830.0 * RPM, "rad/s", "mean input-shaft (engine) speed",
+        minimum=1.0, maximum=2000.0, display_unit="rpm")
+    # Engine orders: up to N_ORDERS slots; a slot with zero amplitude is off.
+    order_1: float = _order(1, 2.0)
+    amplitude_1: float = _amplitude(1, 300.0)
+    phase_1: float = _phase(1)
+    order_2: float = _order(2, 4.0)
+    amplitude_2: float = _amplitude(2, 200.0)
+    phase_2: float = _phase(2)
+    order_3: float = _order(3, 6.0)
+    amplitude_3: float = _amplitude(3, 150.0)
+    phase_3: float = _phase(3)
+    order_4: float = _order(4, 8.0)
+    amplitude_4: float = _amplitude(4, 0.0)
+    phase_4: float = _phase(4)
+    phi_start: float = declare(
+        "pinion.phi_start", 0.0, "rad", "input-shaft angle at the start time",
+        display_unit="deg")
+    a_over_step: bool = declare(
+        "pinion.a_over_step", True, "",
+        "output as pinion.a the mean acceleration over the coming step, (w(t+h) - w(t))/h with "
+        "h the last communication step, so that the mesh's Taylor polynomial of the pinion "
+        "keeps the pinion speed continuous from step to step; false = the instantaneous "
+        "acceleration (its speed error at the step end, jerk*h^2/2, then jumps at every "
+        "communication point)")
+    speed_table: str = declare(
+        "engine.speed_table", "", "",
+        "CSV file of measured input-shaft speed (columns: time [s], speed [rad/s]; header "
+        "optional); relative paths resolve against the FMU resources; empty = engine orders")
+    # --- output shaft and vehicle --------------------------------------------------------
+    k_shaft: float = declare(
+        "shaft.k", 0.2, "N.m/rad",
+        "torsional stiffness of the output shaft (default: a very soft coupling, so that the "
+        "wheel sees the nearly constant drag of the paper's M_res; see docs/model.md section 6)",
+        minimum=1e-3, maximum=1e9)
+    c_shaft: float = declare(
+        "shaft.c", 0.005, "N.m.s/rad",
+        "torsional damping of the output shaft (default light: see docs/model.md section 6)",
+        minimum=0.0, maximum=1e6)
+    J_vehicle: float = declare(
+        "vehicle.J", 5.0, "kg.m2", "vehicle inertia reflected to the output shaft",
+        minimum=1e-6, maximum=1e6)
+    drag: float = declare(
+        "vehicle.drag", 0.0833, "N.m",
+        "constant drag torque on the vehicle side (creep load; default 0.5 M*, half the load "
+        "the default engine orders can separate the default wheel from, M* = wheel.J "
+        "z_p/z_w 250 rad/s^2 = 0.1667 N.m; see docs/model.md section 6)",
+        minimum=-1e5, maximum=1e5)
+    drag_viscous: float = declare(
+        "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
+        minimum=0.0, maximum=1e5)
+    h_max: float = declare(
+        "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
+        minimum=1e-8, maximum=1.0)
+    h_comm_max: float = declare(
+        "solver.h_comm_max", 1.0, "s",
+        "largest communication step accepted: a guard against absurd steps (a step costs "
+        "h/solver.h_max substeps), not an accuracy limit; the wheel is extrapolated linearly "
+        "over a step, accuracy against the step in docs/tools.md",
+        minimum=1e-7, maximum=1.0)
+
+    # --- how the unit reads its inputs (docs/tools.md: held inputs, first step) -------------
+    settle_first_step: bool = declare(
+        "init.settle_first_step", True, "",
+        "when wheel.phi or wheel.w of the first doStep differ from those at the end of "
+        "initialization (a master that exchanges no values during initialization), first "
+        "start the output shaft anew in steady state behind them, as at initialization; "
+        "false = step from the initialized shaft")
+    continue_when_held: bool = declare(
+        "inputs.continue_when_held", True, "",
+        "when the master holds wheel.phi and wheel.w (set neither since the last step, or "
+        "set the last step's values again; e.g. fmpy simulate of this FMU alone), the wheel "
+        "runs on at constant speed "
+        "from where the last step left it (at the first step: from wheel.phi at wheel.w); "
+        "false = take held values literally (the wheel jumps back to the held angle at every "
+        "step)")
+
+    KIND = library.DRIVELINE
+
+    def order_terms(self) -> list[tuple[float, float, float]]:
+        """``(order, amplitude [rad/s^2], phase [rad])`` of the active engine orders."""
+        return [
+            (getattr(self, f"order_{k}"), getattr(self, f"amplitude_{k}"),
+             getattr(self, f"phase_{k}"))
+            for k in range(1, N_ORDERS + 1)
+            if getattr(self, f"amplitude_{k}") != 0.0
+        ]

@@ -9,9 +9,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 #: The Python sources: the runtime packages, the slave modules and the C sources.
 SOURCE = ROOT / "fmu_src"
-#: The C sources: the kernel, its generated layout header and the native status shim.
-NATIVE = SOURCE / "native"
-#: The packages copied whole into every FMU (standard library only; docs/architecture.md).
+#: The model library: the one C implementation of the model (rattle_model.h).
+MODEL_SOURCE = SOURCE / "rattle_model"
+#: The FMI 2.0 face of the native FMUs and what it shares with the pythonfmu FMUs' status shim.
+FMI2_SOURCE = SOURCE / "fmi2"
+#: The packages copied whole into every pythonfmu FMU (standard library only;
+#: docs/architecture.md).
 RUNTIME_PACKAGES = ("drive_rattle", "drive_rattle_fmi")
 #: The committed normalised modelDescriptions (a checked output of the build).
 TEMPLATES = ROOT / "modelDescription_templates"

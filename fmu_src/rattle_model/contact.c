@@ -1,0 +1,420 @@
+/*
+ * contact.c - Hertzian point contact of two crowned flanks and its dissipation (paper eq. 1,
+ * 2, 7, 8; Johnson, Contact Mechanics, 1985, section 4.2; Hunt and Crossley 1975).
+ *
+ * Two load-approach laws of the form W = K delta^(3/2) for the contact of radii r_x (across
+ * the contact line) and r_y (along it):
+ *  - law 0, exact elliptical Hertz contact: the ellipse's axis ratio q = b/a from the
+ *    curvature ratio through complete elliptic integrals, and K, the semi-major axis a and the
+ *    area pi a b from q.  It depends on the radii only through rho = R/r >= 1, so a pair's
+ *    range of rho is fitted once as Chebyshev series in ln rho, accurate to rounding (checked
+ *    between the nodes), evaluated with Clenshaw's recurrence;
+ *  - law 1, the paper's equivalent sphere (eq. 2), K = 4/3 E* (r_x r_y)^(1/4), with Johnson's
+ *    approximate ellipse sqrt(ab) = (3 W sqrt(r_x r_y) / (4 E*))^(1/3), a/b = (R/r)^(2/3).
+ * Dissipation: Hunt-Crossley, W = K delta^(3/2) (1 + d d(delta)/dt), with d set exactly from a
+ * coefficient of restitution (docs/model.md section 3.3).
+ */
+#include <stdlib.h>
+
+#include "rm_private.h"
+
+/* Relative accuracy a fitted series must reach between its nodes. */
+#define CHEBYSHEV_TOLERANCE 1e-13
+/* Curvature ratio below which an ellipse counts as a circle. */
+#define CIRCLE_RATIO (1.0 + 1e-9)
+/* The arithmetic-geometric mean: relative convergence and its iteration cap. */
+#define AGM_TOLERANCE 1e-16
+#define AGM_MAX_ITERATIONS 60
+/* Brent's absolute tolerances on ln(q) and on the Hunt-Crossley factor d v, and on e. */
+#define ROOT_XTOL 1e-15
+#define RESTITUTION_XTOL 1e-16
+
+double rm_effective_modulus(double E1, double nu1, double E2, double nu2)
+{
+    /* Johnson's contact modulus, 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2; the paper prints 2/(...)
+     * (the "reduced modulus" E' = 2E*), which with K = 4/3 E* sqrt(R) would double K */
+    return 1.0 / ((1.0 - nu1 * nu1) / E1 + (1.0 - nu2 * nu2) / E2);
+}
+
+/* The root of fn in [a, b] by Brent's method: 1, or 0 with the refusal. */
+static int solve(RmRootFn fn, void* ctx, double a, double b, double xtol, double* root,
+                 RmText* err)
+{
+    RmFail f;
+    double fa = fn(ctx, a);
+    double fb = fn(ctx, b);
+    if (setjmp(f.jb) != 0) {
+        rm_refusal_text(err, f.code, f.values);
+        return 0;
+    }
+    *root = rm_brent(&f, fn, ctx, a, b, fa, fb, xtol, RM_BRENT_RTOL);
+    return 1;
+}
+
+/* Complete elliptic integrals for the ellipse of axis ratio q = b/a (modulus
+ * e = sqrt(1 - q^2)): K(e) and S with E(e) = K (1 - S), by the arithmetic-geometric mean
+ * (Abramowitz and Stegun 17.6), S = sum 2^(n-1) c_n^2 so that K - E = K S cancels nothing. */
+static void elliptic_integrals(double q, double* K, double* S_out)
+{
+    double a = 1.0, b = q;
+    double c = sqrt((1.0 - q) * (1.0 + q));
+    double S = 0.5 * c * c;
+    double weight = 0.5;
+    for (int it = 0; it < AGM_MAX_ITERATIONS; it++) {
+        if (a - b <= AGM_TOLERANCE * a) break;
+        c = 0.5 * (a - b);
+        double na = 0.5 * (a + b), nb = sqrt(a * b);
+        a = na;
+        b = nb;
+        weight *= 2.0;
+        S += weight * c * c;
+    }
+    *K = RM_PI / (2.0 * a);
+    *S_out = S;
+}
+
+/* R/r of the ellipse with axis ratio q: ((a/b)^2 E - K) / (K - E) = (e^2 - S) / (q^2 S). */
+static double curvature_ratio(double q)
+{
+    double K, S;
+    elliptic_integrals(q, &K, &S);
+    double e2 = (1.0 - q) * (1.0 + q);
+    return (e2 - S) / (q * q * S);
+}
+
+static double ellipse_residual(void* ctx, double y) /* y = ln q */
+{
+    double target = *(const double*)ctx;
+    return log(curvature_ratio(exp(y))) - target;
+}
+
+/* The exact elliptical contact for rho = R/r >= 1 (Johnson section 4.2): q solves R/r above;
+ * a^3 = 3 W R K S / (pi E* e^2); the approach delta = 3 W K(e) / (2 pi a E*) gives
+ * K_H = (2 sqrt(2) pi / 3) E* sqrt(R) sqrt(S) / (K e).  For rho -> 1 the sphere:
+ * K_H = 4/3 E* sqrt(R), a = (3 W R / (4 E*))^(1/3). */
+int rm_exact_ellipse(double rho, RmEllipse* out, RmText* err)
+{
+    if (!(rho >= 1.0)) {
+        rm_puts(err, "radius ratio rho = ");
+        rm_put_number(err, rho);
+        rm_puts(err, " must be >= 1 (larger over smaller)");
+        return 0;
+    }
+    if (rho <= CIRCLE_RATIO) {
+        double third = rm_pow(3.0 / 4.0, 1.0 / 3.0);
+        out->q = 1.0;
+        out->kappa = 4.0 / 3.0;
+        out->alpha = third;
+        out->zeta = RM_PI * third * third;
+        return 1;
+    }
+    double target = log(rho);
+    double y_lo = -1.0;
+    while (ellipse_residual(&target, y_lo) < 0.0) {
+        y_lo *= 2.0;
+        if (y_lo < -200.0) {
+            rm_puts(err, "radius ratio rho = ");
+            rm_put_number(err, rho);
+            rm_puts(err, " too large for an elliptical contact");
+            return 0;
+        }
+    }
+    double y_hi = -1e-9;
+    double y;
+    if (ellipse_residual(&target, y_hi) < 0.0) {
+        if (!solve(ellipse_residual, &target, y_lo, y_hi, ROOT_XTOL, &y, err)) return 0;
+    }
+    else
+        y = y_hi;
+    double q = exp(y);
+    double K, S;
+    elliptic_integrals(q, &K, &S);
+    double e2 = (1.0 - q) * (1.0 + q);
+    double e = sqrt(e2);
+    double kappa = (2.0 * sqrt(2.0) * RM_PI / 3.0) * sqrt(S) / (K * e);
+    double alpha = rm_pow(3.0 * K * S / (RM_PI * e2), 1.0 / 3.0);
+    out->q = q;
+    out->kappa = kappa;
+    out->alpha = alpha;
+    out->zeta = RM_PI * q * alpha * alpha;
+    return 1;
+}
+
+/* The fit's memo of x -> exact_ellipse(exp(x)) (the nodes repeat between fits). */
+typedef struct {
+    int n, cap;
+    double* x;
+    RmEllipse* e;
+} EllipseCache;
+
+static int cached_ellipse(EllipseCache* c, double x, RmEllipse* out, RmText* err)
+{
+    for (int k = 0; k < c->n; k++)
+        if (c->x[k] == x) {
+            *out = c->e[k];
+            return 1;
+        }
+    if (!rm_exact_ellipse(exp(x), out, err)) return 0;
+    if (c->n == c->cap) {
+        int cap = c->cap ? 2 * c->cap : 64;
+        double* nx = realloc(c->x, (size_t)cap * sizeof *nx);
+        if (nx == NULL) return 1; /* not memoized: computed again when asked */
+        c->x = nx;
+        RmEllipse* ne = realloc(c->e, (size_t)cap * sizeof *ne);
+        if (ne == NULL) return 1;
+        c->e = ne;
+        c->cap = cap;
+    }
+    c->x[c->n] = x;
+    c->e[c->n] = *out;
+    c->n++;
+    return 1;
+}
+
+static double ellipse_field(const RmEllipse* e, int i)
+{
+    return i == 1 ? e->kappa : (i == 2 ? e->alpha : e->zeta);
+}
+
+/* Coefficients of the Chebyshev interpolant of field i on [lo, hi] at the n Chebyshev points
+ * of the first kind (c_0 halved, ready for chebyshev_value). */
+static int chebyshev_fit(EllipseCache* cache, int i, double lo, double hi, int terms,
+                         double* coeffs, RmText* err)
+{
+    int n = terms;
+    double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    double values[RM_MAX_CHEBYSHEV_TERMS];
+    for (int k = 0; k < n; k++) {
+        RmEllipse e;
+        if (!cached_ellipse(cache, mid + half * cos(RM_PI * ((double)k + 0.5) / (double)n), &e,
+                            err))
+            return 0;
+        values[k] = ellipse_field(&e, i);
+    }
+    for (int j = 0; j < n; j++) {
+        double acc = 0.0;
+        for (int k = 0; k < n; k++)
+            acc += values[k] * cos(RM_PI * (double)j * ((double)k + 0.5) / (double)n);
+        coeffs[j] = 2.0 * acc / (double)n;
+    }
+    coeffs[0] *= 0.5;
+    return 1;
+}
+
+/* Clenshaw's recurrence for sum_j c_j T_j(t), t in [-1, 1]. */
+static inline double chebyshev_value(const double* c, int n, double t)
+{
+    double b1 = 0.0, b2 = 0.0;
+    int j = n - 1;
+    while (j > 0) {
+        double next = 2.0 * t * b1 - b2 + c[j];
+        b2 = b1;
+        b1 = next;
+        j -= 1;
+    }
+    return t * b1 - b2 + c[0];
+}
+
+int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double x_hi,
+                         RmContactLaw* c, RmText* err)
+{
+    c->law = law;
+    c->E_star = E_star;
+    c->r_y = r_y;
+    c->x_lo = x_lo;
+    c->x_hi = x_hi;
+    c->terms = 0;
+    c->t_mid = 0.5 * (x_lo + x_hi);
+    double half = 0.5 * (x_hi - x_lo);
+    c->t_scale = half > 0.0 ? 1.0 / half : 0.0;
+    if (law == RM_LAW_EQUIVALENT_SPHERE) return 1;
+    if (law != RM_LAW_EXACT) {
+        rm_printf(err, "contact law %d unknown; allowed: 0, 1", law);
+        return 0;
+    }
+    double lo = x_lo, hi = x_hi;
+    if (hi - lo < 1e-12) { /* a single ratio: constant series */
+        RmEllipse e;
+        if (!rm_exact_ellipse(exp(lo), &e, err)) return 0;
+        c->kappa[0] = e.kappa;
+        c->alpha[0] = e.alpha;
+        c->zeta[0] = e.zeta;
+        c->terms = 1;
+        return 1;
+    }
+    EllipseCache cache = {0, 0, NULL, NULL};
+    double checks[23];
+    for (int k = 0; k < 23; k++) checks[k] = lo + (hi - lo) * ((double)k + 0.5) / 23.0;
+    double worst = 0.0;
+    int ok = 0, failed = 0;
+    for (int terms = 8; terms <= RM_MAX_CHEBYSHEV_TERMS && !ok && !failed; terms += 4) {
+        double* fits[3] = {c->kappa, c->alpha, c->zeta};
+        for (int i = 1; i <= 3 && !failed; i++)
+            if (!chebyshev_fit(&cache, i, lo, hi, terms, fits[i - 1], err)) failed = 1;
+        worst = 0.0;
+        for (int k = 0; k < 23 && !failed; k++) {
+            double x = checks[k];
+            double t = (x - c->t_mid) * c->t_scale;
+            RmEllipse e;
+            if (!cached_ellipse(&cache, x, &e, err)) {
+                failed = 1;
+                break;
+            }
+            for (int i = 1; i <= 3; i++) {
+                double exact = ellipse_field(&e, i);
+                worst = rm_max(worst,
+                               fabs(chebyshev_value(fits[i - 1], terms, t) - exact) / exact);
+            }
+        }
+        if (!failed && worst <= CHEBYSHEV_TOLERANCE) {
+            c->terms = terms;
+            ok = 1;
+        }
+    }
+    free(cache.x);
+    free(cache.e);
+    if (!ok && !failed) {
+        rm_puts(err, "the exact Hertz law cannot be tabulated for ln(R/r) in [");
+        rm_put_g(err, lo, 4);
+        rm_puts(err, ", ");
+        rm_put_g(err, hi, 4);
+        rm_puts(err, "] to ");
+        rm_put_g(err, CHEBYSHEV_TOLERANCE, 6);
+        rm_puts(err, " (reached ");
+        rm_put_g(err, worst, 3);
+        rm_puts(err, "); use contact.hertz_law = 1");
+    }
+    return ok;
+}
+
+/* The law at the contact radius r_x: the stiffness non-linearity K [N/m^1.5], the larger
+ * radius R [m] and the coefficients of the semi-major axis a = ka W^(1/3) [m] and of the
+ * area A = kz W^(2/3) [m^2]. */
+void rm_contact_law_at(const RmContactLaw* c, RmFail* f, double r_x, double* K, double* R,
+                       double* ka, double* kz)
+{
+    double r_y = c->r_y;
+    double E = c->E_star;
+    if (c->law == RM_LAW_EXACT) {
+        double rho;
+        if (r_y >= r_x) {
+            *R = r_y;
+            rho = r_y / r_x;
+        }
+        else {
+            *R = r_x;
+            rho = r_x / r_y;
+        }
+        double t = (rm_log_checked(f, rho) - c->t_mid) * c->t_scale;
+        *K = E * rm_sqrt_checked(f, *R) * chebyshev_value(c->kappa, c->terms, t);
+        double cr = rm_pow_checked(f, *R / E, 1.0 / 3.0);
+        *ka = cr * chebyshev_value(c->alpha, c->terms, t);
+        *kz = cr * cr * chebyshev_value(c->zeta, c->terms, t);
+        return;
+    }
+    /* equivalent sphere (eq. 2) with Johnson's approximate ellipse, a along the larger radius */
+    *K = (4.0 / 3.0) * E * rm_sqrt_checked(f, rm_sqrt_checked(f, r_x * r_y));
+    double g = rm_pow_checked(f, 3.0 * rm_sqrt_checked(f, r_x * r_y) / (4.0 * E), 1.0 / 3.0);
+    double stretch;
+    if (r_y >= r_x) {
+        *R = r_y;
+        stretch = rm_pow_checked(f, r_y / r_x, 1.0 / 3.0);
+    }
+    else {
+        *R = r_x;
+        stretch = rm_pow_checked(f, r_x / r_y, 1.0 / 3.0);
+    }
+    *ka = g * stretch;
+    *kz = RM_PI * g * g;
+}
+
+/* delta_max of eq. (7)-(8): the equivalent ellipsoid of mass m = rho pi r_x^2 l, l = 2a its
+ * contact ellipse's long diameter at the peak load W = K delta_max^(3/2), striking at v:
+ * 1/2 m v^2 = 2/5 K delta_max^(5/2).  With a = ka W^(1/3), m = C sqrt(delta_max) where
+ * C = 2 rho pi r_x^2 ka K^(1/3), and the balance has the closed form
+ * delta_max = |v| sqrt(5 C / (4 K)). */
+double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka, double density)
+{
+    double C = 2.0 * density * RM_PI * r_x * r_x * ka * rm_pow_checked(f, K, 1.0 / 3.0);
+    return fabs(v) * rm_sqrt_checked(f, 5.0 * C / (4.0 * K));
+}
+
+/* G(alpha, e) = alpha - ln(1 + alpha) + alpha e + ln(1 - alpha e): zero on the restitution
+ * curve.  With the speed u = d(delta)/dt as variable, m u du = -K delta^n (1 + d u) d delta
+ * separates: u/d - ln(1 + d u)/d^2 changes by -(K/m) integral delta^n d delta, which is zero
+ * from the onset back to the release, so alpha - ln(1 + alpha) = -alpha e - ln(1 - alpha e)
+ * with 0 <= e < 1/alpha (the force never turns tensile). */
+static double hc_balance(double alpha, double e)
+{
+    return alpha - log1p(alpha) + alpha * e + log1p(-alpha * e);
+}
+
+static double hc_balance_fn(void* ctx, double e) { return hc_balance(*(const double*)ctx, e); }
+
+/* The coefficient of restitution e of an impact on W = K delta^n (1 + d delta_dot) at
+ * approach speed v, alpha = d v >= 0 (any n, K and mass): exact, by Brent's method. */
+int rm_hunt_crossley_restitution(double alpha, double* e, RmText* err)
+{
+    if (!(alpha >= 0.0 && isfinite(alpha))) {
+        rm_puts(err, "alpha = d v = ");
+        rm_put_number(err, alpha);
+        rm_puts(err, " must be finite and >= 0");
+        return 0;
+    }
+    if (alpha == 0.0) {
+        *e = 1.0;
+        return 1;
+    }
+    /* G falls in e from G(alpha, 0) > 0 towards -inf at e = 1/alpha; at e = 1 it is
+     * 2 alpha - 2 artanh(alpha) < 0.  Past alpha ~ 40 the root is 1/alpha to rounding. */
+    double hi = rm_min(1.0, 1.0 / alpha) * (1.0 - 1e-15);
+    if (hc_balance(alpha, hi) >= 0.0) {
+        *e = hi;
+        return 1;
+    }
+    return solve(hc_balance_fn, &alpha, 0.0, hi, RESTITUTION_XTOL, e, err);
+}
+
+typedef struct {
+    double e;
+    RmText* err;
+    int ok;
+} HcCtx;
+
+static double hc_factor_fn(void* vctx, double a)
+{
+    HcCtx* c = vctx;
+    double r = 0.0;
+    if (!rm_hunt_crossley_restitution(a, &r, c->err)) c->ok = 0;
+    return r - c->e;
+}
+
+/* The Hunt-Crossley factor d [s/m] for which an impact at speed v [m/s] rebounds with the
+ * coefficient of restitution e in (0, 1] (e = 1 gives d = 0). */
+int rm_hunt_crossley_factor(double e, double v, double* d, RmText* err)
+{
+    if (!(0.0 < e && e <= 1.0) || !(v > 0.0)) {
+        rm_puts(err, "restitution e = ");
+        rm_put_number(err, e);
+        rm_puts(err, " must be in (0, 1] and speed v = ");
+        rm_put_number(err, v);
+        rm_puts(err, " > 0");
+        return 0;
+    }
+    if (e == 1.0) {
+        *d = 0.0;
+        return 1;
+    }
+    /* bracket: e(alpha) falls from 1 (alpha = 0) towards 0 and stays below 1/alpha */
+    double hi = 1.0, r;
+    for (;;) {
+        if (!rm_hunt_crossley_restitution(hi, &r, err)) return 0;
+        if (!(r > e)) break;
+        hi *= 2.0;
+    }
+    HcCtx ctx = {e, err, 1};
+    double alpha;
+    if (!solve(hc_factor_fn, &ctx, 0.0, hi, ROOT_XTOL, &alpha, err) || !ctx.ok) return 0;
+    *d = alpha / v;
+    return 1;
+}

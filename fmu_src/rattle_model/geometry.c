@@ -1,0 +1,283 @@
+/*
+ * geometry.c - the helical involute pair and the tooth pairs in its zone of action (paper
+ * eq. 3-6, read as docs/model.md section 2 says).
+ *
+ * Conventions:
+ *  - each gear's angle is positive in its own forward direction; phi_p = phi_w = 0 puts the
+ *    pinion tooth centreline on the line of centres, centred in the wheel's tooth space;
+ *  - s is the roll coordinate along a transverse line of action from the pinion's base-circle
+ *    tangent point: at a contact s is the pinion's roll length rho_p (its involute radius of
+ *    curvature) and L - s the wheel's, L = a sin(alpha_t) (eq. 5);
+ *  - flank +1 is the drive flank (pinion leads), -1 the coast flank;
+ *  - a helical pair touches along a contact line spanning w = b tan(beta_b) of roll; it is in
+ *    the zone of action while that span overlaps the path of contact [s_start, s_end];
+ *  - the flanks are lead-crowned (contact.crowning C_b, along the normal): a pair touches at
+ *    the lowest point of its engaged contact line -- its face centre s_n while that lies in
+ *    the path, else the end of the path nearest to it, with the crown offset
+ *    g = C_b (d / (w/2))^2 at roll distance d from the face centre.
+ */
+#include "rm_private.h"
+
+/* x % w of doubles with the sign of w (floored modulo). */
+static double floored_mod(double v, double w)
+{
+    double mod = fmod(v, w);
+    if (mod != 0.0) {
+        if ((w < 0.0) != (mod < 0.0)) mod += w;
+    }
+    else
+        mod = copysign(0.0, w);
+    return mod;
+}
+
+int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
+{
+    double zp = (double)p->z_pinion, zw = (double)p->z_wheel;
+    double m_n = p->m_n, alpha_n = p->alpha_n, beta = p->beta;
+    double addendum = p->addendum, b = p->b;
+    g->ratio = zp / zw; /* wheel speed / pinion speed in rigid mesh */
+    /* transverse pressure angle and base helix angle (MODEL_NOTES section 4) */
+    g->alpha_t = atan(tan(alpha_n) / cos(beta));
+    g->beta_b = asin(sin(beta) * cos(alpha_n));
+    g->m_t = m_n / cos(beta);
+    /* pitch, base and tip radii; addendum h_a m_n, no profile shift */
+    g->r_pinion = 0.5 * zp * g->m_t;
+    g->r_wheel = 0.5 * zw * g->m_t;
+    g->centre_distance = g->r_pinion + g->r_wheel;
+    g->rb_pinion = g->r_pinion * cos(g->alpha_t);
+    g->rb_wheel = g->r_wheel * cos(g->alpha_t);
+    g->ra_pinion = g->r_pinion + addendum * m_n;
+    g->ra_wheel = g->r_wheel + addendum * m_n;
+    /* line of action between the base tangent points, and the path of contact on it (eq. 5) */
+    g->line_length = g->centre_distance * sin(g->alpha_t);
+    g->s_start = g->line_length - sqrt(rm_pow(g->ra_wheel, 2.0) - rm_pow(g->rb_wheel, 2.0));
+    g->s_end = sqrt(rm_pow(g->ra_pinion, 2.0) - rm_pow(g->rb_pinion, 2.0));
+    g->s_pitch = g->rb_pinion * tan(g->alpha_t);
+    g->base_pitch = 2.0 * RM_PI * g->rb_pinion / zp; /* transverse, p_bt */
+    g->eps_alpha = (g->s_end - g->s_start) / g->base_pitch;
+    g->eps_beta = b * sin(beta) / (RM_PI * m_n);
+    g->eps_gamma = g->eps_alpha + g->eps_beta;
+    /* transverse extent of one contact line across the face (eps_beta p_bt); a span below
+     * the roll resolution is a spur pair's */
+    g->line_span = b * tan(g->beta_b);
+    if (g->line_span < RM_BREAKPOINT_TOLERANCE) g->line_span = 0.0;
+    /* lead crowning: gap g = crown_factor d^2 at roll distance d from the face centre (C_b at
+     * d = w/2), and the flank radius along the contact line it implies (eq. 6 read as
+     * crowning): a distance l along the line is l sin(beta_b) of roll, and the face end lies
+     * at l = b / (2 cos beta_b), so r_y = (b / (2 cos beta_b))^2 / (2 C_b) */
+    g->crowning = p->crowning;
+    double half_span = 0.5 * g->line_span;
+    g->crown_factor = half_span > 0.0 ? g->crowning / (half_span * half_span) : 0.0;
+    double half_line = 0.5 * b / cos(g->beta_b);
+    g->r_y = half_line * half_line / (2.0 * g->crowning);
+    /* rigid-body kinematics onto the tooth normal: delta = cos(beta_b)(rb_p phi_p - rb_w phi_w) */
+    g->normal_factor = cos(g->beta_b);
+    g->cos_alpha_t = cos(g->alpha_t);
+    g->sin_alpha_t = sin(g->alpha_t);
+    g->sin_beta_b = sin(g->beta_b);
+    g->half_backlash = 0.5 * p->backlash;
+    /* roll coordinate of pair 0 at phi_p = 0: the flank a quarter base pitch ahead of the
+     * pitch point, both flanks */
+    g->flank_phase = g->s_pitch + 0.25 * g->base_pitch;
+
+    /* validity: undercut of a rack cutter whose dedendum matches the addendum h_a m_n */
+    double sin2 = rm_pow(sin(g->alpha_t), 2.0);
+    double z_min = 2.0 * addendum * cos(beta) / sin2;
+    const char* names[2] = {"gear.z_pinion", "gear.z_wheel"};
+    int zs[2] = {p->z_pinion, p->z_wheel};
+    for (int k = 0; k < 2; k++) {
+        if ((double)zs[k] < z_min) {
+            rm_printf(err, "parameter '%s' = %d undercuts with gear.alpha_n = ", names[k], zs[k]);
+            rm_put_g(err, alpha_n * (180.0 / RM_PI), 4);
+            rm_puts(err, " deg and gear.beta = ");
+            rm_put_g(err, beta * (180.0 / RM_PI), 4);
+            rm_printf(err, " deg; allowed: %s >= %.0f (2 cos(beta)/sin^2(alpha_t) * gear.h_a = ",
+                      names[k], ceil(z_min - 1e-9));
+            rm_put_g(err, z_min, 4);
+            rm_puts(err, ")");
+            return 0;
+        }
+    }
+    if (g->s_start <= 0.0 || g->s_end >= g->line_length) {
+        rm_puts(err, "tip interference: the path of contact leaves the line of action (s_start = ");
+        rm_put_g(err, g->s_start, 4);
+        rm_puts(err, " m, s_end = ");
+        rm_put_g(err, g->s_end, 4);
+        rm_puts(err, " m, line length ");
+        rm_put_g(err, g->line_length, 4);
+        rm_printf(err, " m) for gear.z_pinion = %d, gear.z_wheel = %d; allowed: 0 < s_start "
+                       "< s_end < line length", zs[0], zs[1]);
+        return 0;
+    }
+    if (g->eps_alpha < 1.0) {
+        rm_puts(err, "transverse contact ratio eps_alpha = ");
+        rm_put_g(err, g->eps_alpha, 5);
+        rm_printf(err, " below 1 for gear.z_pinion = %d, gear.z_wheel = %d, gear.h_a = ", zs[0],
+                  zs[1]);
+        rm_put_g(err, addendum, 4);
+        rm_puts(err, ", gear.alpha_n = ");
+        rm_put_g(err, alpha_n * (180.0 / RM_PI), 4);
+        rm_puts(err, " deg, gear.beta = ");
+        rm_put_g(err, beta * (180.0 / RM_PI), 4);
+        rm_puts(err, " deg; allowed: eps_alpha >= 1");
+        return 0;
+    }
+    double max_pairs = floor(g->eps_gamma) + 1.0;
+    if (max_pairs > RM_MAX_PAIR_SLOTS) {
+        double b_max = (RM_MAX_PAIR_SLOTS - g->eps_alpha) * RM_PI * m_n / rm_max(sin(beta), 1e-300);
+        rm_puts(err, "parameter 'gear.b' = ");
+        rm_put_number(err, b);
+        rm_puts(err, " gives a total contact ratio eps_gamma = ");
+        rm_put_g(err, g->eps_gamma, 4);
+        rm_printf(err, ", needing %.0f pair slots; at most %d are available; allowed: gear.b < ",
+                  max_pairs, RM_MAX_PAIR_SLOTS);
+        rm_put_g(err, b_max, 4);
+        rm_puts(err, " m");
+        return 0;
+    }
+
+    /* roll coordinates (mod the base pitch) of a pair's face centre where the pair enters or
+     * leaves the zone (s_start - w/2, s_end + w/2) or its contact point starts or stops
+     * following the face centre (s_start, s_end): distinct values, sorted */
+    double half = 0.5 * g->line_span;
+    double raw[4] = {g->s_start - half, g->s_start, g->s_end, g->s_end + half};
+    int n = 0;
+    for (int k = 0; k < 4; k++) {
+        int seen = 0;
+        for (int m = 0; m < k; m++)
+            if (raw[m] == raw[k]) seen = 1;
+        if (!seen) g->bp[n++] = floored_mod(raw[k], g->base_pitch);
+    }
+    for (int a = 1; a < n; a++)
+        for (int c = a; c > 0 && g->bp[c] < g->bp[c - 1]; c--) {
+            double x = g->bp[c];
+            g->bp[c] = g->bp[c - 1];
+            g->bp[c - 1] = x;
+        }
+    g->n_bp = n;
+    return 1;
+}
+
+/* Principal radii in the normal plane at roll coordinate s (eq. 3-5 as read in MODEL_NOTES
+ * section 2): the involute radius of curvature is the roll length, and a helicoid's
+ * normal-section radius the transverse one over cos(beta_b). */
+double rm_radius_x(const RmGeometry* g, double s)
+{
+    double c = g->normal_factor;
+    double rp = s / c;
+    double rw = (g->line_length - s) / c;
+    return rp * rw / (rp + rw);
+}
+
+/* Bounds of ln(R/r), R and r the larger and smaller of r_x and r_y, over the contact points
+ * the path of contact allows. */
+void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi)
+{
+    double samples[3] = {g->s_start, g->s_end, 0.0};
+    int n = 2;
+    double mid = 0.5 * g->line_length; /* r_x(s) = s (L - s) / (L cos beta_b) peaks there */
+    if (g->s_start < mid && mid < g->s_end) samples[n++] = mid;
+    double r_x[3];
+    for (int k = 0; k < n; k++) r_x[k] = rm_radius_x(g, samples[k]);
+    double r_lo = r_x[0], r_hi = r_x[0];
+    for (int k = 1; k < n; k++) {
+        if (r_x[k] < r_lo) r_lo = r_x[k];
+        if (r_x[k] > r_hi) r_hi = r_x[k];
+    }
+    double cand[3] = {fabs(log(g->r_y / r_lo)), fabs(log(g->r_y / r_hi)), 0.0};
+    int m = 2;
+    if (r_lo <= g->r_y && g->r_y <= r_hi) cand[m++] = 0.0;
+    double c_lo = cand[0], c_hi = cand[0];
+    for (int k = 1; k < m; k++) {
+        if (cand[k] < c_lo) c_lo = cand[k];
+        if (cand[k] > c_hi) c_hi = cand[k];
+    }
+    *lo = c_lo;
+    *hi = c_hi;
+}
+
+static void pair_set_add(RmFail* f, RmPairSet* ps, double n, double s, double g, double dg)
+{
+    if (ps->n == RM_MAX_PAIRS) rm_fail(f, RM_FAIL_TOO_MANY_PAIRS, RM_MAX_PAIRS, 0.0, 0.0, 0.0);
+    int i = ps->n++;
+    int64_t k = (int64_t)n % RM_MAX_PAIR_SLOTS; /* the slot: pair number mod slots, >= 0 */
+    ps->slot[i] = k < 0 ? k + RM_MAX_PAIR_SLOTS : k;
+    ps->s[i] = s;
+    ps->offset[i] = g;
+    ps->dg[i] = dg;
+    ps->coefficients_ok[i] = 0;
+    ps->d_max_ok[i] = 0;
+}
+
+/* The pairs at roll coordinate u of pair 0's face centre: pair n sits at s_n = u - n p_bt.
+ * Per pair: its slot (pair number mod RM_MAX_PAIR_SLOTS, so a slot follows one pair through
+ * its passage), the roll coordinate s of its contact point, the crown offset g there (the
+ * pair touches when the flank's penetration exceeds it) and dg = dg/ds_n. */
+void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, RmPairSet* ps)
+{
+    double pb = g->base_pitch;
+    double half = 0.5 * g->line_span;
+    double s0 = g->s_start, s1 = g->s_end;
+    double k = g->crown_factor;
+    double n_lo = rm_floor_checked(f, (u - s1 - half) / pb) + 1.0;
+    double n_hi = rm_ceil_checked(f, (u - s0 + half) / pb) - 1.0;
+    if (!(fabs(n_lo) < RM_PAIR_NUMBER_LIMIT && fabs(n_hi) < RM_PAIR_NUMBER_LIMIT))
+        rm_fail(f, RM_FAIL_PAIR_RANGE, u, n_lo, 0.0, 0.0);
+    ps->u = u;
+    ps->n = 0;
+    ps->d_max_v = 0.0;
+    for (double n = n_lo; n <= n_hi; n += 1.0) {
+        double s = u - n * pb; /* roll coordinate of the pair's face centre */
+        if (half > 0.0) {
+            if (s + half > s0 && s - half < s1) {
+                if (s < s0) {
+                    double d = s0 - s;
+                    pair_set_add(f, ps, n, s0, k * d * d, -2.0 * k * d);
+                }
+                else if (s > s1) {
+                    double d = s - s1;
+                    pair_set_add(f, ps, n, s1, k * d * d, 2.0 * k * d);
+                }
+                else {
+                    pair_set_add(f, ps, n, s, 0.0, 0.0);
+                }
+            }
+        }
+        else if (s0 < s && s < s1) {
+            pair_set_add(f, ps, n, s, 0.0, 0.0);
+        }
+    }
+}
+
+/* The first breakpoint between u_a and u_b in the direction of travel; breakpoints within
+ * RM_BREAKPOINT_TOLERANCE of u_a are behind (the previous substep ended on them). */
+int rm_next_breakpoint(const RmGeometry* g, RmFail* f, double u_a, double u_b, double* out)
+{
+    if (u_a == u_b) return 0;
+    double pb = g->base_pitch;
+    double tol = RM_BREAKPOINT_TOLERANCE;
+    int found = 0;
+    double best = 0.0;
+    if (u_b > u_a) {
+        for (int i = 0; i < g->n_bp; i++) {
+            double bp = g->bp[i];
+            double v = bp + (rm_floor_checked(f, (u_a + tol - bp) / pb) + 1.0) * pb;
+            if (v < u_b && (!found || v < best)) {
+                best = v;
+                found = 1;
+            }
+        }
+    }
+    else {
+        for (int i = 0; i < g->n_bp; i++) {
+            double bp = g->bp[i];
+            double v = bp + (rm_ceil_checked(f, (u_a - tol - bp) / pb) - 1.0) * pb;
+            if (v > u_b && (!found || v > best)) {
+                best = v;
+                found = 1;
+            }
+        }
+    }
+    if (found) *out = best;
+    return found;
+}

@@ -1,0 +1,264 @@
+/*
+ * mesh.c - the mesh model: Hertzian normal force and flank friction of every tooth pair in
+ * contact, and the torques they put on the wheel and the pinion (paper eq. 1-2, 10-17 as read
+ * in docs/model.md).
+ *
+ * The rigid-body approach along the tooth normal is common to the pairs of a flank:
+ *     x     = cos(beta_b) (rb_p phi_p - rb_w phi_w)        (> 0 when the pinion leads)
+ *     delta = flank x - backlash / 2                       (penetration; < 0 is a gap)
+ * Each pair touches at its own point with its own crown offset g_i (geometry.c), so its
+ * penetration is delta_i = delta - g_i, and it carries the Hertz force with Hunt-Crossley
+ * dissipation on its own penetration rate,
+ *     W_i = K_i delta_i^(3/2) (1 + d d(delta_i)/dt),   W_i >= 0,
+ * K_i from the contact law at the pair's radii.  Torques (each gear positive forward), F_i the
+ * pair's friction force and sgn_i the sign of its sliding speed:
+ *     wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
+ *     pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
+ */
+#include "rm_private.h"
+
+/* Largest penetration a step may reach, as a fraction of the normal module: far beyond it the
+ * Hertz contact of the flanks' surfaces is no longer a model of anything (the default pair
+ * reaches about 1e-3 of the module in rattle). */
+const double RM_MAX_PENETRATION_MODULES = 0.05;
+
+int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
+{
+    m->p = *p;
+    if (!rm_geometry(&p->gear, &m->g, err)) return 0;
+    m->E_star = rm_effective_modulus(p->E_pinion, p->nu_pinion, p->E_wheel, p->nu_wheel);
+    double x_lo, x_hi;
+    rm_radius_ratio_range(&m->g, &x_lo, &x_hi);
+    if (!rm_contact_law_build(p->hertz_law, m->E_star, m->g.r_y, x_lo, x_hi, &m->law, err))
+        return 0;
+    m->damping = 0.0;
+    if (p->dissipation == RM_DISSIPATION_RESTITUTION) {
+        if (!rm_hunt_crossley_factor(p->restitution, p->restitution_speed, &m->damping, err))
+            return 0;
+    }
+    else if (p->dissipation == RM_DISSIPATION_FACTOR)
+        m->damping = p->damping;
+    /* arms of the normal force about each axis: cos(beta_b) times the base radius */
+    m->arm_wheel = m->g.normal_factor * m->g.rb_wheel;
+    m->arm_pinion = m->g.normal_factor * m->g.rb_pinion;
+    /* the wheel's effective mass along the tooth normal (energy-consistent) */
+    m->normal_mass = p->J_wheel / rm_pow(m->arm_wheel, 2.0);
+    m->pen_limit = RM_MAX_PENETRATION_MODULES * p->gear.m_n;
+    m->sqrt_gamma_sigma = sqrt(p->gamma / p->sigma);
+    return 1;
+}
+
+/* ------------------------------------------------------------------ the pair cache */
+/* The integrator evaluates the pairs twice at t + h/2 of each RK4 step and at the start of a
+ * substep for the right-hand side, the substep length and the friction directions, so a step
+ * keeps a few pair sets: each value is computed by the same expression as without the cache,
+ * only fewer times. */
+void rm_pair_cache_init(RmPairCache* c) { c->n_used = c->next = 0; }
+
+RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u)
+{
+    for (int i = 0; i < c->n_used; i++)
+        if (c->set[i].u == u) return &c->set[i];
+    RmPairSet* ps = &c->set[c->next];
+    c->next = (c->next + 1) % RM_PAIR_CACHE;
+    if (c->n_used < RM_PAIR_CACHE) c->n_used++;
+    ps->u = NAN; /* invalid while being built (a failing build longjmps out) */
+    rm_pair_set_build(&M->g, f, u, ps);
+    return ps;
+}
+
+/* The normal radius r_x and the contact law's coefficients of pair i. */
+void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i)
+{
+    if (ps->coefficients_ok[i]) return;
+    double R;
+    ps->r_x[i] = rm_radius_x(&M->g, ps->s[i]);
+    rm_contact_law_at(&M->law, f, ps->r_x[i], &ps->K[i], &R, &ps->ka[i], &ps->kz[i]);
+    ps->coefficients_ok[i] = 1;
+}
+
+/* eq. 7 delta_max of pair i (coefficients computed) for the impact speed v. */
+static inline double pair_d_max(const RmMesh* M, RmFail* f, RmPairSet* ps, int i, double v)
+{
+    if (!(v == ps->d_max_v)) {
+        for (int k = 0; k < ps->n; k++) ps->d_max_ok[k] = 0;
+        ps->d_max_v = v;
+    }
+    if (!ps->d_max_ok[i] || v != v) {
+        ps->d_max[i] = rm_film_delta_max(f, v, ps->K[i], ps->r_x[i], ps->ka[i], M->p.density);
+        ps->d_max_ok[i] = 1;
+    }
+    return ps->d_max[i];
+}
+
+/* The rate [m/s] at which a pair's crown offset grows: dg/ds_n times the roll speed of its
+ * face centre, flank rb_p w_p. */
+static inline double pair_rate(const RmMesh* M, int flank, double w_p, double dg)
+{
+    return dg * ((double)flank * M->g.rb_pinion * w_p);
+}
+
+/* ------------------------------------------------------------------ loads */
+void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
+                   double w_p, double phi_w, double w_w, double v_impact, const double* signs,
+                   int detail, RmLoads* out, double* pairs, size_t capacity)
+{
+    const RmMeshParams* p = &M->p;
+    double delta = rm_penetration(M, flank, phi_p, phi_w);
+    out->delta = delta;
+    out->tau_w = out->tau_p = out->W = out->F = 0.0;
+    out->n_pairs = 0;
+    if (detail) {
+        out->n_loaded = 0;
+        out->top_W = out->top_h = out->top_lam = out->top_psi = 0.0;
+        for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++) out->forces[k] = 0.0;
+    }
+    if (delta <= 0.0) return;
+    double delta_dot = rm_approach_rate(M, flank, w_p, w_w);
+    double damping = M->damping;
+    double E_star = M->E_star;
+    double tau_w = 0.0, tau_p = 0.0, W_sum = 0.0, F_net = 0.0;
+    RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    for (int i = 0; i < ps->n; i++) {
+        int64_t slot = ps->slot[i];
+        double s = ps->s[i];
+        double pen = delta - ps->offset[i];
+        double W = 0.0, F = 0.0, v_s = 0.0, u = 0.0, h = 0.0, lam = 0.0, psi = 0.0, d_max = 0.0;
+        if (pen <= 0.0) {
+            if (detail) out->forces[slot] = 0.0;
+            if (pairs != NULL && (size_t)out->n_pairs < capacity) {
+                rm_pair_coefficients(M, f, ps, i);
+                double* row = pairs + RM_PAIR_DETAIL * (size_t)out->n_pairs;
+                for (int k = 0; k < RM_PAIR_DETAIL; k++) row[k] = 0.0;
+                row[0] = (double)slot;
+                row[1] = s;
+                row[2] = ps->offset[i];
+                row[3] = ps->r_x[i];
+                row[4] = ps->K[i];
+                row[5] = pen;
+                out->n_pairs++;
+            }
+            continue;
+        }
+        rm_pair_coefficients(M, f, ps, i);
+        double K = ps->K[i];
+        W = K * (pen * rm_sqrt_checked(f, pen));
+        if (damping > 0.0) {
+            W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (W < 0.0) W = 0.0; /* the flanks never pull on each other */
+        }
+        tau_w += (double)flank * W * M->arm_wheel;
+        tau_p -= (double)flank * W * M->arm_pinion;
+        W_sum += W;
+        double rho_p = s, rho_w = M->g.line_length - s;
+        v_s = w_p * rho_p - w_w * rho_w;       /* sliding speed, changes sign at the pitch point */
+        u = 0.5 * (w_p * rho_p + w_w * rho_w); /* entrainment (mean rolling) speed, eq. 16-17 */
+        if ((p->friction_enabled || detail) && W > 0.0) {
+            double A_e = 3.2 * W / E_star * M->sqrt_gamma_sigma; /* eq. 13 */
+            double A = ps->kz[i] * rm_pow_checked(f, W, 2.0 / 3.0);
+            d_max = pair_d_max(M, f, ps, i, v_impact);
+            h = -pen + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, never negative */
+            if (!(h > 0.0)) h = 0.0;
+            lam = h / p->sigma;
+            psi = rm_dry_fraction(lam);
+            if (p->friction_enabled) {
+                double U = p->shear_speed == 0 ? u : v_s;
+                F = rm_friction_force(p->friction_form, psi, A_e, A, p->tau_s, p->eta, U, h);
+                double sgn;
+                if (signs != NULL)
+                    sgn = signs[slot];
+                else if (v_s > 0.0)
+                    sgn = 1.0;
+                else if (v_s < 0.0)
+                    sgn = -1.0;
+                else
+                    sgn = 0.0;
+                if (sgn != 0.0) {
+                    tau_w += sgn * F * rho_w;
+                    tau_p -= sgn * F * rho_p;
+                    F_net += sgn * F;
+                }
+            }
+        }
+        if (detail) {
+            /* the loaded pairs (W > 0), the most loaded one (the first of equal maxima), the
+             * force per slot (a later pair in the same slot overwrites) */
+            if (W > 0.0) {
+                if (out->n_loaded == 0 || W > out->top_W) {
+                    out->top_W = W;
+                    out->top_h = h;
+                    out->top_lam = lam;
+                    out->top_psi = psi;
+                }
+                out->n_loaded++;
+            }
+            out->forces[slot] = W;
+        }
+        if (pairs != NULL && (size_t)out->n_pairs < capacity) {
+            double* row = pairs + RM_PAIR_DETAIL * (size_t)out->n_pairs;
+            double values[RM_PAIR_DETAIL] = {(double)slot, s, ps->offset[i], ps->r_x[i], K, pen,
+                                             W, F, v_s, u, h, lam, psi, d_max};
+            for (int k = 0; k < RM_PAIR_DETAIL; k++) row[k] = values[k];
+            out->n_pairs++;
+        }
+    }
+    out->tau_w = tau_w;
+    out->tau_p = tau_p;
+    out->W = W_sum;
+    out->F = F_net;
+}
+
+/* The total normal force of `flank` at penetration delta without dissipation:
+ * sum_i K_i (delta - g_i)^(3/2) over the pairs that touch. */
+double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
+                       double delta)
+{
+    RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double total = 0.0;
+    for (int i = 0; i < ps->n; i++) {
+        double d = delta - ps->offset[i];
+        if (d > 0.0) {
+            rm_pair_coefficients(M, f, ps, i);
+            total += ps->K[i] * (d * rm_sqrt_checked(f, d));
+        }
+    }
+    return total;
+}
+
+/* The contact's stiffness dW/d(delta) [N/m] and damping dW/d(delta_dot) [N.s/m] summed over
+ * the touching pairs at penetration delta and rate delta_dot: they set its time scales
+ * sqrt(m/k) and m/c. */
+void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
+                      double w_p, double delta, double delta_dot, double* k, double* c)
+{
+    double d = M->damping;
+    double k_sum = 0.0, c_sum = 0.0;
+    RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    for (int i = 0; i < ps->n; i++) {
+        double pen = delta - ps->offset[i];
+        if (pen > 0.0) {
+            rm_pair_coefficients(M, f, ps, i);
+            double K = ps->K[i];
+            double root = rm_sqrt_checked(f, pen);
+            double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (factor > 0.0) k_sum += 1.5 * K * root * factor;
+            c_sum += K * d * (pen * root);
+        }
+    }
+    *k = k_sum;
+    *c = c_sum;
+}
+
+/* The largest eq. (7)-(8) delta_max over the pairs of `flank` for an impact at v_impact. */
+double rm_energy_balance_delta_max(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                                   double phi_p, double v_impact)
+{
+    RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double out = 0.0;
+    for (int i = 0; i < ps->n; i++) {
+        rm_pair_coefficients(M, f, ps, i);
+        double d = rm_film_delta_max(f, v_impact, ps->K[i], ps->r_x[i], ps->ka[i], M->p.density);
+        if (d > out) out = d;
+    }
+    return out;
+}

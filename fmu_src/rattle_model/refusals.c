@@ -1,0 +1,131 @@
+/*
+ * refusals.c - the wording of the refusals the physics reports as a code and its numbers
+ * (RM_FAIL_...), written once for every face, and the failure exit itself.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "rm_private.h"
+
+/* Largest penetration a step may reach, in gear.m_n (stepper.c) */
+extern const double RM_MAX_PENETRATION_MODULES;
+/* Substeps of a contact in one communication step (stepper.c) */
+extern const int64_t RM_MAX_CONTACT_SUBSTEPS;
+
+void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
+{
+    f->code = code;
+    f->values[0] = v0;
+    f->values[1] = v1;
+    f->values[2] = v2;
+    f->values[3] = v3;
+    longjmp(f->jb, 1);
+}
+
+double rm_pow(double x, double y)
+{
+    double (*volatile libm_pow)(double, double) = pow;
+    return libm_pow(x, y);
+}
+
+static const char* math_call(int which)
+{
+    switch (which) {
+    case RM_MATH_POW: return "pow";
+    case RM_MATH_SQRT: return "sqrt";
+    case RM_MATH_LOG: return "log";
+    case RM_MATH_EXP: return "exp";
+    case RM_MATH_FLOOR: return "floor";
+    case RM_MATH_CEIL: return "ceil";
+    default: return "an integer conversion";
+    }
+}
+
+void rm_refusal_text(RmText* t, int code, const double* v)
+{
+    switch (code) {
+    case RM_FAIL_DIVERGED:
+        rm_puts(t, "the step diverged (wheel angle ");
+        rm_put_number(t, v[0]);
+        rm_puts(t, " rad, speed ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, " rad/s); the inputs or parameters are beyond what the integrator resolves "
+                   "(reduce solver.h_max or the communication step)");
+        return;
+    case RM_FAIL_PENETRATION:
+        rm_puts(t, "the flanks would penetrate ");
+        rm_put_g(t, v[0] * 1e3, 4);
+        rm_puts(t, " mm in this step, beyond the validity of the Hertz contact (allowed: ");
+        rm_put_g(t, v[1] * 1e3, 4);
+        rm_puts(t, " mm = ");
+        rm_put_number(t, RM_MAX_PENETRATION_MODULES);
+        rm_puts(t, " gear.m_n); the inputs drive the teeth into each other far harder than any "
+                   "transmission (check wheel.tau_load and the pinion kinematics, or reduce the "
+                   "communication step)");
+        return;
+    case RM_FAIL_TOO_STIFF:
+        rm_puts(t, "the contact is too stiff to resolve: its fastest time scale ");
+        rm_put_g(t, 1.0 / v[0], 3);
+        rm_puts(t, " s (stiffness ");
+        rm_put_g(t, v[1], 4);
+        rm_puts(t, " N/m, damping ");
+        rm_put_g(t, v[2], 4);
+        rm_puts(t, " N.s/m on the wheel's normal mass ");
+        rm_put_g(t, v[3], 4);
+        rm_printf(t, " kg) needs more than %lld substeps in this step; reduce the communication "
+                     "step, the impact speed (inputs) or contact.damping, or raise wheel.J",
+                  (long long)RM_MAX_CONTACT_SUBSTEPS);
+        return;
+    case RM_FAIL_NO_BRACKET:
+        rm_puts(t, "Brent's method: f(");
+        rm_put_number(t, v[0]);
+        rm_puts(t, ") = ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, " and f(");
+        rm_put_number(t, v[2]);
+        rm_puts(t, ") = ");
+        rm_put_number(t, v[3]);
+        rm_puts(t, " do not bracket a root");
+        return;
+    case RM_FAIL_MATH:
+        rm_printf(t, "%s(", math_call((int)v[0]));
+        rm_put_number(t, v[1]);
+        if ((int)v[0] == RM_MATH_POW) {
+            rm_puts(t, ", ");
+            rm_put_number(t, v[2]);
+        }
+        rm_puts(t, ") has no finite real result: the inputs or parameters are beyond what the "
+                   "integrator resolves (reduce solver.h_max or the communication step)");
+        return;
+    case RM_FAIL_TOO_MANY_PAIRS:
+        rm_printf(t, "more than %d tooth pairs in the zone of action", (int)v[0]);
+        return;
+    case RM_FAIL_PAIR_RANGE:
+        rm_puts(t, "roll coordinate ");
+        rm_put_number(t, v[0]);
+        rm_puts(t, " m beyond the model's range (pair number ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, "; |pinion angle| too large)");
+        return;
+    case RM_FAIL_NO_PROGRESS:
+        rm_puts(t, "the step makes no progress at t = ");
+        rm_put_number(t, v[0]);
+        rm_puts(t, " s (the integrator is stuck; reduce solver.h_max or the communication "
+                   "step)");
+        return;
+    case RM_FAIL_SUBSTEPS:
+        rm_puts(t, "step size h = ");
+        rm_put_number(t, v[0]);
+        rm_puts(t, " s needs ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, " substeps of solver.h_max");
+        return;
+    case RM_FAIL_PAIR_LEFT:
+        rm_puts(t, "a tooth pair left the zone of action while its engagement was located "
+                   "(reduce solver.h_max)");
+        return;
+    default:
+        rm_printf(t, "internal refusal %d", code);
+        return;
+    }
+}

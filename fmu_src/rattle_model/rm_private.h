@@ -1,0 +1,580 @@
+/*
+ * rm_private.h - what the files of the model library share, by physical job:
+ *
+ *   text.c          message text (numbers as the shortest text that reads back exactly)
+ *   refusals.c      the wording of every refusal the physics reports as a code
+ *   roots.c         Brent's method, exact quadratic crossings
+ *   geometry.c      the helical involute pair and its tooth pairs (paper eq. 3-6)
+ *   contact.c       Hertz point contact: exact ellipse and eq. 2, eq. 7-8, Hunt-Crossley
+ *   friction.c      film, regime and flank friction (eq. 11-17)
+ *   mesh.c          the mesh model: loads and torques of every pair (eq. 1-2, 10-17)
+ *   stepper.c       the wheel's equation of motion (eq. 10) over one communication step
+ *   start.c         the start solutions: static flank equilibrium, free start
+ *   driveline.c     input-shaft kinematics and the output shaft
+ *   speed_table.c   reading a measured speed table
+ *   unit.c          the unit: variables, phases, checks, save/restore (rattle_model.h)
+ *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
+ *   unit_driveline.c  Driveline: the same for the driveline
+ *   rm_tables.c     GENERATED from the Python specs: the variables of both units
+ *
+ * Numbers: every expression keeps the IEEE operations of the reference results (docs/model.md:
+ * "Reproducible numbers"): no -ffast-math, no contraction (-ffp-contract=off), x ** y through
+ * libm's pow (rm_pow), max(a, b) as "b > a ? b : a".  A one-ulp change changes the impact
+ * sequence of the chaotic rattle motion, so do not "simplify" an expression here.
+ */
+#ifndef RM_PRIVATE_H
+#define RM_PRIVATE_H
+
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+#if defined(__FAST_MATH__)
+#error "the rattle model must not be compiled with -ffast-math: it keeps IEEE arithmetic"
+#endif
+
+#include <math.h>
+#include <setjmp.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rattle_model.h"
+#include "rm_tables.h"
+
+#define RM_PI 3.141592653589793
+
+/* Internal to the library's binary: never exported to a host (nor interposed by a namesake). */
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(_WIN32)
+#define RM_INTERNAL __attribute__((visibility("hidden")))
+#else
+#define RM_INTERNAL
+#endif
+
+/* ------------------------------------------------------------------ text (text.c) */
+/* A growable UTF-8 string; on allocation failure it keeps what it has and sets `failed`. */
+typedef struct {
+    char* data;
+    size_t len, cap;
+    int failed;
+} RmText;
+
+RM_INTERNAL void rm_text_init(RmText* t);
+RM_INTERNAL void rm_text_free(RmText* t);
+RM_INTERNAL void rm_text_clear(RmText* t);
+RM_INTERNAL const char* rm_text_str(const RmText* t); /* "" when empty */
+RM_INTERNAL void rm_puts(RmText* t, const char* s);
+RM_INTERNAL void rm_putn(RmText* t, const char* s, size_t n);
+RM_INTERNAL void rm_printf(RmText* t, const char* fmt, ...)
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+/* A number as the shortest text that reads back to the same double (0.1, 1e-05, 2.5e+16,
+ * nan, inf), whatever the locale. */
+RM_INTERNAL void rm_put_number(RmText* t, double x);
+/* A number with `digits` significant digits (%g), whatever the locale. */
+RM_INTERNAL void rm_put_g(RmText* t, double x, int digits);
+/* A string in single quotes, bytes that are not printable ASCII as \xNN. */
+RM_INTERNAL void rm_put_quoted(RmText* t, const char* s, size_t n);
+/* Locale-independent strtod of a whole string (surrounding blanks allowed); 1 on success. */
+RM_INTERNAL int rm_parse_number(const char* text, size_t n, double* out);
+
+/* ------------------------------------------------------------------ failures */
+/* A refusal inside the physics: its code and the numbers its message quotes, then a longjmp
+ * back to the entry point (stepper.c, the start and the probes), which leaves its state
+ * unchanged.  refusals.c words them (rm_refusal_text). */
+enum {
+    RM_FAIL_NONE = 0,
+    RM_FAIL_DIVERGED,     /* wheel angle, speed */
+    RM_FAIL_PENETRATION,  /* depth, limit */
+    RM_FAIL_TOO_STIFF,    /* fastest rate, k, c, mass */
+    RM_FAIL_NO_BRACKET,   /* a, f(a), b, f(b) */
+    RM_FAIL_MATH,         /* which (RM_MATH_...), x, y */
+    RM_FAIL_TOO_MANY_PAIRS, /* limit */
+    RM_FAIL_PAIR_RANGE,   /* roll coordinate, pair number */
+    RM_FAIL_NO_PROGRESS,  /* time */
+    RM_FAIL_SUBSTEPS,     /* h, substeps */
+    RM_FAIL_PAIR_LEFT     /* (a pair left the zone of action while its event was located) */
+};
+enum { RM_MATH_POW, RM_MATH_SQRT, RM_MATH_LOG, RM_MATH_EXP, RM_MATH_FLOOR, RM_MATH_CEIL,
+       RM_MATH_INT };
+
+typedef struct {
+    jmp_buf jb;
+    int code;
+    double values[4];
+} RmFail;
+
+#if defined(__GNUC__) || defined(__clang__)
+#define RM_NORETURN __attribute__((noreturn))
+#else
+#define RM_NORETURN
+#endif
+RM_INTERNAL void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
+    RM_NORETURN;
+/* The message of a failure (refusals.c). */
+RM_INTERNAL void rm_refusal_text(RmText* t, int code, const double* values);
+
+/* x ** y through libm's pow, called through a volatile pointer so that the compiler cannot
+ * fold a constant exponent (pow(x, 2.0) into x * x rounds differently in rare cases). */
+RM_INTERNAL double rm_pow(double x, double y);
+
+/* The library calls of the physics, refused where their result is not a real number the
+ * integration can go on with (a negative or non-finite argument from diverging inputs). */
+static inline double rm_pow_checked(RmFail* f, double x, double y)
+{
+    double r = rm_pow(x, y);
+    if (x < 0.0 || (isinf(r) && isfinite(x))) rm_fail(f, RM_FAIL_MATH, RM_MATH_POW, x, y, 0.0);
+    return r;
+}
+
+static inline double rm_sqrt_checked(RmFail* f, double x)
+{
+    if (x < 0.0) rm_fail(f, RM_FAIL_MATH, RM_MATH_SQRT, x, 0.0, 0.0);
+    return sqrt(x);
+}
+
+static inline double rm_log_checked(RmFail* f, double x)
+{
+    if (x <= 0.0) rm_fail(f, RM_FAIL_MATH, RM_MATH_LOG, x, 0.0, 0.0);
+    return log(x);
+}
+
+static inline double rm_exp_checked(RmFail* f, double x)
+{
+    double r = exp(x);
+    if (isinf(r) && isfinite(x)) rm_fail(f, RM_FAIL_MATH, RM_MATH_EXP, x, 0.0, 0.0);
+    return r;
+}
+
+static inline double rm_floor_checked(RmFail* f, double x)
+{
+    if (!isfinite(x)) rm_fail(f, RM_FAIL_MATH, RM_MATH_FLOOR, x, 0.0, 0.0);
+    return floor(x);
+}
+
+static inline double rm_ceil_checked(RmFail* f, double x)
+{
+    if (!isfinite(x)) rm_fail(f, RM_FAIL_MATH, RM_MATH_CEIL, x, 0.0, 0.0);
+    return ceil(x);
+}
+
+/* max(a, b) that returns a unless b > a (a NaN in a stays; fmax would drop it). */
+static inline double rm_max(double a, double b) { return b > a ? b : a; }
+static inline double rm_min(double a, double b) { return b < a ? b : a; }
+
+/* ------------------------------------------------------------------ roots.c */
+/* Brent's method: its iteration cap and the usual relative tolerance (four units of roundoff). */
+#define RM_BRENT_MAX_ITERATIONS 200
+#define RM_BRENT_RTOL (4.0 * 2.220446049250313e-16)
+
+typedef double (*RmRootFn)(void* ctx, double x);
+/* The root of fn in [a, b] given f(a) = fa and f(b) = fb of different signs (or one zero), to
+ * xtol + rtol |x|; RM_FAIL_NO_BRACKET otherwise. */
+RM_INTERNAL double rm_brent(RmFail* f, RmRootFn fn, void* ctx, double a, double b, double fa,
+                            double fb, double xtol, double rtol);
+/* The smallest t in [0, t_max] where c0 + c1 t + c2 t^2 crosses zero upwards (rising) or
+ * downwards: 1 and *out, or 0. */
+RM_INTERNAL int rm_first_crossing(double c0, double c1, double c2, double t_max, int rising,
+                                  double* out);
+
+/* ------------------------------------------------------------------ geometry.c */
+#define RM_DRIVE 1
+#define RM_COAST (-1)
+/* Roll distance [m] under which a breakpoint counts as reached. */
+#define RM_BREAKPOINT_TOLERANCE 1e-12
+/* Tooth pairs held per roll coordinate, and the largest |pair number| (exact in a double). */
+#define RM_MAX_PAIRS 16
+#define RM_PAIR_NUMBER_LIMIT 4503599627370496.0 /* 2^52 */
+
+/* The parameters the geometry reads. */
+typedef struct {
+    int z_pinion, z_wheel;
+    double m_n, alpha_n, beta, addendum, b, backlash, crowning;
+} RmGearParams;
+
+typedef struct {
+    double ratio, alpha_t, beta_b, m_t, r_pinion, r_wheel, centre_distance, rb_pinion,
+        rb_wheel, ra_pinion, ra_wheel, line_length, s_start, s_end, s_pitch, base_pitch,
+        eps_alpha, eps_beta, eps_gamma, line_span, crowning, crown_factor, r_y, normal_factor,
+        cos_alpha_t, sin_alpha_t, sin_beta_b, half_backlash, flank_phase;
+    int n_bp;
+    double bp[4]; /* roll breakpoints modulo the base pitch, sorted */
+} RmGeometry;
+
+/* The pair's geometry from its parameters, with its validity checks (undercut, tip
+ * interference, contact ratio, pair slots): 1, or 0 with the refusal in err. */
+RM_INTERNAL int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err);
+/* r_x = r_p r_w / (r_p + r_w) of the normal-plane radii at roll coordinate s (eq. 3-5). */
+RM_INTERNAL double rm_radius_x(const RmGeometry* g, double s);
+RM_INTERNAL void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi);
+
+static inline double rm_flank_roll(const RmGeometry* g, int flank, double phi_p)
+{
+    return g->flank_phase + (double)flank * g->rb_pinion * phi_p;
+}
+
+/* The tooth pairs in the zone of action at roll coordinate u, with the contact law's
+ * coefficients at each pair's radius (filled on first use by mesh.c) and, per impact speed,
+ * the eq. 7 delta_max. */
+typedef struct {
+    double u;
+    int n;
+    int64_t slot[RM_MAX_PAIRS];
+    double s[RM_MAX_PAIRS], offset[RM_MAX_PAIRS], dg[RM_MAX_PAIRS];
+    int coefficients_ok[RM_MAX_PAIRS];
+    double r_x[RM_MAX_PAIRS], K[RM_MAX_PAIRS], ka[RM_MAX_PAIRS], kz[RM_MAX_PAIRS];
+    double d_max_v;
+    int d_max_ok[RM_MAX_PAIRS];
+    double d_max[RM_MAX_PAIRS];
+} RmPairSet;
+
+RM_INTERNAL void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, RmPairSet* ps);
+/* The first roll breakpoint between u_a and u_b in the direction of travel: 1 and *out. */
+RM_INTERNAL int rm_next_breakpoint(const RmGeometry* g, RmFail* f, double u_a, double u_b,
+                                   double* out);
+
+/* ------------------------------------------------------------------ contact.c */
+#define RM_LAW_EXACT 0
+#define RM_LAW_EQUIVALENT_SPHERE 1
+#define RM_MAX_CHEBYSHEV_TERMS 32
+
+typedef struct {
+    double q, kappa, alpha, zeta;
+} RmEllipse;
+
+typedef struct {
+    int law;
+    double E_star, r_y, x_lo, x_hi, t_mid, t_scale;
+    int terms;
+    double kappa[RM_MAX_CHEBYSHEV_TERMS], alpha[RM_MAX_CHEBYSHEV_TERMS],
+        zeta[RM_MAX_CHEBYSHEV_TERMS];
+} RmContactLaw;
+
+RM_INTERNAL double rm_effective_modulus(double E1, double nu1, double E2, double nu2);
+RM_INTERNAL int rm_exact_ellipse(double rho, RmEllipse* out, RmText* err);
+RM_INTERNAL int rm_contact_law_build(int law, double E_star, double r_y, double x_lo,
+                                     double x_hi, RmContactLaw* c, RmText* err);
+RM_INTERNAL void rm_contact_law_at(const RmContactLaw* c, RmFail* f, double r_x, double* K,
+                                   double* R, double* ka, double* kz);
+RM_INTERNAL double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka,
+                                     double density);
+RM_INTERNAL int rm_hunt_crossley_restitution(double alpha, double* e, RmText* err);
+RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* err);
+
+/* ------------------------------------------------------------------ friction.c */
+#define RM_FORM_LOAD_SHARING 0
+#define RM_FORM_APPARENT_AREA 1
+#define RM_FORM_AS_PRINTED 2
+/* Film parameters of the boundary (psi = 1) and full-film (psi = 0) limits. */
+#define RM_LAMBDA_BOUNDARY 1.0
+#define RM_LAMBDA_FULL_FILM 3.0
+
+RM_INTERNAL double rm_dry_fraction(double lam);
+RM_INTERNAL double rm_friction_force(int form, double psi, double A_e, double A, double tau_s,
+                                     double eta, double U, double h);
+
+/* ------------------------------------------------------------------ mesh.c */
+#define RM_DISSIPATION_NONE 0
+#define RM_DISSIPATION_RESTITUTION 1
+#define RM_DISSIPATION_FACTOR 2
+
+/* The parameters of the mesh model (GearMeshRattle's, SI). */
+typedef struct {
+    RmGearParams gear;
+    double E_pinion, nu_pinion, E_wheel, nu_wheel, density, J_wheel;
+    int hertz_law, dissipation;
+    double restitution, restitution_speed, damping;
+    int friction_enabled, friction_form, shear_speed;
+    double tau_s, eta, sigma, gamma, rattle_time, h_max, h_comm_max;
+} RmMeshParams;
+
+/* The mesh model: everything the stepper reads, built once per parameter set. */
+typedef struct {
+    RmMeshParams p;
+    RmGeometry g;
+    RmContactLaw law;
+    double E_star, arm_wheel, arm_pinion, normal_mass, damping;
+    double pen_limit;        /* largest penetration a step may reach [m] */
+    double sqrt_gamma_sigma; /* sqrt(gamma / sigma) of eq. 13 */
+} RmMesh;
+
+RM_INTERNAL int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err);
+
+static inline double rm_penetration(const RmMesh* M, int flank, double phi_p, double phi_w)
+{
+    return (double)flank * (M->arm_pinion * phi_p - M->arm_wheel * phi_w) - M->g.half_backlash;
+}
+
+static inline double rm_approach_rate(const RmMesh* M, int flank, double w_p, double w_w)
+{
+    return (double)flank * (M->arm_pinion * w_p - M->arm_wheel * w_w);
+}
+
+static inline double rm_sliding_speed(const RmMesh* M, double s, double w_p, double w_w)
+{
+    return w_p * s - w_w * (M->g.line_length - s);
+}
+
+#define RM_PAIR_CACHE 6
+typedef struct {
+    int n_used, next;
+    RmPairSet set[RM_PAIR_CACHE];
+} RmPairCache;
+
+RM_INTERNAL void rm_pair_cache_init(RmPairCache* c);
+/* The pair set at roll coordinate u, from the cache or built into it (valid until the next
+ * call). */
+RM_INTERNAL RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u);
+RM_INTERNAL void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i);
+
+/* The loads of one flank. */
+typedef struct {
+    double delta, tau_w, tau_p, W, F;
+    /* with detail: */
+    int64_t n_loaded;
+    double top_W, top_h, top_lam, top_psi;
+    double forces[RM_MAX_PAIR_SLOTS];
+    int n_pairs; /* rows written to the per-pair detail (probes) */
+} RmLoads;
+
+/* Per-pair detail of the loads (probes): slot, s, offset, r_x, K, delta, W, F, v_s, u, h,
+ * lambda, psi, delta_max. */
+#define RM_PAIR_DETAIL 14
+
+RM_INTERNAL void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                               double phi_p, double w_p, double phi_w, double w_w,
+                               double v_impact, const double* signs, int detail, RmLoads* out,
+                               double* pairs, size_t capacity);
+RM_INTERNAL double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                                   double phi_p, double delta);
+RM_INTERNAL void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                                  double phi_p, double w_p, double delta, double delta_dot,
+                                  double* k, double* c);
+RM_INTERNAL double rm_energy_balance_delta_max(const RmMesh* M, RmFail* f, RmPairCache* cache,
+                                               int flank, double phi_p, double v_impact);
+
+/* ------------------------------------------------------------------ stepper.c */
+/* The wheel's state and the contact bookkeeping (SI). */
+typedef struct {
+    double phi, w;
+    int flank; /* in contact: +1 drive, -1 coast, 0 none */
+    double v_drive, v_coast, v_last; /* approach speed at the last onset of each flank, any */
+    int64_t n_drive, n_coast;        /* cumulative onsets */
+    double rattle_index;             /* exponentially averaged impact energy per second [W] */
+} RmWheel;
+
+/* The aggregates of the last step, and the pinion at its end. */
+typedef struct {
+    double tau_wheel_mean, tau_pinion_mean, W_peak, delta_peak;
+    int64_t onsets_drive, onsets_coast;
+    double pinion_phi, pinion_w;
+} RmLast;
+
+/* The cost counters and the located events of a step. */
+typedef struct {
+    int64_t rhs_evaluations, contact_substeps;
+    size_t n_events, total_events;
+    RmEvent events[RM_MAX_EVENTS];
+} RmStepLog;
+
+/* One communication step of the wheel from `wheel` under the pinion's Taylor polynomial
+ * (phi_p, w_p, a_p) and the held load tau_load: RM_FAIL_NONE with the new wheel and last,
+ * or the failure's code with its numbers in values (wheel and last untouched). */
+RM_INTERNAL int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h,
+                              double phi_p, double w_p, double a_p, double tau_load,
+                              RmStepLog* log, double* values);
+
+/* ------------------------------------------------------------------ start.c */
+RM_INTERNAL int rm_contact_flank(const RmMesh* M, double phi_p, double w_p, double a_p,
+                                 double tau_load, const RmWheel* st);
+/* The wheel at the rigid speed ratio resting on the flank that carries tau_load (static
+ * equilibrium): 1, or 0 with the refusal. */
+RM_INTERNAL int rm_equilibrium_start(const RmMesh* M, double phi_p, double w_p,
+                                     double tau_load, RmWheel* wheel, RmText* err);
+/* The wheel at (phi_start, w_start) against the pinion: 1, or 0 if that puts the flanks into
+ * each other. */
+RM_INTERNAL int rm_free_start(const RmMesh* M, double phi_start, double w_start, double phi_p,
+                              double w_p, double tau_load, RmWheel* wheel, RmText* err);
+
+/* ------------------------------------------------------------------ driveline.c */
+#define RM_N_ORDERS 4
+
+typedef struct {
+    double k, c, J, drag, drag_viscous, h_max, h_comm_max;
+} RmShaftParams;
+
+typedef struct {
+    RmShaftParams p;
+    /* input-shaft kinematics: engine orders, or the speed table when n_table > 0 */
+    double w_mean, phi_0, t_start;
+    int n_terms;
+    double A[RM_N_ORDERS], W[RM_N_ORDERS], ph[RM_N_ORDERS];
+    int a_over_step;
+    size_t n_table;
+    double *times, *speeds, *angles;
+    /* output shaft */
+    double shaft_phi, shaft_w, tau_load;
+    double time, last_step;
+} RmDriveline;
+
+/* (phi, w, a) of the input shaft at t. */
+RM_INTERNAL void rm_kinematics(const RmDriveline* d, double t, double* out);
+/* The speed table (n rows) as the kinematics: 1, or 0 when out of memory. */
+RM_INTERNAL int rm_use_table(RmDriveline* d, size_t n, const double* times,
+                             const double* speeds);
+RM_INTERNAL void rm_driveline_release(RmDriveline* d);
+/* The output shaft in steady state behind the wheel at (phi_w, w_w). */
+RM_INTERNAL void rm_shaft_start(RmDriveline* d, double phi_w, double w_w);
+/* One step of the output shaft from t by h with the wheel's step-start angle and speed: 1, or
+ * 0 with the refusal (nothing changed). */
+RM_INTERNAL int rm_driveline_step(RmDriveline* d, double t, double h, double phi_w,
+                                  double w_w, RmText* err);
+/* A table of n rows as the saved record holds it: 1 if valid, else 0 with the refusal naming
+ * `source`. */
+RM_INTERNAL int rm_check_speed_table(size_t n, const double* times, const double* speeds,
+                                     const char* source, RmText* err);
+
+/* ------------------------------------------------------------------ speed_table.c */
+#define RM_MAX_SPEED_TABLE_BYTES (4u * 1024u * 1024u)
+#define RM_MAX_PATH_BYTES 4096
+/* The file a speed-table parameter names: a relative path in `resources` first (when it
+ * exists there), else as given. */
+RM_INTERNAL void rm_resolve_speed_table(const char* resources, const char* name, RmText* out);
+/* The rows of the CSV file at path: 1 with n, times, speeds (malloc'ed), or 0 with the
+ * refusal. */
+RM_INTERNAL int rm_read_speed_table(const char* path, size_t* n, double** times,
+                                    double** speeds, RmText* err);
+
+/* ------------------------------------------------------------------ the unit (unit.c) */
+/* A stored value: Real in r, Integer and Boolean in i, String in s (UTF-8, owned). */
+typedef struct {
+    double r;
+    int64_t i;
+    char* s;
+} RmValue;
+
+/* A binary record being written or read (little-endian, explicit fields). */
+typedef struct {
+    unsigned char* data;
+    size_t len, cap;
+    int failed;
+} RmWriter;
+typedef struct {
+    const unsigned char* data;
+    size_t len, pos;
+    int failed;
+} RmReader;
+RM_INTERNAL void rm_write_u32(RmWriter* w, uint32_t x);
+RM_INTERNAL void rm_write_i64(RmWriter* w, int64_t x);
+RM_INTERNAL void rm_write_f64(RmWriter* w, double x);
+RM_INTERNAL void rm_write_bytes(RmWriter* w, const void* p, size_t n);
+RM_INTERNAL uint32_t rm_read_u32(RmReader* r);
+RM_INTERNAL int64_t rm_read_i64(RmReader* r);
+RM_INTERNAL double rm_read_f64(RmReader* r);
+RM_INTERNAL const unsigned char* rm_read_bytes(RmReader* r, size_t n);
+
+/* How a unit reads inputs a master holds or did not exchange during initialization (the
+ * boundary of the unit): the inputs at the end of initialization, whether the first step is
+ * still to come, and the motion inputs of the last step. */
+typedef struct {
+    double initial_inputs[4];
+    int first_step;
+    int has_last_motion;
+    double last_motion[4];
+} RmBoundary;
+
+typedef struct RmUnitClass RmUnitClass;
+
+struct RmUnit {
+    const RmUnitClass* cls;
+    int kind;
+    int phase;
+    double start_time, time;
+    size_t n_variables;
+    const RmVariable* variables;
+    RmValue* values;
+    char* resources;
+    void* model;            /* the unit's model, NULL before initialization has ended */
+    void* cache;            /* the unit's own cache (built models, the speed table read) */
+    unsigned stale;         /* output groups out of date since the last step */
+    int provisional_valid;  /* outputs of initialization mode computed */
+    RmValue* provisional;   /* ... here */
+    int motion_set;         /* a motion input was set since the last step */
+    int status;             /* of the current call */
+    RmText message;
+    RmLogger logger;
+    void* logger_env;
+};
+
+/* The hooks of a kind of unit (unit_mesh.c, unit_driveline.c). */
+struct RmUnitClass {
+    int kind;
+    /* The inputs whose values the first step compares with initialization's, and the motion
+     * inputs a held master leaves unchanged (value references). */
+    int n_start, n_motion;
+    unsigned start_vr[4], motion_vr[4];
+    /* The model for the current values (their ranges checked): the combination checks, the
+     * fixed part (kept per parameter set), the start -- a new model, or NULL with the
+     * refusal. */
+    void* (*build)(RmUnit* u, RmText* err);
+    void (*free_model)(void* model);
+    void (*free_cache)(RmUnit* u);
+    /* The step from t by h with the current inputs: 1, or 0 with the refusal (the model
+     * unchanged); may report a warning (rm_report). */
+    int (*step)(RmUnit* u, double t, double h, RmText* err);
+    /* The outputs of the groups asked for into values: 1, or 0 with the refusal.  Asking for
+     * complete_group computes every output. */
+    int (*outputs)(RmUnit* u, void* model, unsigned groups, RmValue* values, RmText* err);
+    unsigned all_groups, complete_group;
+    unsigned (*group_of)(unsigned vr);
+    /* The model's own record: written, and read back (checked) into a new model for the
+     * current values. */
+    void (*save)(const void* model, RmWriter* w);
+    void* (*restore)(RmUnit* u, RmReader* r, RmText* err);
+    /* The events and cost of the last accepted step (NULL: none kept). */
+    const RmStepLog* (*step_log)(const void* model);
+    /* Derived quantities of the parameters (rm_describe): 1, or 0 with the refusal. */
+    int (*describe)(RmUnit* u, const char** names, double* values, size_t capacity,
+                    size_t* count, RmText* err);
+};
+
+RM_INTERNAL extern const RmUnitClass RM_MESH_CLASS;
+RM_INTERNAL extern const RmUnitClass RM_DRIVELINE_CLASS;
+
+/* The current call returns at least `status` with `message` (the first of the highest). */
+RM_INTERNAL void rm_report(RmUnit* u, int status, const char* message);
+/* The boundary at the end of initialization, from the current inputs. */
+RM_INTERNAL void rm_boundary_start(const RmUnit* u, RmBoundary* b);
+/* The master holds the motion inputs: set none since the last step, or set them to exactly
+ * the last step's values. */
+RM_INTERNAL int rm_motion_held(const RmUnit* u, const RmBoundary* b);
+RM_INTERNAL void rm_motion_step_done(RmUnit* u, RmBoundary* b);
+/* The first step's inputs differ from initialization's (and settling is asked for). */
+RM_INTERNAL int rm_first_step_differs(const RmBoundary* b, int settle, const double* values,
+                                      int n);
+/* The settling warning of a first step. */
+RM_INTERNAL void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given,
+                                    const char* what);
+RM_INTERNAL void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w);
+RM_INTERNAL int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r,
+                                    RmText* err);
+/* A saved double that must be finite (and >= 0 with nonnegative): 1, or 0 with the refusal
+ * naming `what`. */
+RM_INTERNAL int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out,
+                               RmText* err);
+
+/* The mesh model's parameters from a GearMeshRattle unit's values. */
+RM_INTERNAL int rm_mesh_params(const RmValue* values, RmMeshParams* p);
+/* The parameters' ranges and choices: 1, or 0 with the refusal. */
+RM_INTERNAL int rm_unit_values_valid(RmUnit* u, RmText* err);
+/* The coupled start (unit.c) asks the classes: the driveline's outputs at the start for a
+ * wheel (pinion.phi, pinion.w, pinion.a, wheel.tau_load, vehicle.w), and the mesh's wheel at
+ * the start for its inputs. */
+RM_INTERNAL int rm_driveline_start_outputs(RmUnit* u, double start_time, double phi_w,
+                                           double w_w, double* out, RmText* err);
+RM_INTERNAL int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
+                                    RmText* err);
+
+#endif

@@ -1,0 +1,1223 @@
+/*
+ * unit.c - the unit of rattle_model.h: its variables and their checks, its phases, the step
+ * with the communication point's continuity, the outputs computed when read, the complete
+ * state as a versioned binary record, and the coupled start values.  What is particular to a
+ * kind of unit is behind RmUnitClass (unit_mesh.c, unit_driveline.c).
+ *
+ * Every message of a refused call is "<action>: <reason>", the action named as the FMI
+ * function it serves (setReal, doStep, ...), so that both FMI faces and the Python API log the
+ * same text.
+ */
+#if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
+#define __USE_MINGW_ANSI_STDIO 1
+#endif
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rm_private.h"
+
+/* Tolerance of the communication point's continuity, in units of the step: masters that
+ * compute t = t0 + k h differ from t_prev + h_prev by a few ulps of t. */
+#define COMMUNICATION_POINT_TOLERANCE 1e-9
+/* The largest |start time| [s]: beyond ~1e9 s a 1e-7 s step no longer moves the time. */
+#define MAX_START_TIME 1e9
+/* Version of the record of rm_save (bumped when its fields change). */
+#define RECORD_MAGIC "RATLUNIT"
+#define RECORD_VERSION 1u
+
+static const char* const PHASE_NAMES[4] = {"instantiated", "initialization", "stepping",
+                                           "terminated"};
+static const char* const TYPE_NAMES[4] = {"Real", "Integer", "Boolean", "String"};
+
+/* ------------------------------------------------------------------ the tables */
+const RmVariable* rm_variables(int kind)
+{
+    return kind == RM_MESH ? RM_MESH_VARIABLES : kind == RM_DRIVELINE ? RM_DRIVELINE_VARIABLES
+                                                                      : NULL;
+}
+
+size_t rm_variable_count(int kind)
+{
+    return kind == RM_MESH ? RM_MESH_N_VARIABLES
+                           : kind == RM_DRIVELINE ? RM_DRIVELINE_N_VARIABLES : 0;
+}
+
+int rm_api_version(void) { return RM_API_VERSION; }
+
+#ifndef RM_SOURCE_ID
+#define RM_SOURCE_ID "unidentified build"
+#endif
+const char* rm_build_id(void) { return RM_SOURCE_ID; }
+
+/* ------------------------------------------------------------------ messages */
+void rm_report(RmUnit* u, int status, const char* message)
+{
+    if (status > u->status) {
+        rm_text_clear(&u->message);
+        rm_puts(&u->message, message);
+        u->status = status;
+    }
+    if (u->logger != NULL) u->logger(u->logger_env, status, message);
+}
+
+/* Start of an API call: no status yet. */
+static void begin(RmUnit* u)
+{
+    u->status = RM_OK;
+    rm_text_clear(&u->message);
+}
+
+/* "<action>: <reason>" as the call's Error. */
+static void refuse(RmUnit* u, const char* action, const RmText* reason)
+{
+    RmText t;
+    rm_text_init(&t);
+    rm_printf(&t, "%s: %s", action, rm_text_str(reason));
+    rm_report(u, RM_ERROR, t.failed ? "out of memory" : rm_text_str(&t));
+    rm_text_free(&t);
+}
+
+static int refuse_text(RmUnit* u, const char* action, const char* reason)
+{
+    RmText t;
+    rm_text_init(&t);
+    rm_puts(&t, reason);
+    refuse(u, action, &t);
+    rm_text_free(&t);
+    return u->status;
+}
+
+const char* rm_message(const RmUnit* u) { return u != NULL ? rm_text_str(&u->message) : ""; }
+
+void rm_set_logger(RmUnit* u, RmLogger logger, void* env)
+{
+    if (u == NULL) return;
+    u->logger = logger;
+    u->logger_env = env;
+}
+
+/* ------------------------------------------------------------------ values */
+static char* copy_string(const char* s)
+{
+    size_t n = strlen(s) + 1;
+    char* p = malloc(n);
+    if (p != NULL) memcpy(p, s, n);
+    return p;
+}
+
+static void free_values(RmValue* values, size_t n)
+{
+    if (values == NULL) return;
+    for (size_t k = 0; k < n; k++) {
+        free(values[k].s);
+        values[k].s = NULL;
+    }
+}
+
+/* The defaults of the tables (inputs 0: rm_new sets their start values). */
+static int set_defaults(RmUnit* u)
+{
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        RmValue* x = &u->values[k];
+        free(x->s);
+        x->s = NULL;
+        x->r = v->type == RM_REAL ? v->start : 0.0;
+        x->i = v->type == RM_REAL ? 0 : (int64_t)v->start;
+        if (v->type == RM_STRING) {
+            x->s = copy_string(v->start_string != NULL ? v->start_string : "");
+            if (x->s == NULL) return 0;
+        }
+    }
+    return 1;
+}
+
+/* UTF-8 as RFC 3629 has it; the offset of the first bad byte or (size_t)-1. */
+static size_t utf8_error_at(const char* text)
+{
+    const unsigned char* s = (const unsigned char*)text;
+    size_t i = 0;
+    while (s[i] != 0) {
+        unsigned c = s[i], cp;
+        size_t len;
+        if (c < 0x80) {
+            i++;
+            continue;
+        }
+        if ((c & 0xE0) == 0xC0) {
+            len = 2;
+            cp = c & 0x1F;
+        }
+        else if ((c & 0xF0) == 0xE0) {
+            len = 3;
+            cp = c & 0x0F;
+        }
+        else if ((c & 0xF8) == 0xF0) {
+            len = 4;
+            cp = c & 0x07;
+        }
+        else
+            return i;
+        for (size_t k = 1; k < len; k++) {
+            if ((s[i + k] & 0xC0) != 0x80) return i;
+            cp = (cp << 6) | (s[i + k] & 0x3F);
+        }
+        if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000)
+            || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
+            return i;
+        i += len;
+    }
+    return (size_t)-1;
+}
+
+/* The range and choice checks of every parameter (in declaration order): 1, or 0 with the
+ * refusal. */
+static int check_parameter_values(const RmUnit* u, const RmValue* values, RmText* err)
+{
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        const char* why = NULL;
+        double x;
+        if (v->causality != RM_PARAMETER || v->type == RM_STRING || v->type == RM_BOOLEAN)
+            continue;
+        if (v->type == RM_INTEGER) {
+            x = (double)values[k].i;
+            if (v->n_choices > 0) {
+                int found = 0;
+                for (int c = 0; c < v->n_choices; c++)
+                    if (values[k].i == v->choices[c]) found = 1;
+                if (!found) why = "is not one of its choices";
+            }
+        }
+        else {
+            x = values[k].r;
+            if (!isfinite(x)) why = "must be finite";
+        }
+        if (why == NULL && v->has_min && (x < v->min || (v->min_exclusive && x == v->min)))
+            why = "is out of range";
+        if (why == NULL && v->has_max && (x > v->max || (v->max_exclusive && x == v->max)))
+            why = "is out of range";
+        if (why != NULL) {
+            rm_printf(err, "parameter '%s' = ", v->name);
+            if (v->type == RM_INTEGER)
+                rm_printf(err, "%lld", (long long)values[k].i);
+            else
+                rm_put_number(err, values[k].r);
+            rm_printf(err, " %s; allowed: %s", why, v->allowed);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Every input finite and in its range: 1, or 0 with the refusal. */
+static int check_inputs(const RmUnit* u, const RmValue* values, RmText* err)
+{
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        if (v->causality != RM_INPUT) continue;
+        double x = values[k].r;
+        if (!isfinite(x)) {
+            rm_printf(err, "input '%s' = ", v->name);
+            rm_put_number(err, x);
+            rm_puts(err, " is not finite; allowed: finite numbers");
+            return 0;
+        }
+        if ((v->has_min && x < v->min) || (v->has_max && x > v->max)) {
+            rm_printf(err, "input '%s' = ", v->name);
+            rm_put_number(err, x);
+            rm_printf(err, " is out of range; allowed: %s", v->allowed);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* A model for the current values: parameters checked (ranges, then the class's combination
+ * checks in build), inputs checked, start solved.  NULL with the refusal. */
+static void* build_model(RmUnit* u, RmText* err)
+{
+    if (!check_parameter_values(u, u->values, err) || !check_inputs(u, u->values, err))
+        return NULL;
+    return u->cls->build(u, err);
+}
+
+int rm_unit_values_valid(RmUnit* u, RmText* err)
+{
+    return check_parameter_values(u, u->values, err);
+}
+
+/* The outputs of the stale groups asked for, from the model. */
+static int refresh_outputs(RmUnit* u, unsigned groups, RmText* err)
+{
+    if (u->model == NULL || (u->stale & groups) == 0) return 1;
+    unsigned todo = u->stale & groups;
+    if (!u->cls->outputs(u, u->model, todo, u->values, err)) return 0;
+    u->stale = (todo & u->cls->complete_group) ? 0 : (u->stale & ~todo);
+    return 1;
+}
+
+/* The outputs of initialization mode: those of a model built from the current values (the
+ * values as they are when that fails: the failure is reported at exitInitializationMode). */
+static void refresh_provisional(RmUnit* u)
+{
+    if (u->provisional_valid) return;
+    RmText err;
+    rm_text_init(&err);
+    for (size_t k = 0; k < u->n_variables; k++) {
+        u->provisional[k] = u->values[k];
+        u->provisional[k].s = NULL; /* not owned: strings are read from values */
+    }
+    void* model = build_model(u, &err);
+    if (model != NULL) {
+        u->cls->outputs(u, model, u->cls->all_groups, u->provisional, &err);
+        u->cls->free_model(model);
+    }
+    rm_text_free(&err);
+    u->provisional_valid = 1;
+}
+
+/* The value of variable vr for a get: outputs from initialization mode's provisional model,
+ * or refreshed after a step.  NULL with the refusal when it cannot be computed. */
+static const RmValue* value_for_get(RmUnit* u, unsigned vr, RmText* err)
+{
+    const RmVariable* v = &u->variables[vr];
+    if (v->causality == RM_OUTPUT) {
+        if (u->phase == RM_INITIALIZATION) {
+            refresh_provisional(u);
+            return &u->provisional[vr];
+        }
+        unsigned group = u->cls->group_of(vr);
+        if ((u->stale & group) && !refresh_outputs(u, group, err)) return NULL;
+    }
+    return &u->values[vr];
+}
+
+static int get_values(RmUnit* u, int type, const unsigned* vr, size_t n, void* out)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    char action[32];
+    snprintf(action, sizeof action, "get%s", TYPE_NAMES[type]);
+    if (n > 0 && (vr == NULL || out == NULL))
+        return refuse_text(u, action, "a value-reference or value array is NULL");
+    for (size_t i = 0; i < n; i++) {
+        const RmValue* x = NULL;
+        RmText err;
+        rm_text_init(&err);
+        if (vr[i] < u->n_variables && u->variables[vr[i]].type == type) {
+            x = value_for_get(u, vr[i], &err);
+            if (x == NULL) {
+                char where[64];
+                snprintf(where, sizeof where, "%s vr %u", action, vr[i]);
+                refuse(u, where, &err);
+            }
+        }
+        else {
+            rm_printf(&err, "no %s variable with value reference %u", TYPE_NAMES[type], vr[i]);
+            refuse(u, action, &err);
+        }
+        rm_text_free(&err);
+        switch (type) {
+        case RM_REAL: ((double*)out)[i] = x != NULL ? x->r : NAN; break;
+        case RM_INTEGER: {
+            /* 32 bits, as FMI's: saturate (the cumulative counters can exceed it) */
+            int64_t v = x != NULL ? x->i : 0;
+            ((int32_t*)out)[i] = v > 2147483647LL ? 2147483647
+                                 : v < -2147483647LL - 1 ? (-2147483647 - 1) : (int32_t)v;
+            break;
+        }
+        case RM_BOOLEAN: ((int32_t*)out)[i] = x != NULL && x->i ? 1 : 0; break;
+        default: {
+            const char* s = "";
+            if (x != NULL) {
+                /* strings stay valid until the next call: a copy per answer */
+                const char* src = x->s != NULL ? x->s : u->values[vr[i]].s;
+                s = src != NULL ? src : "";
+            }
+            ((const char**)out)[i] = s;
+        }
+        }
+    }
+    return u->status;
+}
+
+int rm_get_real(RmUnit* u, const unsigned* vr, size_t n, double* values)
+{
+    return get_values(u, RM_REAL, vr, n, values);
+}
+
+int rm_get_integer(RmUnit* u, const unsigned* vr, size_t n, int32_t* values)
+{
+    return get_values(u, RM_INTEGER, vr, n, values);
+}
+
+int rm_get_boolean(RmUnit* u, const unsigned* vr, size_t n, int32_t* values)
+{
+    return get_values(u, RM_BOOLEAN, vr, n, values);
+}
+
+int rm_get_string(RmUnit* u, const unsigned* vr, size_t n, const char** values)
+{
+    return get_values(u, RM_STRING, vr, n, (void*)values);
+}
+
+static void put_given(RmText* t, int type, const void* values, size_t i)
+{
+    switch (type) {
+    case RM_REAL: rm_put_number(t, ((const double*)values)[i]); break;
+    case RM_INTEGER: rm_printf(t, "%d", (int)((const int32_t*)values)[i]); break;
+    case RM_BOOLEAN: rm_puts(t, ((const int32_t*)values)[i] ? "true" : "false"); break;
+    default: {
+        const char* s = ((const char* const*)values)[i];
+        rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
+    }
+    }
+}
+
+/* Every entry checked before any is stored: a refused call (one bad entry) stores nothing. */
+static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const void* values)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    char action[32];
+    snprintf(action, sizeof action, "set%s", TYPE_NAMES[type]);
+    if (n > 0 && (vr == NULL || values == NULL))
+        return refuse_text(u, action, "a value-reference or value array is NULL; nothing stored");
+    RmText err;
+    rm_text_init(&err);
+    int refused = 0;
+    for (size_t i = 0; i < n && !refused; i++) {
+        if (!(vr[i] < u->n_variables && u->variables[vr[i]].type == type)) {
+            rm_printf(&err, "no %s variable with value reference %u", TYPE_NAMES[type], vr[i]);
+            refused = 1;
+            break;
+        }
+        const RmVariable* v = &u->variables[vr[i]];
+        if (v->causality == RM_OUTPUT) {
+            rm_printf(&err, "'%s' is an output and cannot be set", v->name);
+            refused = 1;
+        }
+        else if (v->causality == RM_PARAMETER && u->phase != RM_INSTANTIATED
+                 && u->phase != RM_INITIALIZATION) {
+            rm_printf(&err, "parameter '%s' is fixed: it can only be set before the end of "
+                            "initialization (mode is '%s'); value ",
+                      v->name, PHASE_NAMES[u->phase]);
+            put_given(&err, type, values, i);
+            rm_puts(&err, " rejected");
+            refused = 1;
+        }
+        else if (type == RM_STRING) {
+            const char* s = ((const char* const*)values)[i];
+            size_t bad;
+            if (s == NULL) {
+                rm_printf(&err, "value %zu ('%s') is NULL", i, v->name);
+                refused = 1;
+            }
+            else if ((bad = utf8_error_at(s)) != (size_t)-1) {
+                rm_printf(&err, "value %zu ('%s') is not valid UTF-8 (byte 0x%02X at offset "
+                                "%zu)", i, v->name, (unsigned)(unsigned char)s[bad], bad);
+                refused = 1;
+            }
+        }
+    }
+    if (refused) {
+        rm_puts(&err, "; nothing of this call was stored");
+        refuse(u, action, &err);
+    }
+    else {
+        /* strings first: the only allocations, so that a failure stores nothing */
+        char** copies = NULL;
+        if (type == RM_STRING && n > 0) {
+            copies = calloc(n, sizeof *copies);
+            int ok = copies != NULL;
+            for (size_t i = 0; ok && i < n; i++)
+                if ((copies[i] = copy_string(((const char* const*)values)[i])) == NULL) ok = 0;
+            if (!ok) {
+                for (size_t i = 0; copies != NULL && i < n; i++) free(copies[i]);
+                free(copies);
+                rm_text_free(&err);
+                return refuse_text(u, action, "out of memory; nothing of this call was stored");
+            }
+        }
+        for (size_t i = 0; i < n; i++) {
+            RmValue* x = &u->values[vr[i]];
+            switch (type) {
+            case RM_REAL: x->r = ((const double*)values)[i]; break;
+            case RM_INTEGER: x->i = ((const int32_t*)values)[i]; break;
+            case RM_BOOLEAN: x->i = ((const int32_t*)values)[i] != 0; break;
+            default:
+                free(x->s);
+                x->s = copies[i];
+            }
+        }
+        free(copies);
+        if (n > 0) u->provisional_valid = 0;
+    }
+    rm_text_free(&err);
+    /* a call naming a motion input marks them set, whether it was accepted or not: a master
+     * that sets them holds nothing */
+    if (type == RM_REAL && !u->motion_set && vr != NULL)
+        for (size_t i = 0; i < n; i++)
+            for (int k = 0; k < u->cls->n_motion; k++)
+                if (vr[i] == u->cls->motion_vr[k]) u->motion_set = 1;
+    return u->status;
+}
+
+int rm_set_real(RmUnit* u, const unsigned* vr, size_t n, const double* values)
+{
+    return set_values(u, RM_REAL, vr, n, values);
+}
+
+int rm_set_integer(RmUnit* u, const unsigned* vr, size_t n, const int32_t* values)
+{
+    return set_values(u, RM_INTEGER, vr, n, values);
+}
+
+int rm_set_boolean(RmUnit* u, const unsigned* vr, size_t n, const int32_t* values)
+{
+    return set_values(u, RM_BOOLEAN, vr, n, values);
+}
+
+int rm_set_string(RmUnit* u, const unsigned* vr, size_t n, const char* const* values)
+{
+    return set_values(u, RM_STRING, vr, n, values);
+}
+
+/* ------------------------------------------------------------------ life cycle */
+static const RmUnitClass* class_of(int kind)
+{
+    return kind == RM_MESH ? &RM_MESH_CLASS : kind == RM_DRIVELINE ? &RM_DRIVELINE_CLASS : NULL;
+}
+
+/* A unit at its table defaults (inputs 0). */
+static RmUnit* unit_alloc(int kind, const char* resources)
+{
+    const RmUnitClass* cls = class_of(kind);
+    if (cls == NULL) return NULL;
+    RmUnit* u = calloc(1, sizeof *u);
+    if (u == NULL) return NULL;
+    u->cls = cls;
+    u->kind = kind;
+    u->phase = RM_INSTANTIATED;
+    u->variables = rm_variables(kind);
+    u->n_variables = rm_variable_count(kind);
+    rm_text_init(&u->message);
+    u->values = calloc(u->n_variables, sizeof *u->values);
+    u->provisional = calloc(u->n_variables, sizeof *u->provisional);
+    if (u->values == NULL || u->provisional == NULL || !set_defaults(u)
+        || (resources != NULL && (u->resources = copy_string(resources)) == NULL)) {
+        rm_free(u);
+        return NULL;
+    }
+    return u;
+}
+
+static void set_inputs(RmUnit* u, const double* inputs)
+{
+    size_t j = 0;
+    for (size_t k = 0; k < u->n_variables; k++)
+        if (u->variables[k].causality == RM_INPUT) u->values[k].r = inputs[j++];
+}
+
+static int coupled_start(RmUnit* mesh, RmUnit* drive, double start_time, double* mesh_in,
+                         double* drive_in, RmText* err);
+
+/* The inputs' start values: what the partner outputs at t = 0 in the default system. */
+static int default_inputs(RmUnit* u)
+{
+    RmUnit* mesh = unit_alloc(RM_MESH, NULL);
+    RmUnit* drive = unit_alloc(RM_DRIVELINE, NULL);
+    double mesh_in[8], drive_in[8];
+    RmText err;
+    rm_text_init(&err);
+    int ok = mesh != NULL && drive != NULL
+             && coupled_start(mesh, drive, 0.0, mesh_in, drive_in, &err);
+    if (ok) set_inputs(u, u->kind == RM_MESH ? mesh_in : drive_in);
+    rm_text_free(&err);
+    rm_free(mesh);
+    rm_free(drive);
+    return ok;
+}
+
+RmUnit* rm_new(int kind, const char* resources)
+{
+    RmUnit* u = unit_alloc(kind, resources);
+    if (u != NULL && !default_inputs(u)) {
+        rm_free(u);
+        return NULL;
+    }
+    return u;
+}
+
+void rm_free(RmUnit* u)
+{
+    if (u == NULL) return;
+    if (u->model != NULL) u->cls->free_model(u->model);
+    if (u->cls != NULL) u->cls->free_cache(u);
+    free_values(u->values, u->n_variables);
+    free(u->values);
+    free(u->provisional);
+    free(u->resources);
+    rm_text_free(&u->message);
+    free(u);
+}
+
+int rm_kind(const RmUnit* u) { return u != NULL ? u->kind : -1; }
+
+int rm_phase(const RmUnit* u) { return u != NULL ? u->phase : -1; }
+
+static int out_of_order(RmUnit* u, const char* action)
+{
+    RmText t;
+    rm_text_init(&t);
+    rm_printf(&t, "%s is not allowed in mode '%s'", action, PHASE_NAMES[u->phase]);
+    refuse(u, action, &t);
+    rm_text_free(&t);
+    return u->status;
+}
+
+int rm_setup(RmUnit* u, double start_time)
+{
+    static const char action[] = "setupExperiment";
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (u->phase != RM_INSTANTIATED) return out_of_order(u, action);
+    if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME)) {
+        RmText t;
+        rm_text_init(&t);
+        rm_puts(&t, "start time ");
+        rm_put_number(&t, start_time);
+        rm_printf(&t, " s is invalid; allowed: finite, within +-%g s", MAX_START_TIME);
+        refuse(u, action, &t);
+        rm_text_free(&t);
+        return u->status;
+    }
+    u->start_time = start_time;
+    return u->status;
+}
+
+int rm_enter_initialization(RmUnit* u)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (u->phase != RM_INSTANTIATED) return out_of_order(u, "enterInitializationMode");
+    u->phase = RM_INITIALIZATION;
+    u->provisional_valid = 0;
+    return u->status;
+}
+
+int rm_exit_initialization(RmUnit* u)
+{
+    static const char action[] = "exitInitializationMode";
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (u->phase != RM_INITIALIZATION) return out_of_order(u, action);
+    RmText err;
+    rm_text_init(&err);
+    RmValue* outputs = malloc(u->n_variables * sizeof *outputs);
+    void* model = outputs != NULL ? build_model(u, &err) : NULL;
+    if (outputs == NULL) rm_puts(&err, "out of memory");
+    if (model != NULL) {
+        memcpy(outputs, u->values, u->n_variables * sizeof *outputs);
+        if (u->cls->outputs(u, model, u->cls->all_groups, outputs, &err)) {
+            /* commit only now that everything succeeded */
+            for (size_t k = 0; k < u->n_variables; k++)
+                if (u->variables[k].causality == RM_OUTPUT) {
+                    u->values[k].r = outputs[k].r;
+                    u->values[k].i = outputs[k].i;
+                }
+            u->model = model;
+            model = NULL;
+            u->stale = 0;
+            u->time = u->start_time;
+            u->phase = RM_STEPPING;
+            u->provisional_valid = 0;
+        }
+    }
+    if (model != NULL) u->cls->free_model(model);
+    free(outputs);
+    if (u->phase != RM_STEPPING) refuse(u, action, &err);
+    rm_text_free(&err);
+    return u->status;
+}
+
+/* The spacing of doubles at x (math.ulp). */
+static double ulp(double x)
+{
+    x = fabs(x);
+    double up = nextafter(x, INFINITY);
+    return isinf(up) ? x - nextafter(x, 0.0) : up - x;
+}
+
+int rm_do_step(RmUnit* u, double t, double h)
+{
+    static const char action[] = "doStep";
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    RmText err;
+    rm_text_init(&err);
+    if (u->phase != RM_STEPPING) {
+        rm_printf(&err, "doStep is not allowed in mode '%s' (initialize first)",
+                  PHASE_NAMES[u->phase]);
+    }
+    else if (!(isfinite(h) && h > 0.0)) {
+        rm_puts(&err, "communication step size ");
+        rm_put_number(&err, h);
+        rm_puts(&err, " s is invalid; allowed: finite, > 0");
+    }
+    else if (!isfinite(t)) {
+        rm_puts(&err, "communication point ");
+        rm_put_number(&err, t);
+        rm_puts(&err, " s is not finite; allowed: the end of the last step, ");
+        rm_put_number(&err, u->time);
+        rm_puts(&err, " s");
+    }
+    else {
+        double tol = COMMUNICATION_POINT_TOLERANCE * h + 16.0 * ulp(rm_max(fabs(t), fabs(u->time)));
+        if (!(fabs(t - u->time) <= tol)) {
+            rm_puts(&err, "communication point ");
+            rm_put_number(&err, t);
+            rm_puts(&err, " s does not continue the last step, which ended at ");
+            rm_put_number(&err, u->time);
+            rm_puts(&err, " s (tolerance ");
+            rm_put_g(&err, tol, 3);
+            rm_puts(&err, " s)");
+        }
+        else if (!(t + h > t)) {
+            rm_puts(&err, "communication step size ");
+            rm_put_number(&err, h);
+            rm_puts(&err, " s does not advance the time ");
+            rm_put_number(&err, t);
+            rm_puts(&err, " s (it is below its rounding); allowed: a step that moves the time");
+        }
+        else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {
+            u->stale = u->cls->all_groups;
+            u->time = t + h;
+            rm_text_free(&err);
+            return u->status;
+        }
+    }
+    refuse(u, action, &err);
+    rm_text_free(&err);
+    return u->status;
+}
+
+int rm_terminate(RmUnit* u)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (u->phase != RM_STEPPING && u->phase != RM_INITIALIZATION)
+        return out_of_order(u, "terminate");
+    u->phase = RM_TERMINATED;
+    return u->status;
+}
+
+int rm_reset(RmUnit* u)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    /* a new unit: defaults, nothing built (the cache of the fixed model stays: it is a pure
+     * function of the parameters) */
+    if (u->model != NULL) u->cls->free_model(u->model);
+    u->model = NULL;
+    u->phase = RM_INSTANTIATED;
+    u->start_time = u->time = 0.0;
+    u->stale = 0;
+    u->provisional_valid = 0;
+    u->motion_set = 0;
+    if (!set_defaults(u) || !default_inputs(u)) return refuse_text(u, "reset", "out of memory");
+    return u->status;
+}
+
+int rm_last_successful_time(RmUnit* u, double* t)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (u->model == NULL) {
+        RmText err;
+        rm_text_init(&err);
+        rm_printf(&err, "no communication step is possible yet (mode '%s'); allowed after "
+                        "exitInitializationMode", PHASE_NAMES[u->phase]);
+        refuse(u, "getRealStatus(fmi2LastSuccessfulTime)", &err);
+        rm_text_free(&err);
+        *t = NAN;
+        return u->status;
+    }
+    *t = u->time;
+    return u->status;
+}
+
+/* ------------------------------------------------------------------ held inputs */
+void rm_boundary_start(const RmUnit* u, RmBoundary* b)
+{
+    for (int k = 0; k < u->cls->n_start; k++) b->initial_inputs[k] = u->values[u->cls->start_vr[k]].r;
+    b->first_step = 1;
+    b->has_last_motion = 0;
+    for (int k = 0; k < 4; k++) b->last_motion[k] = 0.0;
+}
+
+int rm_motion_held(const RmUnit* u, const RmBoundary* b)
+{
+    if (!u->motion_set) return 1;
+    if (!b->has_last_motion) return 0;
+    for (int k = 0; k < u->cls->n_motion; k++)
+        if (!(u->values[u->cls->motion_vr[k]].r == b->last_motion[k])) return 0;
+    return 1;
+}
+
+void rm_motion_step_done(RmUnit* u, RmBoundary* b)
+{
+    for (int k = 0; k < u->cls->n_motion; k++) b->last_motion[k] = u->values[u->cls->motion_vr[k]].r;
+    b->has_last_motion = 1;
+    b->first_step = 0;
+    u->motion_set = 0;
+}
+
+int rm_first_step_differs(const RmBoundary* b, int settle, const double* values, int n)
+{
+    if (!b->first_step || !settle) return 0;
+    for (int k = 0; k < n; k++)
+        if (values[k] != b->initial_inputs[k]) return 1;
+    return 0;
+}
+
+void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given, const char* what)
+{
+    RmText t;
+    rm_text_init(&t);
+    rm_puts(&t, "doStep at the first step: the inputs (");
+    for (int k = 0; k < u->cls->n_start; k++) {
+        const RmVariable* v = &u->variables[u->cls->start_vr[k]];
+        if (k) rm_puts(&t, ", ");
+        rm_printf(&t, "%s = ", v->name);
+        rm_put_number(&t, given[k]);
+        rm_printf(&t, " %s", v->unit);
+    }
+    rm_puts(&t, ") differ from those at the end of initialization (");
+    for (int k = 0; k < u->cls->n_start; k++) {
+        if (k) rm_puts(&t, ", ");
+        rm_put_number(&t, b->initial_inputs[k]);
+    }
+    rm_printf(&t, "): %s (init.settle_first_step; a master that exchanges no values during "
+                  "initialization)", what);
+    rm_report(u, RM_WARNING, rm_text_str(&t));
+    rm_text_free(&t);
+}
+
+/* ------------------------------------------------------------------ records */
+static void write_raw(RmWriter* w, const void* p, size_t n)
+{
+    if (w->failed) return;
+    if (w->len + n > w->cap) {
+        size_t cap = w->cap ? w->cap : 256;
+        while (cap < w->len + n) cap *= 2;
+        unsigned char* q = realloc(w->data, cap);
+        if (q == NULL) {
+            w->failed = 1;
+            return;
+        }
+        w->data = q;
+        w->cap = cap;
+    }
+    memcpy(w->data + w->len, p, n);
+    w->len += n;
+}
+
+void rm_write_bytes(RmWriter* w, const void* p, size_t n) { write_raw(w, p, n); }
+
+void rm_write_u32(RmWriter* w, uint32_t x)
+{
+    unsigned char b[4];
+    for (int k = 0; k < 4; k++) b[k] = (unsigned char)(x >> (8 * k));
+    write_raw(w, b, 4);
+}
+
+void rm_write_i64(RmWriter* w, int64_t x)
+{
+    uint64_t v = (uint64_t)x;
+    unsigned char b[8];
+    for (int k = 0; k < 8; k++) b[k] = (unsigned char)(v >> (8 * k));
+    write_raw(w, b, 8);
+}
+
+void rm_write_f64(RmWriter* w, double x)
+{
+    uint64_t v;
+    memcpy(&v, &x, 8);
+    rm_write_i64(w, (int64_t)v);
+}
+
+const unsigned char* rm_read_bytes(RmReader* r, size_t n)
+{
+    if (r->failed || n > r->len - r->pos) {
+        r->failed = 1;
+        return NULL;
+    }
+    const unsigned char* p = r->data + r->pos;
+    r->pos += n;
+    return p;
+}
+
+uint32_t rm_read_u32(RmReader* r)
+{
+    const unsigned char* b = rm_read_bytes(r, 4);
+    uint32_t x = 0;
+    if (b != NULL)
+        for (int k = 0; k < 4; k++) x |= (uint32_t)b[k] << (8 * k);
+    return x;
+}
+
+int64_t rm_read_i64(RmReader* r)
+{
+    const unsigned char* b = rm_read_bytes(r, 8);
+    uint64_t x = 0;
+    if (b != NULL)
+        for (int k = 0; k < 8; k++) x |= (uint64_t)b[k] << (8 * k);
+    return (int64_t)x;
+}
+
+double rm_read_f64(RmReader* r)
+{
+    uint64_t v = (uint64_t)rm_read_i64(r);
+    double x;
+    memcpy(&x, &v, 8);
+    return x;
+}
+
+int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out, RmText* err)
+{
+    double x = rm_read_f64(r);
+    if (r->failed) {
+        rm_printf(err, "the record ends before %s", what);
+        return 0;
+    }
+    if (!isfinite(x) || (nonnegative && !(x >= 0.0))) {
+        rm_printf(err, "%s = ", what);
+        rm_put_number(err, x);
+        rm_puts(err, nonnegative ? ": expected a finite number >= 0" : ": expected a finite number");
+        return 0;
+    }
+    *out = x;
+    return 1;
+}
+
+void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w)
+{
+    for (int k = 0; k < cls->n_start; k++) rm_write_f64(w, b->initial_inputs[k]);
+    rm_write_u32(w, (uint32_t)b->first_step);
+    rm_write_u32(w, (uint32_t)b->has_last_motion);
+    for (int k = 0; k < cls->n_motion; k++) rm_write_f64(w, b->last_motion[k]);
+}
+
+int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmText* err)
+{
+    for (int k = 0; k < cls->n_start; k++)
+        if (!rm_read_finite(r, "an input at the end of initialization", 0, &b->initial_inputs[k],
+                            err))
+            return 0;
+    uint32_t first = rm_read_u32(r), has_last = rm_read_u32(r);
+    if (r->failed || first > 1 || has_last > 1) {
+        rm_puts(err, "the record's first-step flags are not 0 or 1");
+        return 0;
+    }
+    b->first_step = (int)first;
+    b->has_last_motion = (int)has_last;
+    for (int k = 0; k < cls->n_motion; k++) {
+        double x = rm_read_f64(r);
+        if (r->failed || (has_last && !isfinite(x))) {
+            rm_puts(err, "the record's motion inputs of the last step are not finite");
+            return 0;
+        }
+        b->last_motion[k] = x;
+    }
+    return 1;
+}
+
+static int save_record(RmUnit* u, RmWriter* w)
+{
+    rm_write_bytes(w, RECORD_MAGIC, 8);
+    rm_write_u32(w, RECORD_VERSION);
+    rm_write_u32(w, (uint32_t)u->kind);
+    rm_write_u32(w, (uint32_t)u->phase);
+    rm_write_u32(w, (uint32_t)u->motion_set);
+    rm_write_f64(w, u->start_time);
+    rm_write_f64(w, u->time);
+    rm_write_u32(w, (uint32_t)u->n_variables);
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        const RmValue* x = &u->values[k];
+        if (v->causality == RM_OUTPUT) continue; /* computed from the model */
+        switch (v->type) {
+        case RM_REAL: rm_write_f64(w, x->r); break;
+        case RM_STRING: {
+            size_t n = x->s != NULL ? strlen(x->s) : 0;
+            rm_write_u32(w, (uint32_t)n);
+            rm_write_bytes(w, x->s != NULL ? x->s : "", n);
+            break;
+        }
+        default: rm_write_i64(w, x->i);
+        }
+    }
+    rm_write_u32(w, u->model != NULL);
+    if (u->model != NULL) u->cls->save(u->model, w);
+    return !w->failed;
+}
+
+int rm_save(RmUnit* u, unsigned char* buf, size_t capacity, size_t* size)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (size == NULL) return refuse_text(u, "getFMUstate", "the size pointer is NULL");
+    RmWriter w = {NULL, 0, 0, 0};
+    if (!save_record(u, &w)) {
+        free(w.data);
+        return refuse_text(u, "getFMUstate", "out of memory");
+    }
+    *size = w.len;
+    if (buf != NULL && capacity >= w.len) memcpy(buf, w.data, w.len);
+    free(w.data);
+    return u->status;
+}
+
+int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
+{
+    static const char action[] = "setFMUstate";
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (buf == NULL && size > 0) return refuse_text(u, action, "the record is NULL");
+    RmReader r = {buf, size, 0, 0};
+    RmText err;
+    rm_text_init(&err);
+    RmValue* values = calloc(u->n_variables, sizeof *values);
+    void* model = NULL;
+    int ok = 0;
+    if (values == NULL) {
+        rm_puts(&err, "out of memory");
+        goto done;
+    }
+    const unsigned char* magic = rm_read_bytes(&r, 8);
+    uint32_t version = rm_read_u32(&r), kind = rm_read_u32(&r), phase = rm_read_u32(&r);
+    uint32_t motion_set = rm_read_u32(&r);
+    double start_time = rm_read_f64(&r), time = rm_read_f64(&r);
+    uint32_t n = rm_read_u32(&r);
+    if (r.failed || memcmp(magic, RECORD_MAGIC, 8) != 0) {
+        rm_puts(&err, "it is not a state of this model (no record header)");
+        goto done;
+    }
+    if (version != RECORD_VERSION) {
+        rm_printf(&err, "its record version is %u, this model reads version %u", version,
+                  RECORD_VERSION);
+        goto done;
+    }
+    if (kind != (uint32_t)u->kind || n != u->n_variables) {
+        rm_printf(&err, "it is a state of another unit (kind %u with %u variables, this is kind "
+                        "%d with %zu)", kind, n, u->kind, u->n_variables);
+        goto done;
+    }
+    if (phase > RM_TERMINATED || motion_set > 1) {
+        rm_printf(&err, "its mode %u is not one of 0 (instantiated) to 3 (terminated)", phase);
+        goto done;
+    }
+    if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME && isfinite(time)
+          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME)) {
+        rm_puts(&err, "its start time ");
+        rm_put_number(&err, start_time);
+        rm_puts(&err, " s and time ");
+        rm_put_number(&err, time);
+        rm_printf(&err, " s do not go together; allowed: finite, |start time| <= %g s, start "
+                        "time <= time", MAX_START_TIME);
+        goto done;
+    }
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        RmValue* x = &values[k];
+        if (v->causality == RM_OUTPUT) continue;
+        switch (v->type) {
+        case RM_REAL: x->r = rm_read_f64(&r); break;
+        case RM_STRING: {
+            uint32_t len = rm_read_u32(&r);
+            const unsigned char* s = rm_read_bytes(&r, len);
+            if (s == NULL) break;
+            x->s = malloc((size_t)len + 1);
+            if (x->s == NULL) {
+                rm_puts(&err, "out of memory");
+                goto done;
+            }
+            memcpy(x->s, s, len);
+            x->s[len] = '\0';
+            if (strlen(x->s) != len || utf8_error_at(x->s) != (size_t)-1) {
+                rm_printf(&err, "variable '%s' is not UTF-8 text without NUL characters",
+                          v->name);
+                goto done;
+            }
+            break;
+        }
+        default: {
+            int64_t i = rm_read_i64(&r);
+            if (!r.failed && ((v->type == RM_BOOLEAN && (i < 0 || i > 1))
+                              || (v->type == RM_INTEGER && (i < -2147483647LL - 1 || i > 2147483647LL)))) {
+                rm_printf(&err, "variable '%s' = %lld: expected %s", v->name, (long long)i,
+                          v->type == RM_BOOLEAN ? "0 or 1" : "a 32-bit integer");
+                goto done;
+            }
+            x->i = i;
+        }
+        }
+        if (r.failed) {
+            rm_printf(&err, "the record ends before variable '%s'", v->name);
+            goto done;
+        }
+    }
+    uint32_t has_model = rm_read_u32(&r);
+    int model_expected = phase == RM_STEPPING || (phase == RM_TERMINATED && has_model == 1);
+    if (r.failed || has_model > 1 || model_expected != (int)has_model) {
+        rm_printf(&err, "mode '%s' does not go with %s model state", PHASE_NAMES[phase],
+                  has_model == 1 ? "a" : "no");
+        goto done;
+    }
+    if (has_model) {
+        /* the parameters of the state, checked, build the model's fixed part; the record sets
+         * its state (nothing is solved, no file read) */
+        RmValue* mine = u->values;
+        u->values = values;
+        double saved_start = u->start_time, saved_time = u->time;
+        u->start_time = start_time;
+        u->time = time;
+        if (check_parameter_values(u, values, &err)) model = u->cls->restore(u, &r, &err);
+        u->values = mine;
+        u->start_time = saved_start;
+        u->time = saved_time;
+        if (model == NULL) goto done;
+    }
+    if (r.pos != r.len) {
+        rm_printf(&err, "%zu bytes follow the end of the record", r.len - r.pos);
+        goto done;
+    }
+    /* commit */
+    for (size_t k = 0; k < u->n_variables; k++)
+        if (u->variables[k].causality == RM_OUTPUT) values[k] = u->values[k];
+    if (u->model != NULL) u->cls->free_model(u->model);
+    u->model = model;
+    model = NULL;
+    free_values(u->values, u->n_variables);
+    free(u->values);
+    u->values = values;
+    values = NULL;
+    u->phase = (int)phase;
+    u->start_time = start_time;
+    u->time = time;
+    u->motion_set = (int)motion_set;
+    u->stale = u->model != NULL ? u->cls->all_groups : 0;
+    u->provisional_valid = 0;
+    ok = 1;
+done:
+    if (model != NULL) u->cls->free_model(model);
+    if (values != NULL) {
+        free_values(values, u->n_variables);
+        free(values);
+    }
+    if (!ok) {
+        RmText t;
+        rm_text_init(&t);
+        rm_printf(&t, "the FMU state is invalid: %s; nothing changed", rm_text_str(&err));
+        refuse(u, action, &t);
+        rm_text_free(&t);
+    }
+    rm_text_free(&err);
+    return u->status;
+}
+
+/* ------------------------------------------------------------------ studies */
+int rm_step_report(const RmUnit* u, RmStepReport* report)
+{
+    if (u == NULL || report == NULL) return RM_ERROR;
+    memset(report, 0, sizeof *report);
+    const RmStepLog* log = u->model != NULL ? u->cls->step_log(u->model) : NULL;
+    if (log != NULL) {
+        report->count = log->n_events;
+        report->total = log->total_events;
+        report->events = log->events;
+        report->rhs_evaluations = log->rhs_evaluations;
+        report->contact_substeps = log->contact_substeps;
+    }
+    return RM_OK;
+}
+
+/* The exchange of the units' initial outputs, run to its fixed point (what a master that
+ * exchanges values during initialization reaches): the driveline built behind the wheel, the
+ * mesh's wheel for the driveline's outputs, until nothing changes. */
+#define START_EXCHANGE_ROUNDS 8
+static int coupled_start(RmUnit* mesh, RmUnit* drive, double start_time, double* mesh_in,
+                         double* drive_in, RmText* err)
+{
+    double wheel[2] = {0.0, 0.0};
+    if (!check_parameter_values(mesh, mesh->values, err)
+        || !check_parameter_values(drive, drive->values, err))
+        return 0;
+    for (int round = 0; round < START_EXCHANGE_ROUNDS; round++) {
+        double out[5], phi, w;
+        if (!rm_driveline_start_outputs(drive, start_time, wheel[0], wheel[1], out, err))
+            return 0;
+        /* the mesh's inputs: pinion.phi, pinion.w, pinion.a, wheel.tau_load */
+        for (int k = 0; k < 4; k++) mesh_in[k] = out[k];
+        if (!rm_mesh_start_wheel(mesh, mesh_in, &phi, &w, err)) return 0;
+        if (phi == wheel[0] && w == wheel[1]) {
+            drive_in[0] = wheel[0];
+            drive_in[1] = wheel[1];
+            return 1;
+        }
+        wheel[0] = phi;
+        wheel[1] = w;
+    }
+    rm_printf(err, "the start values of the coupled inputs do not settle within %d exchanges "
+                   "(last wheel state ", START_EXCHANGE_ROUNDS);
+    rm_put_number(err, wheel[0]);
+    rm_puts(err, " rad, ");
+    rm_put_number(err, wheel[1]);
+    rm_puts(err, " rad/s); check the parameters");
+    return 0;
+}
+
+int rm_coupled_start(RmUnit* mesh, RmUnit* driveline, double start_time, double* mesh_inputs,
+                     double* driveline_inputs)
+{
+    if (mesh == NULL || driveline == NULL) return RM_ERROR;
+    begin(mesh);
+    if (mesh->kind != RM_MESH || driveline->kind != RM_DRIVELINE)
+        return refuse_text(mesh, "coupledStart", "expected a GearMeshRattle and a Driveline unit");
+    RmText err;
+    rm_text_init(&err);
+    if (!coupled_start(mesh, driveline, start_time, mesh_inputs, driveline_inputs, &err))
+        refuse(mesh, "coupledStart", &err);
+    rm_text_free(&err);
+    return mesh->status;
+}
+
+static int describe(RmUnit* u, const char* action, const char** names, double* values,
+                    size_t capacity, size_t* count)
+{
+    if (u == NULL || count == NULL) return RM_ERROR;
+    begin(u);
+    RmText err;
+    rm_text_init(&err);
+    *count = 0;
+    if (!check_parameter_values(u, u->values, &err)
+        || !u->cls->describe(u, names, values, capacity, count, &err))
+        refuse(u, action, &err);
+    rm_text_free(&err);
+    return u->status;
+}
+
+int rm_check_parameters(RmUnit* u)
+{
+    size_t count;
+    return describe(u, "checkParameters", NULL, NULL, 0, &count);
+}
+
+int rm_describe(RmUnit* u, const char** names, double* values, size_t capacity, size_t* count)
+{
+    return describe(u, "describe", names, values, capacity, count);
+}
