@@ -1,5 +1,6 @@
-"""The build of the drive-rattle FMUs: from the runtime packages, the slave modules and the C
-sources to ``dist/GearMeshRattle.fmu``, ``dist/Driveline.fmu`` and ``dist/DriveRattle.ssp``.
+"""The build of the drive-rattle FMUs: from the specs, the model library's C sources, the
+runtime packages and the slave modules to ``dist/GearMeshRattle.fmu``, ``dist/Driveline.fmu``,
+``dist/DriveRattle.ssp`` and the native FMUs in ``dist/native/``.
 
 Needs a source checkout (it reads ``fmu_src/`` and ``regression/``), pythonfmu, fmpy and a C
 compiler (``compiler.c_compiler``).  Command line: ``drive-rattle-build`` (or ``python
@@ -9,14 +10,24 @@ build_fmu.py`` in the clone); from Python::
     fmus = build_fmus("dist")        # {"GearMeshRattle": Path, "Driveline": Path}
 
 Modules, one job each: ``paths`` (where sources and results are), ``compiler`` (the C
-compiler), ``kernel`` (the kernel's layout header and library), ``shim`` (the native status
-shim), ``documentation`` (the interface pages and tables), ``templates`` (the interface
-check), ``fmu`` (packaging and validation), ``system`` (the SSP file), ``cli``.
+compiler), ``model_tables`` (the library's tables from the specs), ``library`` (the model
+library), ``shim`` (the pythonfmu FMUs' status shim), ``documentation`` (the interface pages
+and tables), ``templates`` (the interface check), ``fmu`` (packaging and validation),
+``native`` (the native FMUs), ``system`` (the SSP file), ``cli``.  The names below are
+imported on first use, so that building the library alone needs none of the rest.
 """
 
-from .compiler import BuildError, c_compiler
-from .fmu import build, build_fmus, build_one, package, validate
-from .system import write_system
+from importlib import import_module
 
-__all__ = ["BuildError", "build", "build_fmus", "build_one", "c_compiler", "package",
-           "validate", "write_system"]
+_EXPORTS = {"BuildError": "compiler", "c_compiler": "compiler", "build": "fmu",
+            "build_fmus": "fmu", "build_one": "fmu", "package": "fmu", "validate": "fmu",
+            "write_system": "system", "build_in_place": "library"}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'drive_rattle_build' has no attribute {name!r}")
+    return getattr(import_module(f".{module}", __name__), name)

@@ -69,22 +69,39 @@ def c_compiler() -> str:
     return str(wrapper)
 
 
-def compile_library(cc: str, flags, sources, out_path: Path, what: str, libs=()) -> Path:
-    """Compile ``sources`` with ``cc`` and ``flags``, linked with ``libs``, into the shared
-    library ``out_path``,
-    written atomically (a temporary file renamed into place).  RuntimeError with the command
-    and the compiler's output when the compiler is missing or fails."""
-    out = Path(out_path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
-    cmd = [cc, *flags, "-o", str(tmp), *(str(s) for s in sources), *libs]
+def zig_cc(target: str) -> list[str]:
+    """``python -m ziglang cc -target <target>`` (the ziglang package, a dependency): the
+    cross-compiler of the win64 binaries."""
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    except OSError as exc:
-        raise RuntimeError(f"cannot run the C compiler {cc!r}: {exc}") from exc
-    if proc.returncode != 0:
-        tmp.unlink(missing_ok=True)
-        raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
-                           f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+        import ziglang  # noqa: F401
+    except ImportError:
+        raise BuildError(f"cross-compiling for {target} needs the ziglang package: "
+                         "`pip install ziglang` (a dependency of this project)") from None
+    return [sys.executable, "-m", "ziglang", "cc", "-target", target]
+
+
+def compile_library(cc, flags, sources, out_path: Path, what: str, libs=()) -> Path:
+    """Compile ``sources`` with ``cc`` (an executable, or a command as a list) and ``flags``,
+    linked with ``libs``, into the shared library ``out_path``, written atomically (a
+    temporary file renamed into place).  RuntimeError with the command and the compiler's
+    output when the compiler is missing or fails."""
+    out = Path(out_path).resolve()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    compiler = [cc] if isinstance(cc, (str, Path)) else list(cc)
+    # in a folder of its own (a cross-compiler leaves an import library beside its output),
+    # then copied next to the target and renamed into place
+    with tempfile.TemporaryDirectory(prefix="drive_rattle_cc_") as scratch:
+        built = Path(scratch) / out.name
+        cmd = [*compiler, *flags, "-o", str(built), *(str(Path(s).resolve()) for s in sources),
+               *libs]
+        try:
+            proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=scratch)
+        except OSError as exc:
+            raise RuntimeError(f"cannot run the C compiler {compiler[0]!r}: {exc}") from exc
+        if proc.returncode != 0 or not built.is_file():
+            raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
+                               f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+        tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+        shutil.copy2(built, tmp)
     os.replace(tmp, out)
     return out

@@ -80,7 +80,7 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from .compiler import compile_library
-from .paths import NATIVE
+from .paths import FMI2_SOURCE as NATIVE
 
 #: The C source of the shim.
 SHIM_SOURCE: Path = NATIVE / "rattle_fmi_shim.c"

@@ -1,0 +1,79 @@
+"""Building the model library (``fmu_src/rattle_model``): its tables from the specs, and the
+shared library for linux64 (gcc, or ziglang's clang where there is none) and win64 (ziglang's
+clang), compiled with the hash of its sources (``rm_build_id``) so that a stale library is
+never loaded (``drive_rattle.library.load``).
+
+``build_in_place()`` puts the linux64 library next to ``drive_rattle`` (what the Python API, the
+studies and the tests load); the pythonfmu FMUs ship both binaries in ``resources/``, the
+native FMUs compile the same sources with their FMI glue.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from drive_rattle import library as binding
+
+from . import model_tables
+from .compiler import BuildError, c_compiler, compile_library, zig_cc
+from .paths import MODEL_SOURCE
+
+#: IEEE arithmetic without contraction (docs/model.md: "Reproducible numbers"), warnings on,
+#: the interface exported.
+CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra",
+          "-DRM_BUILD_SHARED")
+#: platform folder -> (file name of the library, ziglang target or None for the build
+#: machine's compiler).
+PLATFORMS = {"linux64": ("rattle_model.so", None),
+             "win64": ("rattle_model.dll", "x86_64-windows-gnu")}
+
+
+def sources() -> list[Path]:
+    """The C sources of the library (the generated tables included)."""
+    return sorted(MODEL_SOURCE.glob("*.c"))
+
+
+def headers() -> list[Path]:
+    return sorted(MODEL_SOURCE.glob("*.h"))
+
+
+def source_flags() -> list[str]:
+    """The flags that identify the sources: their hash as ``rm_build_id``."""
+    return [f'-DRM_SOURCE_ID="{binding.source_id(MODEL_SOURCE)}"']
+
+
+def compile_model_library(out_path: Path, platform: str = "linux64", cc: str | None = None,
+                          extra_flags: Sequence[str] = ()) -> Path:
+    """Compile the library for ``platform`` into ``out_path`` (tables regenerated first when
+    the specs changed).  BuildError with the compiler's output on failure."""
+    model_tables.update()
+    _, target = PLATFORMS[platform]
+    if target is None:
+        compiler = [cc or c_compiler()]
+        flags = [*CFLAGS, "-fPIC", "-shared", "-fvisibility=hidden"]
+        libs = ["-lm"]
+    else:
+        compiler = zig_cc(target)
+        flags = [*CFLAGS, "-shared"]
+        libs = []
+    flags += [*source_flags(), *extra_flags, "-I", str(MODEL_SOURCE)]
+    try:
+        return compile_library(compiler, flags, sources(), Path(out_path),
+                               f"the model library for {platform}", libs=libs)
+    except RuntimeError as err:
+        raise BuildError(str(err)) from None
+
+
+def build_in_place() -> Path:
+    """The linux64 library next to the ``drive_rattle`` package, rebuilt when its sources
+    changed (a marker beside it records the sources' hash)."""
+    model_tables.update()
+    out = binding.default_path()
+    marker = out.with_name(out.name + ".id")
+    current = binding.source_id(MODEL_SOURCE)
+    if out.is_file() and marker.is_file() and marker.read_text().strip() == current:
+        return out
+    compile_model_library(out)
+    marker.write_text(current + "\n")
+    return out
