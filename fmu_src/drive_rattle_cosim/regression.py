@@ -154,7 +154,7 @@ def check(fmu: Path, reference_dir: Path | None = None,
 def generate(fmu_dir: Path, out_root: Path = REFERENCE_ROOT) -> list[Path]:
     """Write the references of both models from the coupled paper scenario (inputs) and the
     FMUs in ``fmu_dir`` (outputs)."""
-    from drive_rattle.driveline import DrivelineParameters
+    from drive_rattle.parameters import DrivelineParameters
 
     from .system import simulate
 

@@ -73,11 +73,9 @@ def default_parameters(fmus: dict[str, Path]) -> dict:
 def consistent_input_starts(parameters: dict | None = None, start_time: float = 0.0) -> dict:
     """``{"<Unit>.<input>": value}``: each input at what its partner outputs at ``start_time``
     [s] once the system with these parameters is initialized
-    (``drive_rattle.interface.coupled_start_inputs``).  Parameters that only steer how a unit
-    reads its inputs (``init.settle_first_step``, ``inputs.continue_when_held``) are ignored."""
-    from drive_rattle.driveline import DrivelineParameters
-    from drive_rattle.interface import coupled_start_inputs
-    from drive_rattle.parameters import MeshParameters, specs
+    (``drive_rattle.units.coupled_start_inputs``)."""
+    from drive_rattle.parameters import DrivelineParameters, MeshParameters
+    from drive_rattle.units import coupled_start_inputs
 
     per_unit = {MESH: {}, DRIVELINE: {}}
     for qualified, value in (parameters or {}).items():
@@ -85,10 +83,8 @@ def consistent_input_starts(parameters: dict | None = None, start_time: float = 
         if unit not in per_unit:
             raise ValueError(f"parameter '{qualified}': unknown unit '{unit}'")
         per_unit[unit][name] = value
-    physics = []
-    for unit, cls in ((MESH, MeshParameters), (DRIVELINE, DrivelineParameters)):
-        known = {spec.name for _, spec in specs(cls)}
-        physics.append(cls.from_public({k: v for k, v in per_unit[unit].items() if k in known}))
+    physics = [cls.from_public(per_unit[unit])
+               for unit, cls in ((MESH, MeshParameters), (DRIVELINE, DrivelineParameters))]
     mesh_inputs, driveline_inputs = coupled_start_inputs(*physics, start_time=start_time)
     return {**{f"{MESH}.{k}": v for k, v in mesh_inputs.items()},
             **{f"{DRIVELINE}.{k}": v for k, v in driveline_inputs.items()}}

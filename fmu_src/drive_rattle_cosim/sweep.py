@@ -210,7 +210,6 @@ def run_case(case: Case, fmus: FmuBundle | str | Path, stop_time: float, step: f
     row = {"case_id": case.case_id, **case.parameters, "error": ""}
     start = time.perf_counter()
     try:
-        from drive_rattle.mesh import MeshModel
         from drive_rattle.parameters import MeshParameters
         from drive_rattle_cosim.harness import CoSimulation
 
@@ -220,7 +219,7 @@ def run_case(case: Case, fmus: FmuBundle | str | Path, stop_time: float, step: f
             res = sim.run(stop_time, RECORDED)
         mesh_params = {k.split(".", 1)[1]: v for k, v in case.parameters.items()
                        if k.startswith("GearMeshRattle.")}
-        normal_mass = MeshModel(MeshParameters.from_public(mesh_params)).normal_mass
+        normal_mass = MeshParameters.from_public(mesh_params).derived()["normal_mass"]
         signals = {k.split(".", 1)[1]: v for k, v in res.columns.items()}
         row.update(rattle_metrics(res.time, signals, normal_mass, transient, window))
     except Exception as err:  # recorded, never stops the sweep

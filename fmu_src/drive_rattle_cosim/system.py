@@ -1,27 +1,27 @@
 """The mesh and the driveline coupled in one process, with the same fixed-step coupling as the
 FMU co-simulation (Jacobi: every unit steps from the outputs of the last communication point).
 
-This is the in-process twin of the FMU co-simulation: the co-simulation harness must reproduce
-it bit for bit, which tests the FMI layer without any tolerance.  The units exchange their
-signals along ``drive_rattle.interface.CONNECTIONS``, as the harness does.
+This is the in-process twin of the FMU co-simulation: the two units of the model library
+driven through the same calls the FMUs make (``drive_rattle.units``), so the co-simulation
+harness must reproduce it bit for bit, which tests the FMI layers without any tolerance.  The
+units exchange their signals along ``drive_rattle.interface.CONNECTIONS``, as the harness does,
+and the twin also records the located contact onsets the FMUs do not output.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from drive_rattle.driveline import DrivelineModel, DrivelineParameters
 from drive_rattle.interface import (
     DRIVELINE,
     DRIVELINE_OUTPUTS,
     MESH,
     MESH_INPUTS,
     MESH_OUTPUTS,
-    coupled_start_inputs,
     inputs_of,
 )
-from drive_rattle.parameters import MeshParameters
-from drive_rattle.stepper import WheelStepper
+from drive_rattle.parameters import DrivelineParameters, MeshParameters
+from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs
 
 #: Signals recorded by :func:`simulate`, with units: the units' public inputs and outputs.
 SIGNALS = {
@@ -59,39 +59,37 @@ def communication_points(start: float, step: float, stop: float) -> list[float]:
 def simulate(mesh_params: MeshParameters | None = None,
              driveline_params: DrivelineParameters | None = None,
              stop_time: float = 0.1, step: float = 1e-4, start_time: float = 0.0,
-             signals=None, stepper=WheelStepper) -> Record:
+             signals=None) -> Record:
     """Co-simulate mesh and driveline from ``start_time`` to ``stop_time`` [s] with the
-    communication step ``step`` [s]; record ``signals`` (default all) at every point.
-
-    ``stepper`` builds the mesh's stepper: the pure-Python ``WheelStepper`` (default, the
-    reference twin, the only one that reports the onsets) or e.g. ``kernel.new_stepper`` for
-    the same numbers faster."""
+    communication step ``step`` [s]; record ``signals`` (default all) at every point, and the
+    contact onsets."""
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
-    # Initialisation as the co-simulation masters reach it: the exchange of the units' initial
-    # outputs run to its fixed point (the FMUs' input start values for the default system).
+    # initialization as the co-simulation masters reach it: the exchange of the units' initial
+    # outputs run to its fixed point (the FMUs' input start values for the default system)
     mesh_in, wheel = coupled_start_inputs(mp, dp, start_time)
-    mesh = stepper(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"])
-    drive = DrivelineModel(dp, start_time, wheel["wheel.phi"], wheel["wheel.w"])
     rec = Record(signals={n: [] for n in names})
-    points = communication_points(start_time, step, stop_time)
-    for k, t in enumerate(points):
-        outputs = {MESH: mesh.outputs(), DRIVELINE: drive.outputs()}
-        rec.time.append(t)
-        values = {**outputs[MESH], **outputs[DRIVELINE]}
-        for n in names:
-            rec.signals[n].append(values[n])
-        if k == len(points) - 1:
-            break
-        h = points[k + 1] - t
-        m, d = inputs_of(MESH, outputs), inputs_of(DRIVELINE, outputs)
-        result = mesh.step(h, m["pinion.phi"], m["pinion.w"], m["pinion.a"],
-                           m["wheel.tau_load"])
-        for ev in result.events:
-            if ev.kind == "onset":
+    with MeshUnit(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"],
+                  mesh_in["pinion.a"], start_time=start_time) as mesh, \
+            DrivelineUnit(dp, wheel["wheel.phi"], wheel["wheel.w"],
+                          start_time=start_time) as drive:
+        points = communication_points(start_time, step, stop_time)
+        for k, t in enumerate(points):
+            outputs = {MESH: mesh.outputs(), DRIVELINE: drive.outputs()}
+            rec.time.append(t)
+            values = {**outputs[MESH], **outputs[DRIVELINE]}
+            for n in names:
+                rec.signals[n].append(values[n])
+            if k == len(points) - 1:
+                break
+            h = points[k + 1] - t
+            mesh.set(inputs_of(MESH, outputs))
+            drive.set(inputs_of(DRIVELINE, outputs))
+            mesh.call("rm_do_step", t, h)
+            drive.call("rm_do_step", t, h)
+            for ev in mesh.report().onsets:
                 rec.onset_times.append(t + ev.time)
                 rec.onset_speeds.append(ev.speed)
                 rec.onset_flanks.append(ev.flank)
-        drive.step(h, d["wheel.phi"], d["wheel.w"], t=t)
     return rec
