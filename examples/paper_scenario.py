@@ -19,8 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drive_rattle import MAX_PAIR_SLOTS, MeshModel, MeshParameters
-from drive_rattle.driveline import DrivelineParameters
+from drive_rattle import MAX_PAIR_SLOTS, DrivelineParameters, MeshParameters
 from drive_rattle_build import build_fmus
 from drive_rattle_cosim.analysis import (
     catalogue_for,
@@ -80,7 +79,7 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
                                   s["mesh.v_impact"])
     search = LineSearch(significance=significance)
     catalogue = catalogue_for(mesh_params, drive_params)
-    ws = windowed_statistics(t, s, *onsets, MeshModel(mesh_params).normal_mass, transient,
+    ws = windowed_statistics(t, s, *onsets, mesh_params.derived()["normal_mass"], transient,
                              window, lines=search, catalogue=catalogue,
                              segment_seconds=SEGMENT_SECONDS)
     # The spectrum of everything the windows cover: more averages, so weaker lines show.

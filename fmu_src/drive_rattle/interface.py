@@ -45,9 +45,10 @@ class SignalSpec:
         return f"[{self.minimum:g}, {self.maximum:g}] {self.unit}"
 
 
-#: Input ranges.  Angles are bounded so that the relative approach of the flanks keeps its
-#: precision (at 1e6 rad of pinion rotation the roll coordinate's ulp is 4e-12 m against
-#: penetrations of 1e-7 m); speeds, accelerations and torques far beyond any transmission.
+#: Input ranges (and those of the start angles and speeds and of a speed table's speeds).
+#: Angles are bounded so that the relative approach of the flanks keeps its precision (at
+#: 1e6 rad of pinion rotation the roll coordinate's ulp is 4e-12 m against penetrations of
+#: 1e-7 m); speeds, accelerations and torques far beyond any transmission.
 ANGLE_RANGE = {"minimum": -1e6, "maximum": 1e6}
 SPEED_RANGE = {"minimum": -1e4, "maximum": 1e4}
 

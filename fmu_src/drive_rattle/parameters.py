@@ -20,6 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from . import library, units
+from .interface import ANGLE_RANGE, SPEED_RANGE
 
 
 @dataclass(frozen=True)
@@ -300,10 +301,12 @@ class MeshParameters(ParameterSet):
     # --- initial state -------------------------------------------------------------------
     phi_start: float = declare(
         "wheel.phi_start", 0.0, "rad",
-        "initial wheel angle (used when init.in_contact is false)", display_unit="deg")
+        "initial wheel angle (used when init.in_contact is false)", display_unit="deg",
+        **ANGLE_RANGE)
     w_start: float = declare(
         "wheel.w_start", 0.0, "rad/s",
-        "initial wheel speed (used when init.in_contact is false)", display_unit="rpm")
+        "initial wheel speed (used when init.in_contact is false)", display_unit="rpm",
+        **SPEED_RANGE)
     init_in_contact: bool = declare(
         "init.in_contact", True, "",
         "start in the static flank equilibrium for the initial load torque and pinion "
@@ -386,7 +389,7 @@ class DrivelineParameters(ParameterSet):
     phase_4: float = _phase(4)
     phi_start: float = declare(
         "pinion.phi_start", 0.0, "rad", "input-shaft angle at the start time",
-        display_unit="deg")
+        display_unit="deg", **ANGLE_RANGE)
     a_over_step: bool = declare(
         "pinion.a_over_step", True, "",
         "output as pinion.a the mean acceleration over the coming step, (w(t+h) - w(t))/h with "

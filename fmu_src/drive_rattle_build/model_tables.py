@@ -17,12 +17,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from drive_rattle.interface import (
+    ANGLE_RANGE,
     DEFAULT_EXPERIMENT,
     DRIVELINE_INPUTS,
     DRIVELINE_OUTPUTS,
     MAX_PAIR_SLOTS,
     MESH_INPUTS,
     MESH_OUTPUTS,
+    SPEED_RANGE,
 )
 from drive_rattle.parameters import N_ORDERS, DrivelineParameters, MeshParameters, specs
 
@@ -105,7 +107,11 @@ def render() -> tuple[str, str]:
          "#include \"rattle_model.h\"", "",
          f"#define RM_MAX_PAIR_SLOTS {MAX_PAIR_SLOTS}",
          f"#define RM_N_ENGINE_ORDERS {N_ORDERS}",
-         f"#define RM_DEFAULT_STEP_SIZE {_number(DEFAULT_EXPERIMENT['stepSize'])}", ""]
+         f"#define RM_DEFAULT_STEP_SIZE {_number(DEFAULT_EXPERIMENT['stepSize'])}",
+         "/* the inputs' ranges of angles and speeds (also of the start values and a speed "
+         "table) */",
+         f"#define RM_MAX_ANGLE {_number(ANGLE_RANGE['maximum'])}",
+         f"#define RM_MAX_SPEED {_number(SPEED_RANGE['maximum'])}", ""]
     c = [banner, "#include \"rm_tables.h\"", ""]
     for prefix, parameters, inputs, outputs in UNITS:
         rows = variables(parameters, inputs, outputs)

@@ -111,13 +111,14 @@ void rm_driveline_release(RmDriveline* d)
     d->n_table = 0;
 }
 
-int rm_check_speed_table(size_t n, const double* times, const double* speeds,
+int rm_check_speed_table(size_t n, const double* times, const double* speeds, double phi_0,
                          const char* source, RmText* err)
 {
     if (n < 2) {
         rm_printf(err, "%s needs at least two rows", source);
         return 0;
     }
+    double angle = phi_0;
     for (size_t k = 0; k < n; k++) {
         if (!(isfinite(times[k]) && isfinite(speeds[k]))) {
             rm_printf(err, "%s row %zu has a non-finite value", source, k + 1);
@@ -127,6 +128,21 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds,
             rm_printf(err, "%s row %zu: time ", source, k + 1);
             rm_put_number(err, times[k]);
             rm_puts(err, " s does not increase");
+            return 0;
+        }
+        if (!(fabs(speeds[k]) <= RM_MAX_SPEED)) {
+            rm_printf(err, "%s row %zu: speed ", source, k + 1);
+            rm_put_number(err, speeds[k]);
+            rm_printf(err, " rad/s is out of range; allowed: [%g, %g] rad/s", -RM_MAX_SPEED,
+                      RM_MAX_SPEED);
+            return 0;
+        }
+        if (k > 0) angle += 0.5 * (times[k] - times[k - 1]) * (speeds[k] + speeds[k - 1]);
+        if (!(fabs(angle) <= RM_MAX_ANGLE)) {
+            rm_printf(err, "%s row %zu: the input-shaft angle reaches ", source, k + 1);
+            rm_put_number(err, angle);
+            rm_printf(err, " rad there; allowed: within [%g, %g] rad (a shorter table, or "
+                           "pinion.phi_start nearer 0)", -RM_MAX_ANGLE, RM_MAX_ANGLE);
             return 0;
         }
     }

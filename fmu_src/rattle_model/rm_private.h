@@ -431,10 +431,11 @@ RM_INTERNAL void rm_shaft_start(RmDriveline* d, double phi_w, double w_w);
  * 0 with the refusal (nothing changed). */
 RM_INTERNAL int rm_driveline_step(RmDriveline* d, double t, double h, double phi_w,
                                   double w_w, RmText* err);
-/* A table of n rows as the saved record holds it: 1 if valid, else 0 with the refusal naming
+/* A table of n rows: at least two, finite, times increasing, speeds and the angles they
+ * integrate to (from phi_0) within the inputs' ranges: 1, else 0 with the refusal naming
  * `source`. */
 RM_INTERNAL int rm_check_speed_table(size_t n, const double* times, const double* speeds,
-                                     const char* source, RmText* err);
+                                     double phi_0, const char* source, RmText* err);
 
 /* ------------------------------------------------------------------ speed_table.c */
 #define RM_MAX_SPEED_TABLE_BYTES (4u * 1024u * 1024u)

@@ -8,6 +8,9 @@
 #define RM_MAX_PAIR_SLOTS 8
 #define RM_N_ENGINE_ORDERS 4
 #define RM_DEFAULT_STEP_SIZE 0.0001
+/* the inputs' ranges of angles and speeds (also of the start values and a speed table) */
+#define RM_MAX_ANGLE 1000000.0
+#define RM_MAX_SPEED 10000.0
 
 /* MESH: 69 variables */
 #define RM_MESH_N_VARIABLES 69

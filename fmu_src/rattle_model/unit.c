@@ -250,11 +250,29 @@ int rm_unit_values_valid(RmUnit* u, RmText* err)
 }
 
 /* The outputs of the stale groups asked for, from the model. */
+/* Every Real output computed is finite: 1, or 0 with the refusal naming the first that is
+ * not (no call answers a non-finite output with OK). */
+static int outputs_finite(const RmUnit* u, const RmValue* values, RmText* err)
+{
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        if (v->causality == RM_OUTPUT && v->type == RM_REAL && !isfinite(values[k].r)) {
+            rm_printf(err, "output '%s' = ", v->name);
+            rm_put_number(err, values[k].r);
+            rm_puts(err, " is not finite: the inputs or parameters are beyond what the model "
+                         "resolves");
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static int refresh_outputs(RmUnit* u, unsigned groups, RmText* err)
 {
     if (u->model == NULL || (u->stale & groups) == 0) return 1;
     unsigned todo = u->stale & groups;
-    if (!u->cls->outputs(u, u->model, todo, u->values, err)) return 0;
+    if (!u->cls->outputs(u, u->model, todo, u->values, err) || !outputs_finite(u, u->values, err))
+        return 0;
     u->stale = (todo & u->cls->complete_group) ? 0 : (u->stale & ~todo);
     return 1;
 }
@@ -398,6 +416,11 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
         const RmVariable* v = &u->variables[vr[i]];
         if (v->causality == RM_OUTPUT) {
             rm_printf(&err, "'%s' is an output and cannot be set", v->name);
+            refused = 1;
+        }
+        else if (u->phase == RM_TERMINATED) {
+            rm_printf(&err, "'%s' cannot be set after terminate (mode is 'terminated'); allowed: "
+                            "reset first", v->name);
             refused = 1;
         }
         else if (v->causality == RM_PARAMETER && u->phase != RM_INSTANTIATED
@@ -622,7 +645,8 @@ int rm_exit_initialization(RmUnit* u)
     if (outputs == NULL) rm_puts(&err, "out of memory");
     if (model != NULL) {
         memcpy(outputs, u->values, u->n_variables * sizeof *outputs);
-        if (u->cls->outputs(u, model, u->cls->all_groups, outputs, &err)) {
+        if (u->cls->outputs(u, model, u->cls->all_groups, outputs, &err)
+            && outputs_finite(u, outputs, &err)) {
             /* commit only now that everything succeeded */
             for (size_t k = 0; k < u->n_variables; k++)
                 if (u->variables[k].causality == RM_OUTPUT) {

@@ -140,7 +140,18 @@ static int read_table(RmUnit* u, const TableCache** out, RmText* err)
 static DrivelineModel* started(RmUnit* u, double t_start, double phi_w, double w_w, RmText* err)
 {
     const TableCache* table = NULL;
-    if (table_name(u)[0] != '\0' && !read_table(u, &table, err)) return NULL;
+    if (table_name(u)[0] != '\0') {
+        if (!read_table(u, &table, err)) return NULL;
+        RmText source;
+        rm_text_init(&source);
+        rm_puts(&source, "speed table ");
+        rm_put_quoted(&source, table->name, strlen(table->name));
+        int ok = rm_check_speed_table(table->n, table->times, table->speeds,
+                                      u->values[RM_DRIVELINE_PINION_PHI_START].r,
+                                      rm_text_str(&source), err);
+        rm_text_free(&source);
+        if (!ok) return NULL;
+    }
     DrivelineModel* m = new_model(u, t_start);
     if (m == NULL || (table != NULL && !rm_use_table(&m->d, table->n, table->times, table->speeds))) {
         free_model(m);
@@ -219,6 +230,7 @@ static int step(RmUnit* u, double t, double h, RmText* err)
         return 0;
     }
     double saved[3] = {d->shaft_phi, d->shaft_w, d->tau_load};
+    double saved_time = d->time, saved_step = d->last_step;
     int settled = rm_first_step_differs(&m->boundary, B(RM_DRIVELINE_INIT_SETTLE_FIRST_STEP), used, 2);
     if (settled) rm_shaft_start(d, phi_w, w_w);
     if (!rm_driveline_step(d, t, h, phi_w, w_w, err)) {
@@ -226,6 +238,23 @@ static int step(RmUnit* u, double t, double h, RmText* err)
         d->shaft_w = saved[1];
         d->tau_load = saved[2];
         return 0;
+    }
+    double out[5];
+    driveline_outputs(m, out);
+    for (int k = 0; k < 5; k++) {
+        if (!isfinite(out[k])) { /* the kinematics ran off (a table held far beyond its end) */
+            rm_printf(err, "the driveline's outputs are not finite at t = ");
+            rm_put_number(err, d->time);
+            rm_puts(err, " s (the input-shaft angle ");
+            rm_put_number(err, out[0]);
+            rm_puts(err, " rad); a speed table ends too early for this run");
+            d->shaft_phi = saved[0];
+            d->shaft_w = saved[1];
+            d->tau_load = saved[2];
+            d->time = saved_time;
+            d->last_step = saved_step;
+            return 0;
+        }
     }
     /* the output shaft moves the wheel at its step-start speed within a step */
     m->wheel_end[0] = phi_w + w_w * h;
@@ -317,7 +346,7 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
         if (!ok) rm_puts(err, "out of memory");
         for (size_t i = 0; ok && i < rows; i++) t[i] = rm_read_f64(r);
         for (size_t i = 0; ok && i < rows; i++) w[i] = rm_read_f64(r);
-        ok = ok && rm_check_speed_table(rows, t, w, "the saved speed table", err);
+        ok = ok && rm_check_speed_table(rows, t, w, d->phi_0, "the saved speed table", err);
         if (ok && !rm_use_table(d, rows, t, w)) {
             rm_puts(err, "out of memory");
             ok = 0;
