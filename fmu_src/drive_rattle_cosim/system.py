@@ -2,10 +2,10 @@
 FMU co-simulation (Jacobi: every unit steps from the outputs of the last communication point).
 
 This is the in-process twin of the FMU co-simulation: the two units of the model library
-driven through the same calls the FMUs make (``drive_rattle.units``), so the co-simulation
-harness must reproduce it bit for bit, which tests the FMI layers without any tolerance.  The
-units exchange their signals along ``drive_rattle.interface.CONNECTIONS``, as the harness does,
-and the twin also records the located contact onsets the FMUs do not output.
+coupled in the library's compiled loop (``units.run_coupled``) through the same calls the FMUs
+make, so the co-simulation harness must reproduce it bit for bit, which tests the FMI layers
+without any tolerance.  The twin also records the located contact onsets the FMUs do not
+output.
 """
 
 from __future__ import annotations
@@ -18,10 +18,9 @@ from drive_rattle.interface import (
     MESH,
     MESH_INPUTS,
     MESH_OUTPUTS,
-    inputs_of,
 )
 from drive_rattle.parameters import DrivelineParameters, MeshParameters
-from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs
+from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs, run_coupled
 
 #: Signals recorded by :func:`simulate`, with units: the units' public inputs and outputs.
 SIGNALS = {
@@ -61,35 +60,37 @@ def simulate(mesh_params: MeshParameters | None = None,
              stop_time: float = 0.1, step: float = 1e-4, start_time: float = 0.0,
              signals=None) -> Record:
     """Co-simulate mesh and driveline from ``start_time`` to ``stop_time`` [s] with the
-    communication step ``step`` [s]; record ``signals`` (default all) at every point, and the
-    contact onsets."""
+    communication step ``step`` [s] (a whole number of nanoseconds); record ``signals`` (public
+    names; default all) at every point, and the contact onsets.  The loop runs in the library
+    (``units.run_coupled``)."""
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
+    points = communication_points(start_time, step, stop_time)
     # initialization as the co-simulation masters reach it: the exchange of the units' initial
     # outputs run to its fixed point (the FMUs' input start values for the default system)
     mesh_in, wheel = coupled_start_inputs(mp, dp, start_time)
-    rec = Record(signals={n: [] for n in names})
     with MeshUnit(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"],
                   mesh_in["pinion.a"], start_time=start_time) as mesh, \
             DrivelineUnit(dp, wheel["wheel.phi"], wheel["wheel.w"],
                           start_time=start_time) as drive:
-        points = communication_points(start_time, step, stop_time)
-        for k, t in enumerate(points):
-            outputs = {MESH: mesh.outputs(), DRIVELINE: drive.outputs()}
-            rec.time.append(t)
-            values = {**outputs[MESH], **outputs[DRIVELINE]}
-            for n in names:
-                rec.signals[n].append(values[n])
-            if k == len(points) - 1:
-                break
-            h = points[k + 1] - t
-            mesh.set(inputs_of(MESH, outputs))
-            drive.set(inputs_of(DRIVELINE, outputs))
-            mesh.call("rm_do_step", t, h)
-            drive.call("rm_do_step", t, h)
-            for ev in mesh.report().onsets:
-                rec.onset_times.append(t + ev.time)
-                rec.onset_speeds.append(ev.speed)
-                rec.onset_flanks.append(ev.flank)
+        # a mesh input is recorded as the driveline output that feeds it
+        sources = {name: _source(name, mesh, drive) for name in names}
+        run = run_coupled(mesh, drive, round(step * 1e9), len(points) - 1,
+                          sorted(set(sources.values())))
+    integers = {s.name for s in MESH_OUTPUTS if s.fmi_type == "Integer"}
+    rec = Record(time=points, onset_times=run.onset_times, onset_speeds=run.onset_speeds,
+                 onset_flanks=run.onset_flanks)
+    for name in names:
+        column = run.columns[sources[name]]
+        rec.signals[name] = [int(v) for v in column] if name in integers else column
     return rec
+
+
+def _source(name: str, mesh, drive) -> str:
+    """The recorded variable that gives signal ``name``: an output of either unit."""
+    if name in mesh.variables and mesh.variables[name].causality == "output":
+        return f"{MESH}.{name}"
+    if name in drive.variables and drive.variables[name].causality == "output":
+        return f"{DRIVELINE}.{name}"
+    raise KeyError(f"signal {name!r} is no output of {MESH} or {DRIVELINE}")

@@ -177,6 +177,19 @@ RM_API int rm_check_parameters(RmUnit* u);
 RM_API int rm_coupled_start(RmUnit* mesh, RmUnit* driveline, double start_time,
                             double* mesh_inputs, double* driveline_inputs);
 
+/* The two units coupled as the co-simulation couples them (fixed step, Jacobi exchange along
+ * the connections, points t_k = (start_ns + k step_ns) / 1e9 and steps t_{k+1} - t_k) for
+ * `steps` steps, through the same calls the FMUs make: both units initialized (phase
+ * STEPPING) at start_ns / 1e9.  At every point k (steps + 1 of them) the n_record variables
+ * record_vr[i] of unit record_unit[i] (RM_MESH or RM_DRIVELINE; Real or Integer) are written
+ * to record[k n_record + i] before the step; every contact onset of the mesh as (time, speed,
+ * flank) to onsets (at most onset_capacity kept, *n_onsets counts all).  RM_ERROR with the
+ * refusing unit's message in rm_message(mesh) (the units then stay as that call left them). */
+RM_API int rm_run_coupled(RmUnit* mesh, RmUnit* driveline, int64_t start_ns, int64_t step_ns,
+                          int64_t steps, const unsigned* record_vr, const int* record_unit,
+                          size_t n_record, double* record, double* onsets,
+                          size_t onset_capacity, size_t* n_onsets);
+
 /* Derived quantities of the unit's parameters (geometry, contact law, masses: SI units), as
  * parallel arrays of at most `capacity` names and values; *count gets their number.  The
  * parameters are checked first (RM_ERROR with the reason). */

@@ -15,6 +15,7 @@
  *   unit.c          the unit: variables, phases, checks, save/restore (rattle_model.h)
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
+ *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
  *   rm_tables.c     GENERATED from the Python specs: the variables of both units
  *
  * Numbers: every expression keeps the IEEE operations of the reference results (docs/model.md:
