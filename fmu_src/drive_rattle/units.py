@@ -379,5 +379,5 @@ def run_coupled(mesh: Unit, driveline: Unit, step_ns: int, steps: int,
     values = memoryview(buffer).cast("B").cast("d").tolist()
     columns = {name: values[i::n] for i, name in enumerate(record)}
     times = [(start_ns + k * int(step_ns)) / 1e9 for k in range(steps + 1)]
-    flat = memoryview(onsets).cast("B").cast("d").tolist()[:3 * count.value]
+    flat = onsets[:3 * count.value]
     return CoupledRun(times, columns, flat[0::3], flat[1::3], [int(f) for f in flat[2::3]])

@@ -496,6 +496,7 @@ struct RmUnit {
     double start_time, time;
     size_t n_variables;
     const RmVariable* variables;
+    size_t first_input, first_output; /* the table's order: parameters, inputs, outputs */
     RmValue* values;
     char* resources;
     void* model;            /* the unit's model, NULL before initialization has ended */
@@ -530,6 +531,8 @@ struct RmUnitClass {
      * complete_group computes every output. */
     int (*outputs)(RmUnit* u, void* model, unsigned groups, RmValue* values, RmText* err);
     unsigned all_groups, complete_group;
+    /* The groups a successful step leaves computed (the step wrote them to the values). */
+    unsigned fresh_after_step;
     unsigned (*group_of)(unsigned vr);
     /* The model's own record: written, and read back (checked) into a new model for the
      * current values. */

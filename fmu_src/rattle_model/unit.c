@@ -215,9 +215,8 @@ static int check_parameter_values(const RmUnit* u, const RmValue* values, RmText
 /* Every input finite and in its range: 1, or 0 with the refusal. */
 static int check_inputs(const RmUnit* u, const RmValue* values, RmText* err)
 {
-    for (size_t k = 0; k < u->n_variables; k++) {
+    for (size_t k = u->first_input; k < u->first_output; k++) {
         const RmVariable* v = &u->variables[k];
-        if (v->causality != RM_INPUT) continue;
         double x = values[k].r;
         if (!isfinite(x)) {
             rm_printf(err, "input '%s' = ", v->name);
@@ -254,9 +253,9 @@ int rm_unit_values_valid(RmUnit* u, RmText* err)
  * not (no call answers a non-finite output with OK). */
 static int outputs_finite(const RmUnit* u, const RmValue* values, RmText* err)
 {
-    for (size_t k = 0; k < u->n_variables; k++) {
+    for (size_t k = u->first_output; k < u->n_variables; k++) {
         const RmVariable* v = &u->variables[k];
-        if (v->causality == RM_OUTPUT && v->type == RM_REAL && !isfinite(values[k].r)) {
+        if (v->type == RM_REAL && !isfinite(values[k].r)) {
             rm_printf(err, "output '%s' = ", v->name);
             rm_put_number(err, values[k].r);
             rm_puts(err, " is not finite: the inputs or parameters are beyond what the model "
@@ -313,12 +312,14 @@ static const RmValue* value_for_get(RmUnit* u, unsigned vr, RmText* err)
     return &u->values[vr];
 }
 
+static const char* const GET_ACTIONS[4] = {"getReal", "getInteger", "getBoolean", "getString"};
+static const char* const SET_ACTIONS[4] = {"setReal", "setInteger", "setBoolean", "setString"};
+
 static int get_values(RmUnit* u, int type, const unsigned* vr, size_t n, void* out)
 {
     if (u == NULL) return RM_ERROR;
     begin(u);
-    char action[32];
-    snprintf(action, sizeof action, "get%s", TYPE_NAMES[type]);
+    const char* action = GET_ACTIONS[type];
     if (n > 0 && (vr == NULL || out == NULL))
         return refuse_text(u, action, "a value-reference or value array is NULL");
     for (size_t i = 0; i < n; i++) {
@@ -400,8 +401,7 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
 {
     if (u == NULL) return RM_ERROR;
     begin(u);
-    char action[32];
-    snprintf(action, sizeof action, "set%s", TYPE_NAMES[type]);
+    const char* action = SET_ACTIONS[type];
     if (n > 0 && (vr == NULL || values == NULL))
         return refuse_text(u, action, "a value-reference or value array is NULL; nothing stored");
     RmText err;
@@ -527,6 +527,12 @@ static RmUnit* unit_alloc(int kind, const char* resources)
     u->phase = RM_INSTANTIATED;
     u->variables = rm_variables(kind);
     u->n_variables = rm_variable_count(kind);
+    u->first_input = u->first_output = u->n_variables;
+    for (size_t k = u->n_variables; k-- > 0;) {
+        if (u->variables[k].causality == RM_OUTPUT) u->first_output = k;
+        if (u->variables[k].causality == RM_INPUT) u->first_input = k;
+    }
+    if (u->first_input > u->first_output) u->first_input = u->first_output;
     rm_text_init(&u->message);
     u->values = calloc(u->n_variables, sizeof *u->values);
     u->provisional = calloc(u->n_variables, sizeof *u->provisional);
@@ -718,7 +724,7 @@ int rm_do_step(RmUnit* u, double t, double h)
             rm_puts(&err, " s (it is below its rounding); allowed: a step that moves the time");
         }
         else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {
-            u->stale = u->cls->all_groups;
+            u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
             u->time = t + h;
             rm_text_free(&err);
             return u->status;

@@ -198,6 +198,15 @@ static void driveline_outputs(const DrivelineModel* m, double* out)
     out[4] = d->shaft_w;
 }
 
+static void store_outputs(const double* out, RmValue* values)
+{
+    values[RM_DRIVELINE_PINION_PHI].r = out[0];
+    values[RM_DRIVELINE_PINION_W].r = out[1];
+    values[RM_DRIVELINE_PINION_A].r = out[2];
+    values[RM_DRIVELINE_WHEEL_TAU_LOAD].r = out[3];
+    values[RM_DRIVELINE_VEHICLE_W].r = out[4];
+}
+
 int rm_driveline_start_outputs(RmUnit* u, double start_time, double phi_w, double w_w,
                                double* out, RmText* err)
 {
@@ -239,6 +248,7 @@ static int step(RmUnit* u, double t, double h, RmText* err)
         d->tau_load = saved[2];
         return 0;
     }
+    /* the outputs now: checked finite, and kept (the step leaves them computed) */
     double out[5];
     driveline_outputs(m, out);
     for (int k = 0; k < 5; k++) {
@@ -256,6 +266,7 @@ static int step(RmUnit* u, double t, double h, RmText* err)
             return 0;
         }
     }
+    store_outputs(out, u->values);
     /* the output shaft moves the wheel at its step-start speed within a step */
     m->wheel_end[0] = phi_w + w_w * h;
     m->wheel_end[1] = w_w;
@@ -279,11 +290,7 @@ static int outputs(RmUnit* u, void* model, unsigned groups, RmValue* values, RmT
     (void)err;
     if (!(groups & GROUP_ALL)) return 1;
     driveline_outputs(model, out);
-    values[RM_DRIVELINE_PINION_PHI].r = out[0];
-    values[RM_DRIVELINE_PINION_W].r = out[1];
-    values[RM_DRIVELINE_PINION_A].r = out[2];
-    values[RM_DRIVELINE_WHEEL_TAU_LOAD].r = out[3];
-    values[RM_DRIVELINE_VEHICLE_W].r = out[4];
+    store_outputs(out, values);
     return 1;
 }
 
@@ -404,6 +411,7 @@ const RmUnitClass RM_DRIVELINE_CLASS = {
     free_cache,
     step,
     outputs,
+    GROUP_ALL,
     GROUP_ALL,
     GROUP_ALL,
     group_of,

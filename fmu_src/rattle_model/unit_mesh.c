@@ -467,6 +467,7 @@ const RmUnitClass RM_MESH_CLASS = {
     outputs,
     GROUP_QUICK | GROUP_STATE | GROUP_LOADS,
     GROUP_LOADS,
+    0,
     group_of,
     save,
     restore,
