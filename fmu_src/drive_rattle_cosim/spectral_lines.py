@@ -27,7 +27,6 @@ The method (docs/analysis.md gives the reasoning and the measured error rates):
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -260,10 +259,19 @@ def _side_medians(psd: np.ndarray, excluded: np.ndarray, half: int, gap: int):
     windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1)
     out = []
     for side in (windows[:, : half - gap], windows[:, half + gap + 1:]):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # an all-nan side gives nan
-            out += [np.nanmedian(side, axis=1), np.sum(np.isfinite(side), axis=1)]
+        out += [*_nanmedian_rows(side)]
     return out
+
+
+def _nanmedian_rows(a: np.ndarray):
+    """``(median of the finite values of each row, their count)``; nan for a row without
+    any.  The same as ``np.nanmedian(a, axis=1)``, several times faster (nan sorts last)."""
+    s = np.sort(a, axis=1)
+    count = np.sum(np.isfinite(s), axis=1)
+    rows = np.arange(len(s))
+    lo = s[rows, np.maximum(count - 1, 0) // 2]
+    hi = s[rows, np.maximum(count, 1) // 2 - (count == 0)]
+    return np.where(count > 0, 0.5 * (lo + hi), np.nan), count
 
 
 def noise_floor(spec: Spectrum, excluded: np.ndarray, half: int, gap: int):
