@@ -296,9 +296,16 @@ class LineDetection:
         return self.strongest(frequency - tol, frequency + tol)
 
 
+@lru_cache(maxsize=64)
 def median_of_chi2(dof: float) -> float:
     """Median of chi2_dof / dof: the running median's bias against the mean PSD."""
     return float(stats.chi2.median(dof) / dof)
+
+
+@lru_cache(maxsize=64)
+def _density_at_median(dof: float) -> float:
+    """Density of chi2_dof / dof at its median."""
+    return float(stats.chi2.pdf(median_of_chi2(dof) * dof, dof) * dof)
 
 
 def floor_dof(dof: float, neighbours: np.ndarray, bin_correlation: float) -> np.ndarray:
@@ -308,7 +315,7 @@ def floor_dof(dof: float, neighbours: np.ndarray, bin_correlation: float) -> np.
     n / bin_correlation independent ones; a chi-squared with the same relative variance has
     2 / relvar degrees of freedom."""
     m = median_of_chi2(dof)
-    density = float(stats.chi2.pdf(m * dof, dof) * dof)
+    density = _density_at_median(dof)
     n_independent = np.maximum(np.asarray(neighbours, dtype=float), 1.0) / bin_correlation
     relvar = 1.0 / (4.0 * n_independent * density * density * m * m)
     return 2.0 / relvar
@@ -384,7 +391,10 @@ def detect_lines(spec: Spectrum, search: LineSearch | None = None,
                                       search.floor_gap)
         new_threshold = np.full(n, np.nan)
         ok = band & np.isfinite(new_floor)
-        new_threshold[ok] = stats.f.isf(alpha_bin, spec.dof, nu_f[ok])
+        # The floor's degrees of freedom take few distinct values (they depend only on how
+        # many neighbours each side keeps): one quantile per value.
+        nus, which = np.unique(nu_f[ok], return_inverse=True)
+        new_threshold[ok] = stats.f.isf(alpha_bin, spec.dof, nus)[which]
         # A bin whose neighbours are all masked now (inside the skirt of strong lines) keeps
         # the floor it had: leaving lines out only lowers floors.
         keep = ~ok & np.isfinite(floor)

@@ -133,46 +133,72 @@ def test_bad_records_are_refused():
         rattle_statistics(t, {"mesh.W": s["mesh.W"]}, [], [], M_N)
 
 
-def test_spectral_figures_per_window():
-    """A force with a strong 620 Hz line and, in windows 0 and 2 only, one at 310 Hz: the
-    half-frequency line is found in half of the windows.  Neither is an excited order at
-    830 rpm (44.8 and 22.4 times 13.83 Hz, more than a bin from even orders): unexplained."""
+def _line_record(catalogue):
+    """A force with a strong 620 Hz line and, in windows 0 and 2 only, one at 310 Hz (-6 dB
+    of it).  Neither is an excited order at 830 rpm (44.8 and 22.4 times 13.83 Hz, more than
+    a bin from even orders): unexplained."""
     fs, window = 10_000.0, 2.0
     t = np.arange(round(4 * window * fs) + 1) / fs
     rng = np.random.default_rng(3)
     W = 10.0 + rng.standard_normal(t.size) + 0.4 * np.sin(2 * np.pi * 620.0 * t)
     half = (t % (2 * window)) < window
     W += np.where(half, 0.2 * np.sin(2 * np.pi * 310.0 * t), 0.0)
-    s = {"wheel.phi": 44.5 * t, "mesh.W": W}
+    return t, {"wheel.phi": 44.5 * t, "mesh.W": W}, window
+
+
+def test_spectral_figures_per_window():
+    """The sub-harmonic of the 620 Hz line (f0 given) is flagged in the two windows that
+    have it; the line table's figures per window."""
     cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    t, s, window = _line_record(cat)
     ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
-                             catalogue=cat)
+                             catalogue=cat, fundamental=620.0)
     assert [w.dominant_line_frequency for w in ws.windows] == pytest.approx([620.0] * 4,
                                                                             abs=1.0)
-    assert [w.half_line_found for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
-    assert ws.scatter("half_line_found").mean == 0.5
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
+    assert [w.subharmonic_ratio_db for w in ws.windows][::2] == pytest.approx([-6.0] * 2,
+                                                                              abs=1.0)
+    assert ws.scatter("subharmonic_flag").mean == 0.5
     assert [w.lines_detected for w in ws.windows] == [2, 1, 2, 1]
     assert all(w.lines_unexplained == w.lines_detected for w in ws.windows)
+    assert [w.resonances_detected for w in ws.windows] == [0] * 4
     assert ws.most_common("dominant_line_name") == ("unexplained", 4)
     rows = paper_comparison(ws)
-    assert ("windows with a line at half the strongest's frequency [1]",
-            "0.5 ± 0.58 (0–1)", "yes (190 Hz)") in rows
+    sub = next(r for r in rows if r[0].startswith("windows with a sub-harmonic"))
+    assert sub[1] == "2 of 4 windows (f0 = 620 Hz)"
     assert "| strongest line 100–1500 Hz [Hz] | 620" in markdown_table(rows)
+    # Without a fundamental, the catalogue's is used: the forcing's period, engine order 2
+    # (27.67 Hz).  620 Hz lies 0.6 bins from 622.5 Hz, the odd order 45 -- where a response
+    # with twice the forcing's period has lines -- so every window is flagged.
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
+                             catalogue=cat)
+    assert [w.subharmonic_fundamental for w in ws.windows] == pytest.approx([830 / 30] * 4)
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0] * 4
+
+
+def test_subharmonic_of_the_strongest_line_without_a_catalogue():
+    t, s, window = _line_record(None)
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch())
+    assert [w.subharmonic_fundamental for w in ws.windows] == pytest.approx([620.0] * 4,
+                                                                            abs=0.5)
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
 
 
 def test_white_noise_force_has_no_dominant_line():
     """The old "dominant line with a half-frequency sub-harmonic" found one in 47 of 50
-    white-noise spectra; now neither is found (at most the false-alarm count)."""
+    white-noise spectra; now neither a line nor a sub-harmonic of the forcing is found (at
+    most the false-alarm count)."""
     fs = 10_000.0
     t = np.arange(round(2.0 * fs) + 1) / fs
-    found = 0
+    cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    found = flagged = 0
     for seed in range(25):
         W = 10.0 + np.random.default_rng(seed).standard_normal(t.size)
         ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N,
-                                 lines=LineSearch())
+                                 lines=LineSearch(), catalogue=cat)
         found += not math.isnan(ws.windows[0].dominant_line_frequency)
-        assert ws.windows[0].half_line_found == 0.0
-    assert found <= 2
+        flagged += ws.windows[0].subharmonic_flag == 1.0
+    assert found <= 2 and flagged <= 2
 
 
 def test_scatter_text():
