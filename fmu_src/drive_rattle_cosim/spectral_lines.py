@@ -445,9 +445,14 @@ def _classify(spec: Spectrum, search: LineSearch, k: int, fk: float,
         x = seg[:, k]
         peak.fluctuation = float(np.var(x, ddof=1) / np.mean(x) ** 2)
         if search.stability_alpha is not None and not resonance:
+            # The noise under a line: the floor, or the PSD 5-8 bins either side where that
+            # is higher (a line on a resonance hump fluctuates with the hump).
+            near = [j for j in (*range(k - 8, k - 4), *range(k + 5, k + 9))
+                    if 0 < j < len(spec.psd) - 1]
+            under = max(peak.floor, float(np.median(spec.psd[near]))) if near else peak.floor
             line_limit, noise_limit = stability_limits(
                 seg.shape[0], _overlap_correlations(spec), search.stability_alpha,
-                peak.ratio)
+                peak.psd / under)
             resonance = peak.fluctuation > max(line_limit, noise_limit)
     return resonance
 
@@ -760,6 +765,25 @@ def subharmonic_test(spec: Spectrum, fundamental: float,
         centres.append(float(np.mean(idx)))
     k = len(halves)
     dof_psd = k * k / sum(1.0 / d for d in dofs)
+    seg = spec.segment_psd
+    gap = (~excluded & np.isfinite(floor) & (f >= search.f_min - tol)
+           & (f <= search.f_max + tol))
+    if seg is not None and seg.shape[0] >= MIN_SEGMENTS_STABILITY and np.sum(gap) >= 8:
+        # An impulsive force's spectral estimates scatter more than Gaussian noise's, and
+        # together over the band (one strong impact lifts every bin of its segment).  That
+        # common part is measured on the floor's own bins: over the segments, the variance of
+        # their mean power (over the floor) less what independent bins would give.  The
+        # statistic's variance is then the common part plus the half bands' own, over the
+        # segments (overlap-corrected); never below the Gaussian value.
+        segments = seg.shape[0]
+        g = np.mean(seg[:, gap] / floor[gap], axis=1)
+        common = max(0.0, float(np.var(g, ddof=1)) - _mean_variance(np.nonzero(gap)[0], r))
+        own = sum(_mean_variance(idx, r) for idx in halves) / k**2
+        rho2 = np.asarray(_overlap_correlations(spec)[: segments - 1]) ** 2
+        lags = np.arange(1, rho2.size + 1)
+        inflation = 1.0 + 2.0 * float(np.sum((1.0 - lags / segments) * rho2))
+        var = (common + own) / segments * inflation
+        dof_psd = min(dof_psd, 2.0 / var)
     width = 2 * search.floor_half_width + 1
     c = np.asarray(centres)
     overlap = np.clip(1.0 - np.abs(c[:, None] - c[None, :]) / width, 0.0, None)
@@ -778,6 +802,13 @@ def subharmonic_test(spec: Spectrum, fundamental: float,
                      >= comb_excess * 10.0 ** (search.min_ratio_db / 10.0))
     result.flag = bool(statistic > threshold and strong_enough)
     return result
+
+
+def _mean_variance(bins: np.ndarray, r: np.ndarray) -> float:
+    """Variance of the mean of one segment's periodogram over ``bins`` (each bin of unit
+    variance over its mean, bins j apart correlated r[j]) for Gaussian noise."""
+    d = np.abs(np.subtract.outer(bins, bins))
+    return float(np.sum(np.where(d < len(r), r[np.minimum(d, len(r) - 1)], 0.0))) / bins.size**2
 
 
 def _bin_power_correlations(spec: Spectrum) -> np.ndarray:
