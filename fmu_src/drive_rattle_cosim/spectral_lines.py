@@ -628,8 +628,9 @@ def spectral_extent(spec: Spectrum, search: ExtentSearch | None = None) -> Spect
     lo, hi = search.reference_band
     nyquist_below = f[-2] if len(f) > 2 else f[-1]
     top = nyquist_below if search.f_max is None else min(search.f_max, nyquist_below)
-    ref_bins = (f >= lo) & (f <= hi)
-    band = (f >= lo) & (f <= top)
+    eps = 1e-6 * spec.resolution  # bins computed from a rounded sample rate
+    ref_bins = (f >= lo - eps) & (f <= hi + eps)
+    band = (f >= lo - eps) & (f <= top + eps)
     fb, pb = f[band], p[band]
     reference = float(np.mean(p[ref_bins])) if np.any(ref_bins) else math.nan
     if not (reference > 0 and fb.size >= 2):
@@ -739,32 +740,22 @@ def subharmonic_test(spec: Spectrum, fundamental: float,
     excluded |= ~(p > 0)
     floor, floor_dof_ = noise_floor(spec, excluded, search.floor_half_width, 0)
 
-    def bands(first: float):
-        """Per position in the band: (bin indices, centre bin)."""
-        out = []
-        m = first
-        while m <= search.f_max + tol:
-            if m >= search.f_min - tol:
-                idx = np.nonzero(np.abs(f - m) <= tol)[0]
-                if idx.size and np.all(np.isfinite(floor[idx])):
-                    out.append(idx)
-            m += fundamental
-        return out
-
-    halves, combs = bands(half_f), bands(fundamental)
-    if not halves:
+    halves = _position_bins(f, floor, half_f, fundamental, search.f_min, search.f_max, tol)
+    combs = _position_bins(f, floor, fundamental, fundamental, search.f_min, search.f_max, tol)
+    if halves is None:
         return nan
+    idx, mask = halves
+    k = idx.shape[0]
     r = _bin_power_correlations(spec)
-    ratios, dofs, floor_rv, centres = [], [], [], []
-    for idx in halves:
-        ratios.append(float(np.sum(p[idx]) / np.sum(floor[idx])))
-        n = idx.size
-        n_eff = n * n / (n + 2.0 * sum((n - j) * r[j] for j in range(1, min(n, len(r)))))
-        dofs.append(spec.dof * n_eff)
-        floor_rv.append(float(np.mean(2.0 / floor_dof_[idx])))
-        centres.append(float(np.mean(idx)))
-    k = len(halves)
-    dof_psd = k * k / sum(1.0 / d for d in dofs)
+    n = mask.sum(axis=1)
+    # variance of a band's mean power over its mean, for each band's bin count (contiguous)
+    own_var = np.array([math.inf] + [_mean_variance(np.arange(m), r)
+                                     for m in range(1, mask.shape[1] + 1)])
+    floor_sum = np.sum(np.where(mask, floor[idx], 0.0), axis=1)
+    ratios = np.sum(np.where(mask, p[idx], 0.0), axis=1) / floor_sum
+    # Each band sum is a chi-squared of nu / own_var degrees of freedom (its bins count as
+    # 1 / own_var independent ones); the mean of k of them has k^2 / sum(1 / dof).
+    dof_psd = k * k * spec.dof / float(np.sum(own_var[n]))
     seg = spec.segment_psd
     gap = (~excluded & np.isfinite(floor) & (f >= search.f_min - tol)
            & (f <= search.f_max + tol))
@@ -778,22 +769,26 @@ def subharmonic_test(spec: Spectrum, fundamental: float,
         segments = seg.shape[0]
         g = np.mean(seg[:, gap] / floor[gap], axis=1)
         common = max(0.0, float(np.var(g, ddof=1)) - _mean_variance(np.nonzero(gap)[0], r))
-        own = sum(_mean_variance(idx, r) for idx in halves) / k**2
+        own = float(np.sum(own_var[n])) / k**2
         rho2 = np.asarray(_overlap_correlations(spec)[: segments - 1]) ** 2
         lags = np.arange(1, rho2.size + 1)
         inflation = 1.0 + 2.0 * float(np.sum((1.0 - lags / segments) * rho2))
         var = (common + own) / segments * inflation
         dof_psd = min(dof_psd, 2.0 / var)
     width = 2 * search.floor_half_width + 1
-    c = np.asarray(centres)
+    floor_rv = np.sum(np.where(mask, 2.0 / floor_dof_[idx], 0.0), axis=1) / n
+    c = np.sum(np.where(mask, idx, 0), axis=1) / n
     overlap = np.clip(1.0 - np.abs(c[:, None] - c[None, :]) / width, 0.0, None)
     rv = np.sqrt(np.outer(floor_rv, floor_rv))
     dof_floor = 2.0 / (float(np.sum(overlap * rv)) / (k * k))
     statistic = float(np.mean(ratios))
     threshold = float(stats.f.isf(search.significance, dof_psd, dof_floor))
 
-    def excess(groups):
-        return float(sum(np.sum(p[i] - floor[i]) for i in groups) * df)
+    def excess(bins):
+        if bins is None:
+            return 0.0
+        i, m = bins
+        return float(np.sum(np.where(m, p[i] - floor[i], 0.0)) * df)
 
     half_excess, comb_excess = excess(halves), excess(combs)
     result = Subharmonic(float(fundamental), k, statistic, threshold, half_excess,
@@ -802,6 +797,28 @@ def subharmonic_test(spec: Spectrum, fundamental: float,
                      >= comb_excess * 10.0 ** (search.min_ratio_db / 10.0))
     result.flag = bool(statistic > threshold and strong_enough)
     return result
+
+
+def _position_bins(f: np.ndarray, floor: np.ndarray, first: float, step: float,
+                   f_min: float, f_max: float, tol: float):
+    """``(bins, mask)`` of the positions first, first + step, ... in [f_min, f_max]: per
+    position (row) the bins whose centres lie within ``tol`` of it (``mask``; ``bins``
+    clipped to the spectrum), only positions with a bin and a floor at every bin; None when
+    there is none."""
+    df = f[1] - f[0]
+    centres = first + step * np.arange(max(0, math.ceil((f_min - tol - first) / step)),
+                                       math.floor((f_max + tol - first) / step) + 1)
+    if centres.size == 0:
+        return None
+    w = math.ceil(tol / df) + 1
+    bins = np.round(centres / df).astype(int)[:, None] + np.arange(-w, w + 1)[None, :]
+    inside = (bins >= 0) & (bins < len(f))
+    bins = np.clip(bins, 0, len(f) - 1)
+    mask = inside & (np.abs(f[bins] - centres[:, None]) <= tol)
+    ok = mask.any(axis=1) & ~np.any(mask & ~np.isfinite(floor[bins]), axis=1)
+    if not np.any(ok):
+        return None
+    return bins[ok], mask[ok]
 
 
 def _mean_variance(bins: np.ndarray, r: np.ndarray) -> float:
