@@ -104,6 +104,7 @@ def test_the_contact_mode_is_reported_as_a_resonance():
 def test_tone_widths_of_the_window():
     """A noise-free Hann tone: 1.33 bins at -3 dB on a bin centre, 2.04 half-way."""
     offsets, widths = tone_widths("hann", 2500)
+    assert offsets[0] == 0.0 and offsets[-1] == 0.5
     assert widths[0] == pytest.approx(4 / 3, abs=0.01)
     assert widths[-1] == pytest.approx(2.04, abs=0.01)
     assert np.all(np.diff(widths) >= 0)
