@@ -1,5 +1,6 @@
-"""Spectral lines found against the spectrum's own noise floor, at a stated significance, and
-named after the gear mesh and the engine orders.  Needs numpy and scipy (not the FMUs).
+"""Spectral lines found against the spectrum's own noise floor, at a stated significance, told
+apart from noise resonances and named after the gear mesh and the engine orders; the spectral
+extent of a spectrum and a test for sub-harmonics.  Needs numpy and scipy (not the FMUs).
 
 The method (docs/analysis.md gives the reasoning and the measured error rates):
 
@@ -19,9 +20,18 @@ The method (docs/analysis.md gives the reasoning and the measured error rates):
    searched (Bonferroni: the family-wise false-alarm probability per spectrum is at most
    ``alpha``).  A line is a local maximum over the threshold; a second maximum on the skirt of
    a stronger line must also stand the threshold above the valley between them.
-4. **Names**: a line within one bin spacing of the mesh frequency ``z_p n/60`` or its
+4. **Line or resonance**: a peak over the threshold whose -3 dB width exceeds
+   ``max_width_ratio`` times the width the window gives a tone at the same offset from the bin
+   centre, or whose power fluctuates between the Welch segments more than a line's could (at
+   ``stability_alpha``) and as much as narrow-band noise's, is a resonance, not a line.
+5. **Names**: a line within one bin spacing of the mesh frequency ``z_p n/60`` or its
    harmonics, of a mesh +- engine-order sideband, or of an engine order ``k n/60`` or its
    harmonics gets that name (in this priority); any other line is reported as unexplained.
+
+``spectral_extent``: where the 1/3-octave-smoothed PSD falls 10 dB below its mean in
+100-500 Hz, searched up to Nyquist, censored when it never does.  ``subharmonic_test``: power
+at the odd multiples of half a fundamental against the noise floor and against the comb at its
+multiples.
 """
 
 from __future__ import annotations
