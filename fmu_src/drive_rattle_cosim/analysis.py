@@ -5,7 +5,8 @@ Rattle is chaotic: a run is judged by statistics, never by its trajectory, and a
 means something only with its scatter.  ``windowed_statistics`` drops a stated start
 transient, cuts the rest of the record into equal windows, computes ``rattle_statistics`` in
 each, and reports every figure as mean +- standard deviation (and min/max) over the windows.
-The spectral figures come from the line search of ``drive_rattle_cosim.spectral_lines``.
+The spectral figures come from ``drive_rattle_cosim.spectral_lines``: the line search (lines
+against the noise floor, resonances told apart), the spectral extent and the sub-harmonic test.
 docs/analysis.md describes the method.
 """
 
@@ -19,19 +20,23 @@ import numpy as np
 
 from .spectral_lines import (
     UNEXPLAINED,
+    ExtentSearch,
     LineCatalogue,
     LineDetection,
     LineSearch,
     Spectrum,
+    SubharmonicSearch,
     detect_lines,
+    spectral_extent,
+    subharmonic_test,
     welch_spectrum,
 )
 
 __all__ = [
-    "DOMINANT_BAND", "PAPER_FIGURES", "LineCatalogue", "LineSearch", "RattleStatistics",
-    "Scatter", "Spectrum", "WindowedStatistics", "catalogue_for", "detect_lines",
-    "markdown_table", "onsets_from_counters", "paper_comparison", "rattle_statistics",
-    "welch_spectrum", "windowed_statistics",
+    "DOMINANT_BAND", "PAPER_FIGURES", "ExtentSearch", "LineCatalogue", "LineSearch",
+    "RattleStatistics", "Scatter", "Spectrum", "SubharmonicSearch", "WindowedStatistics",
+    "catalogue_for", "detect_lines", "markdown_table", "onsets_from_counters",
+    "paper_comparison", "rattle_statistics", "welch_spectrum", "windowed_statistics",
 ]
 
 #: Band [Hz] of the paper's "dominant impact line" (its Fig. 5 shows lines up to ~1.5 kHz).
@@ -39,17 +44,36 @@ DOMINANT_BAND = (100.0, 1500.0)
 #: Outputs ``rattle_statistics`` needs; the others it reads are optional (nan when absent).
 REQUIRED_SIGNALS = ("wheel.phi", "mesh.W")
 
+#: Flanks of the per-flank statistics: (suffix of the statistic's name, sign in onset_flanks).
+FLANKS = (("drive", 1), ("coast", -1))
+#: Percentiles of the impact speeds reported per flank.
+PERCENTILES = (10, 50, 90)
+
 #: The paper's reported figures (Theodossiades et al. 2008, section 3 and Figures 3-5), as
-#: printed next to this run's: quantity -> text.  The paper's own gear data are unpublished.
+#: printed next to this run's: quantity -> text.  The paper's own gear data are unpublished,
+#: and it does not say which statistic its "typical" figures are, so no row claims agreement.
 PAPER_FIGURES = {
     "mean wheel speed [rad/s]": "44.5",
     "max deflection [µm]": "≈ 1 (\"of the order of 1 µm\")",
-    "typical impact velocity (median) [mm/s]": "≈ 4 (\"of the order of 4 mm/s\")",
+    "impact speed at onsets, drive flank: 10th percentile [mm/s]": "—",
+    "impact speed at onsets, drive flank: median [mm/s]":
+        "\"of the order of 4 mm/s\": which statistic and flank is not stated (its own gear "
+        "data); not a like-for-like figure",
+    "impact speed at onsets, drive flank: 90th percentile [mm/s]": "—",
+    "impact speed at onsets, drive flank: RMS [mm/s]": "—",
+    "impact energy rate, drive flank: Σ ½ m_n v² per second [mW]": "—",
+    "impact speed at onsets, coast flank: 10th percentile [mm/s]": "—",
+    "impact speed at onsets, coast flank: median [mm/s]": "—",
+    "impact speed at onsets, coast flank: 90th percentile [mm/s]": "—",
+    "impact speed at onsets, coast flank: RMS [mm/s]": "—",
+    "impact energy rate, coast flank: Σ ½ m_n v² per second [mW]": "—",
     "pairs loaded while in contact [1]": "3–4 (\"in simultaneous impact\")",
-    "highest detected line [Hz]": "≈ 1500 (impact lines up to about 1.5 kHz)",
+    "spectral extent: 1/3-octave PSD 10 dB below its 100–500 Hz mean [Hz]":
+        "impact lines \"up to about 1.5 kHz\" (its band and criterion not stated)",
     "strongest line 100–1500 Hz [Hz]": "380 (its gear; this pair's mesh is 277 Hz)",
     "strongest line above the noise floor [dB]": "not given (a clear line)",
-    "windows with a line at half the strongest's frequency [1]": "yes (190 Hz)",
+    "windows with a sub-harmonic of the forcing (power at odd multiples of f0/2) [1]":
+        "yes (190 Hz, half its 380 Hz line)",
 }
 
 
@@ -70,18 +94,37 @@ class RattleStatistics:
     rms_normal_force: float  # N
     peak_normal_force: float  # N
     contact_fraction: float  # fraction of samples with a pair in contact
-    impact_energy_rate: float  # W: sum of 1/2 m_n v^2 over onsets per second
+    impact_energy_rate: float  # W: sum of 1/2 m_n v^2 over onsets per second, both flanks
     mean_loaded_pairs: float = math.nan  # pairs in contact, averaged over samples in contact
     max_loaded_pairs: float = math.nan
-    # --- spectral lines of the total normal force (nan unless a line search was asked for)
+    # --- impact speeds per flank [m/s]: percentiles and RMS of the speeds at the flank's
+    # onsets (nan without onsets there); energy rate [W] = sum of 1/2 m_n v^2 / duration
+    impact_speed_p10_drive: float = math.nan
+    impact_speed_p50_drive: float = math.nan
+    impact_speed_p90_drive: float = math.nan
+    impact_speed_rms_drive: float = math.nan
+    impact_energy_rate_drive: float = math.nan
+    impact_speed_p10_coast: float = math.nan
+    impact_speed_p50_coast: float = math.nan
+    impact_speed_p90_coast: float = math.nan
+    impact_speed_rms_coast: float = math.nan
+    impact_energy_rate_coast: float = math.nan
+    # --- spectral figures of the total normal force (nan unless a line search was asked for)
     lines_detected: float = math.nan  # detected lines in DOMINANT_BAND
     lines_unexplained: float = math.nan  # of those, lines no catalogue entry explains
-    highest_line_frequency: float = math.nan  # Hz, highest detected line in the search band
+    #: Peaks over the threshold in DOMINANT_BAND that are resonances, not lines.
+    resonances_detected: float = math.nan
     dominant_line_frequency: float = math.nan  # Hz, strongest detected line in DOMINANT_BAND
     dominant_line_level: float = math.nan  # dB above the noise floor
-    #: 1 when a line was detected at half the strongest line's frequency (within the
-    #: resolution), 0 when not or when there is no line: over windows, the fraction of windows.
-    half_line_found: float = math.nan
+    #: Hz: where the smoothed PSD falls ``drop_db`` below its reference-band mean (band open
+    #: to Nyquist); the band top when it never does (then ``spectral_extent_censored`` = 1).
+    spectral_extent: float = math.nan
+    spectral_extent_censored: float = math.nan  # 1 or 0: over windows, the fraction
+    #: 1 when the sub-harmonic test flags power at (k + 1/2) f0, 0 when not (nan when no
+    #: test was possible): over windows, the fraction of windows.
+    subharmonic_flag: float = math.nan
+    subharmonic_ratio_db: float = math.nan  # the half comb's power over the comb's [dB]
+    subharmonic_fundamental: float = math.nan  # Hz, f0 of the test
     #: The strongest line's name in the catalogue, "unexplained", or "none found" ("" without
     #: a line search).
     dominant_line_name: str = ""
@@ -121,13 +164,20 @@ def _signal(signals: dict, name: str, n: int):
 
 def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks, normal_mass: float, *,
                       lines: LineSearch | None = None, catalogue: LineCatalogue | None = None,
-                      segment_seconds: float = 0.25) -> RattleStatistics:
+                      segment_seconds: float = 0.25, extent: ExtentSearch | None = None,
+                      subharmonics: SubharmonicSearch | None = None,
+                      fundamental: float | None = None) -> RattleStatistics:
     """Statistics of a recorded stretch.  ``signals`` holds the unit outputs by name
     (``wheel.phi`` and ``mesh.W`` required; ``mesh.W_peak``, ``mesh.delta_peak``,
     ``mesh.n_contact`` optional, nan when absent); the onsets are those within the stretch;
-    ``normal_mass`` [kg] is the wheel's effective mass on the tooth normal.  With ``lines``,
-    the total normal force is searched for spectral lines (Welch segments of
-    ``segment_seconds``), named from ``catalogue``."""
+    ``normal_mass`` [kg] is the wheel's effective mass on the tooth normal.
+
+    With ``lines``, the spectral figures of the total normal force are computed from one
+    Welch spectrum (segments of ``segment_seconds``, up to Nyquist): its lines (named from
+    ``catalogue``), its extent (``extent``, default ``ExtentSearch()``) and the sub-harmonic
+    test (``subharmonics``, default ``SubharmonicSearch()``) with the fundamental
+    ``fundamental`` [Hz] -- by default the catalogue's (the forcing's period), without a
+    catalogue the strongest line in DOMINANT_BAND."""
     t = np.asarray(time, dtype=float)
     missing = [n for n in REQUIRED_SIGNALS if n not in signals]
     if missing:
@@ -164,9 +214,32 @@ def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks, normal_ma
     )
     if np.isnan(n_contact).any():
         stats.mean_loaded_pairs = stats.max_loaded_pairs = math.nan
+    for flank, sign in FLANKS:
+        v = speeds[flanks == sign]
+        if v.size:
+            for q, value in zip(PERCENTILES, np.percentile(v, PERCENTILES), strict=True):
+                setattr(stats, f"impact_speed_p{q}_{flank}", float(value))
+            setattr(stats, f"impact_speed_rms_{flank}", float(np.sqrt(np.mean(v * v))))
+        setattr(stats, f"impact_energy_rate_{flank}",
+                float(0.5 * normal_mass * np.sum(v * v) / duration))
     if lines is not None:
-        detection = detect_lines(welch_spectrum(t[steps], W, segment_seconds), lines, catalogue)
+        spec = welch_spectrum(t[steps], W, segment_seconds)
+        detection = detect_lines(spec, lines, catalogue)
         _line_figures(stats, detection)
+        ext = spectral_extent(spec, extent)
+        stats.spectral_extent = ext.frequency
+        stats.spectral_extent_censored = (float(ext.censored) if math.isfinite(ext.frequency)
+                                          else math.nan)
+        f0 = fundamental
+        if f0 is None:
+            f0 = (catalogue.fundamental if catalogue is not None
+                  else stats.dominant_line_frequency)
+        stats.subharmonic_fundamental = float(f0)
+        if math.isfinite(f0):
+            sub = subharmonic_test(spec, f0, subharmonics)
+            if sub.positions:
+                stats.subharmonic_flag = float(sub.flag)
+                stats.subharmonic_ratio_db = sub.ratio_db
     return stats
 
 
@@ -174,16 +247,14 @@ def _line_figures(stats: RattleStatistics, detection: LineDetection) -> None:
     band = detection.in_band(*DOMINANT_BAND)
     stats.lines_detected = float(len(band))
     stats.lines_unexplained = float(sum(ln.kind == UNEXPLAINED for ln in band))
-    stats.highest_line_frequency = (max(ln.frequency for ln in detection.lines)
-                                    if detection.lines else math.nan)
+    stats.resonances_detected = float(sum(DOMINANT_BAND[0] <= r.frequency <= DOMINANT_BAND[1]
+                                          for r in detection.resonances))
     dominant = detection.strongest(*DOMINANT_BAND)
-    stats.half_line_found = 0.0
     stats.dominant_line_name = "none found"
     if dominant is not None:
         stats.dominant_line_frequency = dominant.frequency
         stats.dominant_line_level = dominant.ratio_db
         stats.dominant_line_name = dominant.name or UNEXPLAINED
-        stats.half_line_found = float(detection.near(dominant.frequency / 2) is not None)
 
 
 @dataclass(frozen=True)
@@ -260,9 +331,12 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
                         normal_mass: float, transient: float = 0.0,
                         window: float | None = None, *, lines: LineSearch | None = None,
                         catalogue: LineCatalogue | None = None,
-                        segment_seconds: float = 0.25) -> WindowedStatistics:
+                        segment_seconds: float = 0.25, extent: ExtentSearch | None = None,
+                        subharmonics: SubharmonicSearch | None = None,
+                        fundamental: float | None = None) -> WindowedStatistics:
     """Statistics of a recorded run in windows of ``window`` seconds (None: one window over
-    everything after the transient) after dropping the first ``transient`` seconds.
+    everything after the transient) after dropping the first ``transient`` seconds; the
+    keyword arguments are those of ``rattle_statistics``.
 
     The record must be uniformly sampled.  Window i spans samples ``a_i .. a_i + n`` (n the
     window in samples): its onsets are those with ``t[a_i] < t_onset <= t[a_i + n]``.  A tail
@@ -304,7 +378,8 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
         inside = (onset_t > t[a]) & (onset_t <= t[b])
         results.append(rattle_statistics(
             t[span], {k: v[span] for k, v in series.items()}, onset_v[inside], onset_f[inside],
-            normal_mass, lines=lines, catalogue=catalogue, segment_seconds=segment_seconds))
+            normal_mass, lines=lines, catalogue=catalogue, segment_seconds=segment_seconds,
+            extent=extent, subharmonics=subharmonics, fundamental=fundamental))
         starts.append(float(t[a]))
         slices.append(span)
     end = first + count * width
@@ -314,46 +389,100 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
 
 
 #: Rows of the paper comparison: (quantity as in PAPER_FIGURES, statistic, display scale).
+#: The spectral extent, the strongest line's name and the sub-harmonic flag have rows of
+#: their own (``paper_comparison``).
 PAPER_ROWS = (
     ("mean wheel speed [rad/s]", "mean_wheel_speed", 1.0),
     ("max deflection [µm]", "max_penetration", 1e6),
-    ("typical impact velocity (median) [mm/s]", "median_impact_speed", 1e3),
+    *((f"impact speed at onsets, {flank} flank: {label} [mm/s]", f"impact_speed_{q}_{flank}",
+       1e3) for flank, _sign in FLANKS
+      for label, q in (("10th percentile", "p10"), ("median", "p50"),
+                       ("90th percentile", "p90"), ("RMS", "rms"))),
     ("pairs loaded while in contact [1]", "mean_loaded_pairs", 1.0),
-    ("highest detected line [Hz]", "highest_line_frequency", 1.0),
     ("strongest line 100–1500 Hz [Hz]", "dominant_line_frequency", 1.0),
     ("strongest line above the noise floor [dB]", "dominant_line_level", 1.0),
-    ("windows with a line at half the strongest's frequency [1]", "half_line_found", 1.0),
 )
+#: Keys of PAPER_FIGURES of the rows built apart.
+ENERGY_ROW = "impact energy rate, {flank} flank: Σ ½ m_n v² per second [mW]"
+EXTENT_ROW = "spectral extent: 1/3-octave PSD 10 dB below its 100–500 Hz mean [Hz]"
+SUBHARMONIC_ROW = ("windows with a sub-harmonic of the forcing (power at odd multiples of "
+                   "f0/2) [1]")
 
 #: Further statistics: (quantity, statistic, display scale).
 FURTHER_ROWS = (
     ("impacts per second, drive flank [1/s]", "impacts_per_second_drive", 1.0),
     ("impacts per second, coast flank [1/s]", "impacts_per_second_coast", 1.0),
-    ("mean impact velocity [mm/s]", "mean_impact_speed", 1e3),
+    ("mean impact velocity, both flanks [mm/s]", "mean_impact_speed", 1e3),
     ("peak impact velocity [mm/s]", "peak_impact_speed", 1e3),
-    ("rattle index: impact energy per second [mW]", "impact_energy_rate", 1e3),
+    ("rattle index: impact energy per second, both flanks [mW]", "impact_energy_rate", 1e3),
     ("RMS normal force [N]", "rms_normal_force", 1.0),
     ("peak normal force [N]", "peak_normal_force", 1.0),
     ("fraction of time in contact [1]", "contact_fraction", 1.0),
     ("most pairs loaded at once [1]", "max_loaded_pairs", 1.0),
     ("detected lines 100–1500 Hz [1]", "lines_detected", 1.0),
     ("of those, unexplained [1]", "lines_unexplained", 1.0),
+    ("peaks 100–1500 Hz over the threshold that are resonances, not lines [1]",
+     "resonances_detected", 1.0),
+    ("sub-harmonic comb over the comb at k·f0 (power above the floor) [dB]",
+     "subharmonic_ratio_db", 1.0),
 )
 
 
 def paper_comparison(ws: WindowedStatistics) -> list[tuple[str, str, str]]:
     """Rows ``(quantity, this run: "mean ± scatter (min–max over windows)", paper)``."""
     rows = [(q, ws.text(name, scale), PAPER_FIGURES[q]) for q, name, scale in PAPER_ROWS]
+    per_flank = 4  # p10, median, p90, RMS rows of each flank, then its energy rate
+    for i, (flank, _sign) in enumerate(FLANKS):
+        q = ENERGY_ROW.format(flank=flank)
+        rows.insert(2 + (i + 1) * per_flank + i,
+                    (q, ws.text(f"impact_energy_rate_{flank}", 1e3), PAPER_FIGURES[q]))
+    at = next(i for i, r in enumerate(rows) if r[0].startswith("strongest line 100"))
+    rows.insert(at, (EXTENT_ROW, extent_text(ws), PAPER_FIGURES[EXTENT_ROW]))
     name, n = ws.most_common("dominant_line_name")
-    rows.insert(6, ("strongest line's name (most windows)",
-                    f"{name or '—'} ({n} of {len(ws.windows)} windows)",
-                    "—"))
+    rows.insert(at + 2, ("strongest line's name (most windows)",
+                         f"{name or '—'} ({n} of {len(ws.windows)} windows)", "—"))
+    rows.append((SUBHARMONIC_ROW, subharmonic_text(ws), PAPER_FIGURES[SUBHARMONIC_ROW]))
     return rows
 
 
 def further_statistics(ws: WindowedStatistics) -> list[tuple[str, str]]:
     """Rows ``(quantity, this run: "mean ± scatter (min–max over windows)")``."""
     return [(q, ws.text(name, scale)) for q, name, scale in FURTHER_ROWS]
+
+
+def extent_text(ws: WindowedStatistics) -> str:
+    """The spectral extent over the windows: mean ± scatter of the windows where the smoothed
+    PSD fell below the level, and in how many it did not up to the band top (there the
+    extent is only a lower bound, and no mean is taken)."""
+    values = [(w.spectral_extent, w.spectral_extent_censored) for w in ws.windows
+              if math.isfinite(w.spectral_extent)]
+    if not values:
+        return "none in any window"
+    n = len(ws.windows)
+    found = [f for f, c in values if not c]
+    tops = [f for f, c in values if c]
+    parts = []
+    if found:
+        text = Scatter.of(found).text()
+        parts.append(text if len(found) == n else f"{text} in {len(found)} of {n} windows")
+    if tops:
+        parts.append(f"≥ {min(tops):.0f} (the band top, below Nyquist) in {len(tops)} of "
+                     f"{n} windows: the PSD stays within 10 dB of its 100–500 Hz level "
+                     "up to there")
+    return "; ".join(parts)
+
+
+def subharmonic_text(ws: WindowedStatistics) -> str:
+    """The sub-harmonic flag over the windows: in how many it was raised, and f0."""
+    flags = [w.subharmonic_flag for w in ws.windows if math.isfinite(w.subharmonic_flag)]
+    if not flags:
+        return "no test possible in any window"
+    n = len(ws.windows)
+    f0 = Scatter.of([w.subharmonic_fundamental for w in ws.windows])
+    text = f"{int(sum(flags))} of {len(flags)} windows"
+    if len(flags) < n:
+        text += f" with a test ({n} windows)"
+    return text + f" (f0 = {f0.mean:.4g} Hz)"
 
 
 def markdown_table(rows, headers=("quantity", "this run", "paper")) -> str:

@@ -133,46 +133,72 @@ def test_bad_records_are_refused():
         rattle_statistics(t, {"mesh.W": s["mesh.W"]}, [], [], M_N)
 
 
-def test_spectral_figures_per_window():
-    """A force with a strong 620 Hz line and, in windows 0 and 2 only, one at 310 Hz: the
-    half-frequency line is found in half of the windows.  Neither is an excited order at
-    830 rpm (44.8 and 22.4 times 13.83 Hz, more than a bin from even orders): unexplained."""
+def _line_record(catalogue):
+    """A force with a strong 620 Hz line and, in windows 0 and 2 only, one at 310 Hz (-6 dB
+    of it).  Neither is an excited order at 830 rpm (44.8 and 22.4 times 13.83 Hz, more than
+    a bin from even orders): unexplained."""
     fs, window = 10_000.0, 2.0
     t = np.arange(round(4 * window * fs) + 1) / fs
     rng = np.random.default_rng(3)
     W = 10.0 + rng.standard_normal(t.size) + 0.4 * np.sin(2 * np.pi * 620.0 * t)
     half = (t % (2 * window)) < window
     W += np.where(half, 0.2 * np.sin(2 * np.pi * 310.0 * t), 0.0)
-    s = {"wheel.phi": 44.5 * t, "mesh.W": W}
+    return t, {"wheel.phi": 44.5 * t, "mesh.W": W}, window
+
+
+def test_spectral_figures_per_window():
+    """The sub-harmonic of the 620 Hz line (f0 given) is flagged in the two windows that
+    have it; the line table's figures per window."""
     cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    t, s, window = _line_record(cat)
     ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
-                             catalogue=cat)
+                             catalogue=cat, fundamental=620.0)
     assert [w.dominant_line_frequency for w in ws.windows] == pytest.approx([620.0] * 4,
                                                                             abs=1.0)
-    assert [w.half_line_found for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
-    assert ws.scatter("half_line_found").mean == 0.5
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
+    assert [w.subharmonic_ratio_db for w in ws.windows][::2] == pytest.approx([-6.0] * 2,
+                                                                              abs=1.0)
+    assert ws.scatter("subharmonic_flag").mean == 0.5
     assert [w.lines_detected for w in ws.windows] == [2, 1, 2, 1]
     assert all(w.lines_unexplained == w.lines_detected for w in ws.windows)
+    assert [w.resonances_detected for w in ws.windows] == [0] * 4
     assert ws.most_common("dominant_line_name") == ("unexplained", 4)
     rows = paper_comparison(ws)
-    assert ("windows with a line at half the strongest's frequency [1]",
-            "0.5 ± 0.58 (0–1)", "yes (190 Hz)") in rows
+    sub = next(r for r in rows if r[0].startswith("windows with a sub-harmonic"))
+    assert sub[1] == "2 of 4 windows (f0 = 620 Hz)"
     assert "| strongest line 100–1500 Hz [Hz] | 620" in markdown_table(rows)
+    # Without a fundamental, the catalogue's is used: the forcing's period, engine order 2
+    # (27.67 Hz).  620 Hz lies 0.6 bins from 622.5 Hz, the odd order 45 -- where a response
+    # with twice the forcing's period has lines -- so every window is flagged.
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
+                             catalogue=cat)
+    assert [w.subharmonic_fundamental for w in ws.windows] == pytest.approx([830 / 30] * 4)
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0] * 4
+
+
+def test_subharmonic_of_the_strongest_line_without_a_catalogue():
+    t, s, window = _line_record(None)
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch())
+    assert [w.subharmonic_fundamental for w in ws.windows] == pytest.approx([620.0] * 4,
+                                                                            abs=0.5)
+    assert [w.subharmonic_flag for w in ws.windows] == [1.0, 0.0, 1.0, 0.0]
 
 
 def test_white_noise_force_has_no_dominant_line():
     """The old "dominant line with a half-frequency sub-harmonic" found one in 47 of 50
-    white-noise spectra; now neither is found (at most the false-alarm count)."""
+    white-noise spectra; now neither a line nor a sub-harmonic of the forcing is found (at
+    most the false-alarm count)."""
     fs = 10_000.0
     t = np.arange(round(2.0 * fs) + 1) / fs
-    found = 0
+    cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    found = flagged = 0
     for seed in range(25):
         W = 10.0 + np.random.default_rng(seed).standard_normal(t.size)
         ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N,
-                                 lines=LineSearch())
+                                 lines=LineSearch(), catalogue=cat)
         found += not math.isnan(ws.windows[0].dominant_line_frequency)
-        assert ws.windows[0].half_line_found == 0.0
-    assert found <= 2
+        flagged += ws.windows[0].subharmonic_flag == 1.0
+    assert found <= 2 and flagged <= 2
 
 
 def test_scatter_text():
@@ -207,3 +233,70 @@ def test_a_line_in_some_windows_says_in_how_many():
     assert ws.text("dominant_line_frequency").endswith("; in 2 of 4 windows")
     assert [w.dominant_line_name for w in ws.windows] == ["unexplained"] * 2 + ["none found"] * 2
     assert ws.text("mean_wheel_speed") == "1 ± 0 (1–1)"
+
+
+def test_impact_speeds_per_flank():
+    """Percentiles (numpy's linear interpolation), RMS and energy rate of each flank's onset
+    speeds, and nothing invented for a flank without onsets."""
+    fs = 1000.0
+    t = np.arange(2001) / fs  # one 2 s window
+    drive = np.arange(1, 11) * 1e-3  # 1..10 mm/s
+    coast = np.array([20e-3, 20e-3, 26e-3])
+    speeds = np.concatenate([drive, coast])
+    flanks = [1] * 10 + [-1] * 3
+    s = {"wheel.phi": t, "mesh.W": np.ones(t.size)}
+    st = rattle_statistics(t, s, speeds, flanks, M_N)
+    assert (st.impact_speed_p10_drive, st.impact_speed_p50_drive,
+            st.impact_speed_p90_drive) == pytest.approx((1.9e-3, 5.5e-3, 9.1e-3))
+    assert st.impact_speed_rms_drive == pytest.approx(math.sqrt(np.mean(drive ** 2)))
+    assert st.impact_energy_rate_drive == pytest.approx(0.5 * M_N * np.sum(drive ** 2) / 2.0)
+    assert st.impact_speed_p50_coast == pytest.approx(20e-3)
+    assert st.impact_speed_p90_coast == pytest.approx(24.8e-3)
+    assert st.impact_energy_rate_coast == pytest.approx(0.5 * M_N * np.sum(coast ** 2) / 2.0)
+    assert (st.impact_energy_rate_drive + st.impact_energy_rate_coast
+            == pytest.approx(st.impact_energy_rate))
+    only_drive = rattle_statistics(t, s, drive, [1] * 10, M_N)
+    assert math.isnan(only_drive.impact_speed_p50_coast)
+    assert math.isnan(only_drive.impact_speed_rms_coast)
+    assert only_drive.impact_energy_rate_coast == 0.0
+
+
+def test_paper_rows_give_percentiles_with_scatter_and_claim_no_agreement():
+    t, s = record()
+    onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
+                                  s["mesh.v_impact"])
+    ws = windowed_statistics(t, s, *onsets, M_N, TRANSIENT, WINDOW)
+    rows = {q: (run, paper) for q, run, paper in paper_comparison(ws)}
+    for flank in ("drive", "coast"):
+        for label in ("10th percentile", "median", "90th percentile", "RMS"):
+            run, _ = rows[f"impact speed at onsets, {flank} flank: {label} [mm/s]"]
+            assert " ± " in run
+        run, _ = rows[f"impact energy rate, {flank} flank: Σ ½ m_n v² per second [mW]"]
+        assert " ± " in run
+    # Window i: i + 1 drive onsets at (i + 1) mm/s (window 0 also one at 1 mm/s): medians
+    # 1, 2, 3, 4 mm/s; the coast onset is at 2 mm/s in every window.
+    assert rows["impact speed at onsets, drive flank: median [mm/s]"][0] == (
+        "2.5 ± 1.3 (1–4)")
+    assert rows["impact speed at onsets, coast flank: median [mm/s]"][0] == "2 ± 0 (2–2)"
+    paper = rows["impact speed at onsets, drive flank: median [mm/s]"][1]
+    assert "4 mm/s" in paper and "not a like-for-like" in paper
+    assert not any("typical" in q for q in rows)
+    # Without a line search the spectral rows say so instead of inventing a value.
+    assert rows["spectral extent: 1/3-octave PSD 10 dB below its 100–500 Hz mean [Hz]"][0] == (
+        "none in any window")
+    assert rows["windows with a sub-harmonic of the forcing (power at odd multiples of f0/2) "
+                "[1]"][0] == "no test possible in any window"
+
+
+def test_extent_rows_say_when_the_extent_is_only_a_lower_bound():
+    """White noise is flat to Nyquist: the extent row gives the band top as a lower bound in
+    every window, not a mean with a scatter."""
+    fs = 10_000.0
+    t = np.arange(round(4.0 * fs) + 1) / fs
+    W = 10.0 + np.random.default_rng(5).standard_normal(t.size)
+    ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, 2.0,
+                             lines=LineSearch())
+    assert [w.spectral_extent_censored for w in ws.windows] == [1.0, 1.0]
+    text = next(r[1] for r in paper_comparison(ws) if r[0].startswith("spectral extent"))
+    assert text.startswith("≥ 4996 (the band top, below Nyquist) in 2 of 2 windows")
+    assert "±" not in text
