@@ -1,10 +1,10 @@
 /*
  * rattle_fmi_common.h - what both FMI layers do the same way, written once: the status shim of
- * the pythonfmu FMUs (rattle_fmi_shim.c) and the glue of the native FMUs (fmi2_native.c) both
- * compile rattle_fmi_common.c.
+ * the pythonfmu FMUs (rattle_fmi_shim.c) and the FMI 2.0 glue of the native FMUs
+ * (fmi2_functions.c) both compile rattle_fmi_common.c.
  *
- * Serialized FMU states: an envelope of RATTLE_STATE_HEADER bytes, then the unit's state
- * (JSON).  Little-endian:
+ * Serialized FMU states: an envelope of RATTLE_STATE_HEADER bytes, then the unit's state (the
+ * model library's record, rm_save).  Little-endian:
  *   0  8  "RTLSTSER"
  *   8  4  envelope version (RATTLE_STATE_ENVELOPE_VERSION)
  *  12  4  0 (reserved)
@@ -87,6 +87,23 @@ RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
 RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
                                              const char* fmuGUID, const char* guid, char* name,
                                              size_t name_size, char* why, size_t why_size);
+
+/* The file system, for the resources folder (paths are UTF-8; on Windows converted to the
+ * wide-character API). */
+/* The canonical absolute path of an existing file or folder (malloc'ed), or NULL with the
+ * reason ("no such file or directory", ...) in why. */
+RATTLE_INTERNAL char* rattle_canonical_path(const char* path, char* why, size_t why_size);
+RATTLE_INTERNAL int rattle_is_dir(const char* path);
+RATTLE_INTERNAL int rattle_is_regular_file(const char* path);
+/* The first line of the marker file `path` (a small text file naming the FMU, such as
+ * resources/model_identifier.txt), without its line end, in out (at most size - 1 bytes).
+ * Read only when it is a regular file: it is opened non-blocking and checked again on the
+ * open descriptor, so that a FIFO or a device there is refused without blocking or reading it.
+ * RATTLE_MARKER_OK; RATTLE_MARKER_MISSING when nothing is there; RATTLE_MARKER_BAD with the
+ * reason in why ("is a FIFO, not a regular file", ...). */
+enum { RATTLE_MARKER_OK = 0, RATTLE_MARKER_MISSING = 1, RATTLE_MARKER_BAD = 2 };
+RATTLE_INTERNAL int rattle_read_marker(const char* path, char* out, size_t size, char* why,
+                                       size_t why_size);
 
 /* The log category of a status (the modelDescription's <LogCategories>). */
 RATTLE_INTERNAL const char* rattle_status_category(int status);

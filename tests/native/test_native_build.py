@@ -1,6 +1,7 @@
-"""The native FMUs as built by build_fmu.py: their contents, an interface identical to the
-pythonfmu FMUs', validation by fmpy and fmu-manipulation-toolbox, and nothing of Python in
-their binaries."""
+"""The native FMUs as the build makes them: the model library and its FMI 2.0 face compiled
+together (linux64, win64) with their C sources, an interface rendered from the specs and held
+against the committed templates, a GUID derived from the sources, validation by fmpy and
+fmu-manipulation-toolbox, and only the fmi2 functions exported."""
 
 from __future__ import annotations
 
@@ -16,9 +17,22 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from drive_rattle.interface import MODELS
-from drive_rattle_build.native import C_SOURCES, FMI_HEADERS, HEADERS, RESOURCE_MARKER, interface_of
-from drive_rattle_build.templates import normalised_xml
+from drive_rattle_build.native import (
+    CONFIG_HEADER,
+    FMI_HEADERS,
+    GLUE_HEADERS,
+    GLUE_SOURCES,
+    RESOURCE_MARKER,
+    interface_diff,
+    model_sources,
+    native_guid,
+    render_config,
+    source_files,
+)
 from drive_rattle_cosim.regression import reference_files
+
+#: The functions of the FMI 2.0 co-simulation interface (25 common, 9 co-simulation).
+FMI2_CO_SIMULATION_FUNCTIONS = 34
 
 
 def description(fmu: Path) -> ElementTree.Element:
@@ -35,28 +49,38 @@ def test_contents(native_fmus, model):
         for ref in reference_files(model):
             assert z.read(f"resources/regression/{ref.name}") == ref.read_bytes()
         assert b"no Python" in z.read("documentation/index.html")
+        # the one model: the library's sources as they are in the repository
+        for path in model_sources():
+            assert z.read(f"sources/{path.name}") == path.read_bytes(), path.name
+        config = z.read(f"sources/{CONFIG_HEADER}").decode()
     assert {f"binaries/linux64/{model}.so", f"binaries/win64/{model}.dll"} <= names
     assert not any(n.endswith((".py", ".pyc")) or "pythonfmu" in n for n in names), names
     listed = [f.get("name") for f in md.find("CoSimulation").find("SourceFiles")]
-    assert listed == list(C_SOURCES)
-    for name in (*C_SOURCES, *HEADERS, *FMI_HEADERS):
+    assert listed == source_files()
+    assert set(GLUE_SOURCES) <= set(listed) and "unit.c" in listed and "stepper.c" in listed
+    for name in (*listed, *GLUE_HEADERS, *FMI_HEADERS, CONFIG_HEADER, "rattle_model.h"):
         assert f"sources/{name}" in names, name
-    guid = md.get("guid")
-    with zipfile.ZipFile(native_fmus[model]) as z:  # the GUID is compiled into the sources
-        assert guid.encode() in z.read("sources/rattle_native_tables.h")
+    assert config == render_config(model, md.get("guid"))
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_interface_is_the_pythonfmu_fmus(native_fmus, fmus, model):
+def test_interface_is_the_templates(native_fmus, model):
     """Same variables, value references, types, causalities, units, limits, starts and
-    structure as the pythonfmu FMU; only the GUID, the generation tool, needsExecutionTool and
-    the source files differ."""
-    native, python = description(native_fmus[model]), description(fmus[model])
-    assert normalised_xml(interface_of(native, python)) == normalised_xml(python)
-    assert native.get("guid") != python.get("guid")
-    assert native.find("CoSimulation").get("needsExecutionTool") == "false"
-    assert python.find("CoSimulation").get("needsExecutionTool") == "true"
-    assert "native C" in native.get("generationTool")
+    structure as the committed template (the pythonfmu FMU's); only the GUID, the generation
+    tool, needsExecutionTool and the source files are the native flavour's own."""
+    md = description(native_fmus[model])
+    assert interface_diff(model, md) == []
+    assert md.find("CoSimulation").get("needsExecutionTool") == "false"
+    assert "native C" in md.get("generationTool")
+
+
+def test_guid_from_the_sources(native_fmus):
+    """The GUID is derived from the model, the flavour and the sources (library and glue):
+    every build of the same sources has it, so a state saved by one restores in another."""
+    guids = {model: description(native_fmus[model]).get("guid") for model in MODELS}
+    assert guids == {model: native_guid(model) for model in MODELS}
+    assert len(set(guids.values())) == len(MODELS)
+    assert all(re.fullmatch(r"\{[0-9a-f-]{36}\}", g) for g in guids.values())
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -79,7 +103,7 @@ def _tool(name: str) -> str:
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_linux64_binary_needs_only_the_c_library(native_fmus, model, tmp_path):
+def test_linux64_binary_exports_only_fmi2_and_needs_only_libc(native_fmus, model, tmp_path):
     with zipfile.ZipFile(native_fmus[model]) as z:
         binary = tmp_path / f"{model}.so"
         binary.write_bytes(z.read(f"binaries/linux64/{model}.so"))
@@ -87,16 +111,18 @@ def test_linux64_binary_needs_only_the_c_library(native_fmus, model, tmp_path):
                              text=True, check=True).stdout
     needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
     assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
-    symbols = subprocess.run([_tool("nm"), "-D", str(binary)], capture_output=True, text=True,
-                             check=True).stdout
-    undefined = [line.split()[-1] for line in symbols.splitlines() if " U " in line]
-    assert not [s for s in undefined if s.startswith(("Py", "_Py"))], undefined
-    exported = {line.split()[-1] for line in symbols.splitlines() if " T " in line}
+    symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
+                             capture_output=True, text=True, check=True).stdout
+    exported = {line.split()[-1] for line in symbols.splitlines() if line.strip()}
     assert {"fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate"} <= exported
+    # the library (rm_*) and the glue's helpers (rattle_*) stay inside
+    assert all(name.startswith("fmi2") for name in exported), sorted(exported)
+    assert len(exported) == FMI2_CO_SIMULATION_FUNCTIONS
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_win64_binary_imports_only_the_c_runtime_and_kernel(native_fmus, model, tmp_path):
+def test_win64_binary_exports_only_fmi2_and_imports_only_the_c_runtime(native_fmus, model,
+                                                                         tmp_path):
     with zipfile.ZipFile(native_fmus[model]) as z:
         binary = tmp_path / f"{model}.dll"
         binary.write_bytes(z.read(f"binaries/win64/{model}.dll"))
@@ -109,4 +135,7 @@ def test_win64_binary_imports_only_the_c_runtime_and_kernel(native_fmus, model, 
     assert imported and all(d.startswith("api-ms-win-crt-") or d in ("kernel32.dll",
                                                                     "msvcrt.dll")
                             for d in imported), imported
-    assert "fmi2Instantiate" in headers.stdout and "fmi2DoStep" in headers.stdout
+    table = headers.stdout.split("[Ordinal/Name Pointer] Table")[1].split("\n\n")[0]
+    exported = set(re.findall(r"\]\s+(\w+)", table))
+    assert all(name.startswith("fmi2") for name in exported), sorted(exported)
+    assert len(exported) == FMI2_CO_SIMULATION_FUNCTIONS

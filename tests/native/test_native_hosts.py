@@ -2,9 +2,11 @@
 runs each FMU on its regression inputs
 
 * on linux64, compiled with gcc, in an empty environment (no PATH to a Python, no
-  LD_PRELOAD): its outputs equal fmpy's run of the same calls bit for bit, and no libpython
-  is in the process (the host checks /proc/self/maps);
-* on linux64 with the binary compiled here from the FMU's sources/ alone: the same outputs;
+  LD_PRELOAD): its outputs equal the in-process twin's (the model library's unit driven by the
+  same calls) and fmpy's run of the same calls, bit for bit, and no libpython is in the
+  process (the host checks /proc/self/maps);
+* on linux64 with the binary compiled here from the FMU's sources/ alone (warning-free under
+  -pedantic -Werror): the same outputs;
 * on win64 under wine, host and FMU cross-compiled: the outputs pass the committed regression
   references (another C library, so not bit for bit).  Skipped with the reason where wine is
   missing, unless RATTLE_REQUIRE_WINE=1 (CI sets it), which makes that a failure.
@@ -21,56 +23,26 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import read_model_description
 
 from drive_rattle.interface import MODELS
-from drive_rattle_build.native import C_SOURCES, zig_cc
-from drive_rattle_build.shim import fmi2_headers
+from drive_rattle_build.compiler import zig_cc
 from drive_rattle_cosim.harness import Unit
 from drive_rattle_cosim.regression import read_opt, reference_files
 
-HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
-STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror"]
+from .twin import (
+    STRICT,
+    bits,
+    compile_host,
+    gcc,
+    host_arguments,
+    input_rows,
+    interface,
+    read_table,
+    twin_run,
+)
 
-
-def gcc() -> str:
-    path = shutil.which("gcc")
-    if path is None:
-        pytest.skip("gcc is not installed: the native host cannot be compiled")
-    return path
-
-
-def interface(fmu: Path) -> tuple[str, str, list[str], list[tuple[str, str, int]]]:
-    """(model identifier, GUID, Real input names, [(output name, type, vr)])."""
-    md = read_model_description(str(fmu))
-    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
-    outputs = [(v.name, v.type, v.valueReference) for v in md.modelVariables
-               if v.causality == "output"]
-    return md.coSimulation.modelIdentifier, md.guid, inputs, outputs
-
-
-def host_arguments(fmu: Path, binary: str, resources: str, inputs: str, outputs: str):
-    _, guid, input_names, outs = interface(fmu)
-    md = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
-    return [binary, resources, guid, inputs, outputs,
-            ",".join(str(md[n].valueReference) for n in input_names),
-            *(f"{kind[0]}:{vr}:{name}" for name, kind, vr in outs)]
-
-
-def read_table(path: Path, outputs) -> list[list]:
-    lines = path.read_text(encoding="utf-8").splitlines()
-    assert lines[0] == ",".join(["time", *(n for n, _, _ in outputs)])
-    return [[float(x) if k == 0 or outputs[k - 1][1] == "Real" else int(x)
-             for k, x in enumerate(line.split(","))] for line in lines[1:]]
-
-
-def bits(table) -> list[list[str]]:
-    return [[x.hex() if isinstance(x, float) else str(x) for x in row] for row in table]
-
-
-def input_rows(model: str) -> list[list[float]]:
-    lines = reference_files(model)[0].read_text(encoding="utf-8").splitlines()
-    return [[float(x) for x in line.split(",")] for line in lines[1:]]
+pytestmark = pytest.mark.skipif(gcc() is None,
+                                reason="gcc is not installed: the native host cannot be compiled")
 
 
 def run_fmpy(fmu: Path, rows) -> list[list]:
@@ -103,11 +75,7 @@ def run_fmpy(fmu: Path, rows) -> list[list]:
 
 @pytest.fixture(scope="module")
 def linux_host(tmp_path_factory) -> Path:
-    exe = tmp_path_factory.mktemp("fmu_host") / "fmu_host"
-    cc = subprocess.run([gcc(), *STRICT, "-I", str(fmi2_headers()), "-o", str(exe),
-                         str(HOST_SOURCE), "-ldl"], capture_output=True, text=True, timeout=120)
-    assert cc.returncode == 0, f"gcc failed:\n{cc.stderr}"
-    return exe
+    return compile_host(tmp_path_factory.mktemp("fmu_host") / "fmu_host")
 
 
 def run_linux_host(host: Path, fmu: Path, unpacked: Path,
@@ -122,17 +90,19 @@ def run_linux_host(host: Path, fmu: Path, unpacked: Path,
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_linux_host_without_python(linux_host, native_fmus, model, tmp_path):
+def test_linux_host_without_python_is_the_twin(linux_host, native_fmus, model, tmp_path):
     fmu = native_fmus[model]
-    unpacked = tmp_path / "unpacked ä"
+    unpacked = tmp_path / "unpacked ä%20"  # the URI percent-encodes both
     with zipfile.ZipFile(fmu) as z:
         z.extractall(unpacked)
     run = run_linux_host(linux_host, fmu, unpacked, tmp_path)
     assert run.returncode == 0, f"fmu_host failed (rc {run.returncode}):\n{run.stderr}"
     assert not run.stderr, run.stderr  # nothing logged
-    table = read_table(tmp_path / "outputs.csv", interface(fmu)[3])
+    _, _, names, outputs = interface(fmu)
+    table = read_table(tmp_path / "outputs.csv", outputs)
     rows = input_rows(model)
     assert len(table) == len(rows) == 501
+    assert bits(table) == bits(twin_run(model, rows, names))
     assert bits(table) == bits(run_fmpy(fmu, rows))
 
 
@@ -144,10 +114,10 @@ def test_sources_alone_compile_into_a_working_fmu(linux_host, native_fmus, model
     unpacked = tmp_path / "unpacked"
     with zipfile.ZipFile(fmu) as z:
         z.extractall(unpacked)
-    sources = unpacked / "sources"
+    sources = sorted((unpacked / "sources").glob("*.c"))
     own = tmp_path / f"{model}.so"
     cc = subprocess.run([gcc(), *STRICT, "-ffp-contract=off", "-fPIC", "-shared", "-o",
-                         str(own), *(str(sources / s) for s in C_SOURCES), "-lm"],
+                         str(own), *(str(s) for s in sources), "-lm"],
                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert cc.returncode == 0, f"compiling the FMU's sources failed:\n{cc.stderr}"
     shipped = tmp_path / "shipped"
@@ -189,13 +159,10 @@ def wine_env(tmp_path_factory) -> dict:
 def win64_host(tmp_path_factory) -> Path:
     wine()
     exe = tmp_path_factory.mktemp("fmu_host_win64") / "fmu_host.exe"
-    cc = subprocess.run([*zig_cc("x86_64-windows-gnu"), *STRICT, "-I", str(fmi2_headers()),
-                         "-o", str(exe), str(HOST_SOURCE)], capture_output=True, text=True,
-                        timeout=900, cwd=exe.parent)
-    assert cc.returncode == 0, f"cross-compiling fmu_host.c failed:\n{cc.stderr}"
-    return exe
+    return compile_host(exe, zig_cc("x86_64-windows-gnu"), libs=())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", MODELS)
 def test_win64_binary_under_wine(win64_host, wine_env, native_fmus, model, tmp_path):
     fmu = native_fmus[model]

@@ -1,0 +1,94 @@
+"""The in-process twin of one native FMU: a unit of the model library (``drive_rattle.units``,
+the library the FMU compiles) driven through the calls a host makes of the FMU, and the C host
+``fmu_host.c`` (built here) that makes them of the FMU's binary.  Tables are compared as the
+hexadecimal text of every float: bit for bit, never with a tolerance (rattle is chaotic)."""
+
+from __future__ import annotations
+
+import itertools
+import shutil
+import subprocess
+from collections.abc import Sequence
+from pathlib import Path
+
+from fmpy import read_model_description
+
+from drive_rattle.library import DRIVELINE, MESH
+from drive_rattle.units import Unit
+from drive_rattle_build.shim import fmi2_headers
+from drive_rattle_cosim.regression import reference_files
+
+HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
+#: The host compiles warning-free under these.
+STRICT = ("-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror")
+KINDS = {"GearMeshRattle": MESH, "Driveline": DRIVELINE}
+
+
+def bits(table) -> list[list[str]]:
+    return [[x.hex() if isinstance(x, float) else str(x) for x in row] for row in table]
+
+
+def interface(fmu: Path) -> tuple[str, str, list[str], list[tuple[str, str, int]]]:
+    """(model identifier, GUID, input names, [(output name, type, vr)]) of an FMU."""
+    md = read_model_description(str(fmu))
+    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+    outputs = [(v.name, v.type, v.valueReference) for v in md.modelVariables
+               if v.causality == "output"]
+    return md.coSimulation.modelIdentifier, md.guid, inputs, outputs
+
+
+def input_rows(model: str) -> list[list[float]]:
+    """The committed regression inputs of ``model``: [time, inputs...] per communication
+    point."""
+    lines = reference_files(model)[0].read_text(encoding="utf-8").splitlines()
+    return [[float(x) for x in line.split(",")] for line in lines[1:]]
+
+
+def twin_run(model: str, rows: Sequence[Sequence[float]], names: Sequence[str]) -> list[list]:
+    """fmu_host.c's call sequence on a unit of the model library: setup at the first time,
+    initialization with the first row's inputs, then per row the inputs set and a step to the
+    next time; [time, outputs...] at every point (Integer outputs as int)."""
+    with Unit(KINDS[model], initialize=False) as unit:
+        unit.call("rm_setup", float(rows[0][0]))
+        unit.call("rm_enter_initialization")
+        unit.set(dict(zip(names, rows[0][1:], strict=True)))
+        unit.call("rm_exit_initialization")
+        table = [[rows[0][0], *unit.outputs().values()]]
+        for row, following in itertools.pairwise(rows):
+            unit.set(dict(zip(names, row[1:], strict=True)))
+            unit.call("rm_do_step", row[0], following[0] - row[0])
+            table.append([following[0], *unit.outputs().values()])
+        assert not unit.warnings, unit.warnings
+        return table
+
+
+def compile_host(exe: Path, cc: Sequence[str] = ("gcc",), flags: Sequence[str] = STRICT,
+                 libs: Sequence[str] = ("-ldl",)) -> Path:
+    """fmu_host.c compiled into ``exe``; AssertionError with the compiler's output."""
+    cmd = [*cc, *flags, "-I", str(fmi2_headers()), "-o", str(exe), str(HOST_SOURCE), *libs]
+    run = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=Path(exe).parent)
+    assert run.returncode == 0, f"{' '.join(cmd)}\n{run.stderr}"
+    return Path(exe)
+
+
+def host_arguments(fmu: Path, binary: str, resources: str, inputs: str,
+                   outputs: str) -> list[str]:
+    """fmu_host's command line for ``fmu``'s binary on an inputs file."""
+    md = read_model_description(str(fmu))
+    by_name = {v.name: v for v in md.modelVariables}
+    _, guid, input_names, outs = interface(fmu)
+    return [binary, resources, guid, inputs, outputs,
+            ",".join(str(by_name[n].valueReference) for n in input_names),
+            *(f"{kind[0]}:{vr}:{name}" for name, kind, vr in outs)]
+
+
+def read_table(path: Path, outputs) -> list[list]:
+    """fmu_host's output CSV: [time, outputs...] per row (Integers as int)."""
+    lines = Path(path).read_text(encoding="utf-8").splitlines()
+    assert lines[0] == ",".join(["time", *(n for n, _, _ in outputs)])
+    return [[float(x) if k == 0 or outputs[k - 1][1] == "Real" else int(x)
+             for k, x in enumerate(line.split(","))] for line in lines[1:]]
+
+
+def gcc() -> str | None:
+    return shutil.which("gcc")
