@@ -4,7 +4,7 @@
  * pythonfmu 0.7.0's C++ wrapper (whose sources are not shipped, so it cannot be rebuilt) turns
  * every Python exception into fmi2Fatal, ignores the return value of every slave method except
  * do_step, hands log messages to the host only when debug logging is on (and as a printf
- * FORMAT), and does not check what a master passes.  Measured (docs/fmi.md, "The native
+ * FORMAT), and does not check what a master passes.  Measured (docs/fmi.md, "The status
  * shim"), each of these killed or corrupted the host process:
  *   - it replaces "%20" in the resource path by a space (after any decoding of ours) and
  *     deletes "file://"; a resource location without slavemodule.txt and <module>.py (the
@@ -641,7 +641,7 @@ struct ShimState {
 };
 
 /* Serialized states: the envelope of rattle_fmi_common.h around pythonfmu's serialization of
- * the slave's state (JSON). */
+ * the slave's state (the model library's binary record, rm_save). */
 
 /* `state` as a state of this FMU, or NULL with the refusal logged. */
 static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* function)
