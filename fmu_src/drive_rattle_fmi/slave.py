@@ -22,15 +22,19 @@ which are generated from the same specs: a value reference is the library's inde
 hidden variables of the status channel are registered last.
 
 The slave classes are made once per process, here (``slave_class``), and the slave modules
-(``fmu_src/GearMeshRattle.py``, ``fmu_src/Driveline.py``) only name them: pythonfmu's wrapper
-executes the slave module's source anew at every fmi2Instantiate and keeps a reference to every
-class that source creates, so a class defined in the slave module would stay alive once per
-instantiation (about 17 kiB each; tests/adversarial/test_endurance.py).
+(``fmu_src/GearMeshRattle.py``, ``fmu_src/Driveline.py``) only name them: pythonfmu 0.7.0's
+wrapper executes the slave module's source anew at every fmi2Instantiate and keeps a reference
+to every class that source creates, so a class defined in the slave module stayed alive once
+per instantiation (about 17 kiB each; tests/adversarial/test_endurance.py).  What the wrapper
+still leaks per call (about 1 kiB) the status shim avoids by keeping freed instances idle for
+reuse; and the wrapper's release of a reference to the module's namespace that it never took
+is made good by ``hold_namespace``.
 """
 
 from __future__ import annotations
 
 import ctypes
+import hashlib
 import math
 import os
 import sys
@@ -86,15 +90,27 @@ def _forget_resources_path(resources) -> None:
                    if not p or os.path.normcase(os.path.abspath(p)) != target]
 
 
+_BY_CONTENT: dict[bytes, ctypes.CDLL] = {}
+
+
 def _library_of(resources) -> ctypes.CDLL:
     """The model library of this FMU: its own copy in ``resources/drive_rattle/`` (all
     pythonfmu FMUs of a process share one interpreter, so the ``drive_rattle`` package in
     ``sys.modules`` may be another FMU's, whose folder the host may have deleted), else the
-    binding's default (a slave class driven from a source checkout)."""
+    binding's default (a slave class driven from a source checkout).  A copy with the same
+    bytes as one loaded already is that one: a host that unpacks the FMU anew for every run
+    (fmpy's simulate_fmu) does not map one more library each time."""
     if resources:
         own = Path(resources) / "drive_rattle" / library.LIBRARY_NAME
-        if own.is_file():
-            return library.load(own)
+        try:
+            key = hashlib.sha256(own.read_bytes()).digest()
+        except OSError:
+            key = None
+        if key is not None:
+            lib = _BY_CONTENT.get(key)
+            if lib is None:
+                lib = _BY_CONTENT[key] = library.load(own)
+            return lib
     return library.load()
 
 
@@ -127,6 +143,9 @@ class RattleSlave(Fmi2Slave):
         self._shim_attached = False  # set when the status shim reads the status address
         self._lib = lib = _library_of(self.resources)
         self._register_variables(lib)
+        n = self._n_public
+        self._vr_status_address, self._vr_message, self._vr_last_time = n, n + 1, n + 2
+        self._hidden = frozenset((n, n + 1, n + 2))
         resources = os.fsencode(self.resources) if self.resources else None
         unit = lib.rm_new(self.KIND, resources)
         if not unit:
@@ -135,12 +154,19 @@ class RattleSlave(Fmi2Slave):
         # Freed with the slave (pythonfmu has no free hook: fmi2FreeInstance and fmi2Reset
         # drop the slave object); not at interpreter exit, where the library may be gone.
         weakref.finalize(self, lib.rm_free, unit).atexit = False
-        self._state_buffer = ctypes.create_string_buffer(4096)
+        self._state_buffer = None  # made by the first getFMUstate
 
     # ------------------------------------------------------------------ registration
     def _register_variables(self, lib) -> None:
         """Register the variables from the specs and check them against the library's table:
-        the same names, types and causalities in the same order."""
+        the same names, types and causalities in the same order.  Once per class and library:
+        the variables hold nothing of an instance (no getter or setter is used), so every
+        instance shares them."""
+        cls = type(self)
+        shared = cls.__dict__.get("_registered")
+        if shared is not None and shared[0] is lib:
+            self.vars, self._n_public = shared[1], shared[2]
+            return
         for _attr, spec in specs(self.PARAMETERS):
             self._register(spec.name, spec.fmi_type, Fmi2Causality.parameter,
                            Fmi2Variability.fixed, spec.description)
@@ -152,18 +178,17 @@ class RattleSlave(Fmi2Slave):
                            else Fmi2Variability.discrete)
             self._register(spec.name, spec.fmi_type, Fmi2Causality.output, variability,
                            spec.description)
-        _check_table(type(self), lib, [(v.name, type(v).__name__, v.causality.name)
-                                       for v in self.vars.values()])
-        self._n_public = n = len(self.vars)
-        for name, cls, variability in (
+        _check_table(cls, lib, [(v.name, type(v).__name__, v.causality.name)
+                                for v in self.vars.values()])
+        self._n_public = len(self.vars)
+        for name, var_type, variability in (
                 (STATUS_ADDRESS_VARIABLE, String, Fmi2Variability.constant),
                 (MESSAGE_VARIABLE, String, Fmi2Variability.discrete),
                 (LAST_SUCCESSFUL_TIME_VARIABLE, Real, Fmi2Variability.continuous)):
-            self.register_variable(cls(name, causality=Fmi2Causality.local,
-                                       variability=variability, getter=_no_getter),
+            self.register_variable(var_type(name, causality=Fmi2Causality.local,
+                                            variability=variability, getter=_no_getter),
                                    nested=False)
-        self._vr_status_address, self._vr_message, self._vr_last_time = n, n + 1, n + 2
-        self._hidden = frozenset((n, n + 1, n + 2))
+        cls._registered = (lib, self.vars, self._n_public)
 
     def _register(self, name, fmi_type, causality, variability, description) -> None:
         self.register_variable(_VARIABLE_TYPES[fmi_type](
@@ -325,6 +350,8 @@ class RattleSlave(Fmi2Slave):
         try:
             size = ctypes.c_size_t()
             buf = self._state_buffer
+            if buf is None:
+                self._state_buffer = buf = ctypes.create_string_buffer(1024)
             if self._answer(self._lib.rm_save(self._unit, buf, len(buf),
                                               ctypes.byref(size))) == library.ERROR:
                 return b""
@@ -417,15 +444,21 @@ def _c_values(fmi_type: str, values) -> list:
     return out
 
 
-_CHECKED: set[tuple[type, int]] = set()
+def hold_namespace(namespace: dict) -> None:
+    """Give pythonfmu the reference to a slave module's namespace that it releases at every
+    fmi2Instantiate: pythonfmu 0.7.0 executes the slave module's source anew in it to find the
+    slave class and then releases it (``Py_DECREF`` of ``PyModule_GetDict``'s borrowed
+    reference).  A slave module that defines no class of its own (see the module docstring)
+    leaves nothing else holding its namespace, which would then be freed after a few
+    instantiations (a crash).  The slave modules call it once per execution: one reference
+    each, no memory; with a wrapper that does not release it, the namespace just lives on
+    (as it does anyway, in ``sys.modules``)."""
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
 
 
 def _check_table(cls, lib, registered: list[tuple[str, str, str]]) -> None:
     """LibraryError unless the registration (name, FMI type, causality per value reference)
     is the library's table (both come from the specs; a stale or foreign library differs)."""
-    key = (cls, id(lib))
-    if key in _CHECKED:
-        return
     table = [(v["name"], v["type"], v["causality"])
              for v in library.variables(cls.KIND, lib)]
     if table != registered:
@@ -436,7 +469,6 @@ def _check_table(cls, lib, registered: list[tuple[str, str, str]]) -> None:
             f"(value reference {first}: library {table[first:first + 1]}, specs "
             f"{registered[first:first + 1]}; {len(table)} and {len(registered)} variables): "
             "rebuild the FMU")
-    _CHECKED.add(key)
 
 
 #: The unit of each model and its interface.
