@@ -153,7 +153,8 @@ class RattleSlave(Fmi2Slave):
         self._unit = unit
         # Freed with the slave (pythonfmu has no free hook: fmi2FreeInstance and fmi2Reset
         # drop the slave object); not at interpreter exit, where the library may be gone.
-        weakref.finalize(self, lib.rm_free, unit).atexit = False
+        self._free = weakref.finalize(self, lib.rm_free, unit)
+        self._free.atexit = False
         self._state_buffer = None  # made by the first getFMUstate
 
     # ------------------------------------------------------------------ registration
@@ -322,7 +323,7 @@ class RattleSlave(Fmi2Slave):
             return self._failed(action, err)
 
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        self._call("setupExperiment", "rm_setup", ctypes.c_double(start_time))
+        self._call("setupExperiment", "rm_setup", start_time)
 
     def enter_initialization_mode(self):
         self._call("enterInitializationMode", "rm_enter_initialization")
@@ -331,8 +332,7 @@ class RattleSlave(Fmi2Slave):
         self._call("exitInitializationMode", "rm_exit_initialization")
 
     def do_step(self, current_time, step_size, no_set_fmu_state_prior=False):
-        status = self._call("doStep", "rm_do_step", ctypes.c_double(current_time),
-                            ctypes.c_double(step_size))
+        status = self._call("doStep", "rm_do_step", current_time, step_size)
         # With the shim the status channel carries the failure (and True keeps pythonfmu from
         # flagging the instance as terminated); without it, Discard is the only non-OK status.
         return self._shim_attached or status in (library.OK, library.WARNING)
