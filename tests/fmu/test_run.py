@@ -12,20 +12,9 @@ from drive_rattle.units import MeshUnit
 from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, Unit
 from drive_rattle_cosim.system import simulate
 
+from .closed_forms import engine_orders
+
 W_P = 86.92
-
-
-def engine_orders(p: DrivelineParameters):
-    """The input shaft's motion from engine orders in closed form (MODEL_NOTES section 3):
-    a = sum A_k cos(W_k t + p_k), W_k = order_k w_mean, and its integrals."""
-    terms = [(a, k * p.w_mean, ph) for k, a, ph in p.order_terms()]
-
-    def kin(t):
-        phi = p.phi_start + p.w_mean * t - sum(a / w**2 * (math.cos(w * t + ph) - math.cos(ph))
-                                               for a, w, ph in terms)
-        w_ = p.w_mean + sum(a / w * math.sin(w * t + ph) for a, w, ph in terms)
-        return phi, w_, sum(a * math.cos(w * t + ph) for a, w, ph in terms)
-    return kin
 
 
 def test_driveline_alone_under_simulate_fmu(fmus):
