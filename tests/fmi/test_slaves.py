@@ -4,6 +4,7 @@ status channel verbatim, nothing raises, and a refused call changes nothing (the
 ``rm_save``, is the same before and after)."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -423,3 +424,22 @@ def test_the_model_description_takes_the_build_guid():
         assert Driven(cls).slave.to_xml().get("guid") == cls.FMU_GUID
     finally:
         cls.FMU_GUID = None
+
+
+@pytest.mark.parametrize("name", list(SLAVES))
+def test_the_slave_modules_define_no_class_of_their_own(name):
+    """pythonfmu executes the slave module's source anew at every fmi2Instantiate (its
+    namespace as globals, a new dict as locals) and keeps what that makes: the source makes no
+    new class (the one class is made once per process), and it holds the reference to its
+    namespace that pythonfmu releases afterwards (tests/adversarial/test_endurance.py)."""
+    import sys
+
+    module = sys.modules[name]
+    code = compile(Path(module.__file__).read_text(encoding="utf-8"), module.__file__, "exec")
+    namespace = module.__dict__
+    before = sys.getrefcount(namespace)
+    made = {}
+    exec(code, namespace, made)
+    assert sys.getrefcount(namespace) == before + 1  # hold_namespace: one more reference
+    classes = [v for v in made.values() if isinstance(v, type)]
+    assert classes == [SLAVES[name]] and classes[0] is getattr(module, name)
