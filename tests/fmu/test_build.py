@@ -171,3 +171,32 @@ def test_the_cli_builds_the_library_in_place():
     assert run.returncode == 0, run.stderr
     assert "built the model library" in run.stdout
     assert (SOURCE / "drive_rattle" / "rattle_model.so").is_file()
+
+
+def test_a_state_saved_by_one_build_restores_in_another_of_the_same_sources(fmus, tmp_path):
+    """Issue 20: the GUID was random per build, so a state saved by one build could not be
+    restored by another build of the same source."""
+    from drive_rattle_cosim.harness import Unit
+
+    other = fmu.package(SOURCE / "GearMeshRattle.py", tmp_path, references=False)
+    assert read_model_description(str(other)).guid == read_model_description(
+        str(fmus["GearMeshRattle"])).guid
+    units = [Unit(path, f"u{k}") for k, path in enumerate((fmus["GearMeshRattle"], other))]
+    for u in units:
+        u.slave.setupExperiment(startTime=0.0)
+        u.slave.enterInitializationMode()
+        u.set({"pinion.w": 86.92, "wheel.tau_load": 0.15})
+        u.slave.exitInitializationMode()
+    saver, restorer = units
+    vrs = [saver.var(n).vr for n in ("wheel.phi", "wheel.w", "mesh.W")]
+    for k in range(10):
+        saver.set({"pinion.phi": 86.92 * k * 1e-4})
+        saver.slave.doStep(k * 1e-4, 1e-4)
+    blob = saver.slave.serializeFMUstate(saver.slave.getFMUstate())
+    restorer.slave.setFMUstate(restorer.slave.deSerializeFMUstate(blob))
+    for u in units:
+        u.set({"pinion.phi": 86.92 * 10 * 1e-4})
+        u.slave.doStep(10 * 1e-4, 1e-4)
+    assert saver.slave.getReal(vrs) == restorer.slave.getReal(vrs)
+    for u in units:
+        u.close()
