@@ -37,6 +37,12 @@ and forwards every FMI 2.0 call to it, adding:
 * after pythonfmu itself returned ``fmi2Fatal`` (a Python exception), no further call reaches
   it: later calls return Fatal, and ``fmi2FreeInstance`` frees only the shim's part and leaks
   pythonfmu's instance, whose second release would corrupt the process;
+* **idle instances**: pythonfmu's fmi2Instantiate leaks about 1 kiB of Python objects per
+  call, so fmi2FreeInstance keeps pythonfmu's instance idle (at most 8 per FMU binary) and the
+  next fmi2Instantiate of the same resources folder resets it (pythonfmu's fmi2Reset makes a
+  new slave object) instead of instantiating anew; pythonfmu gets the shim's calloc/free (the
+  FMU declares canNotUseMemoryManagementFunctions), as an idle instance outlives the host's
+  callbacks;
 * an exit handler that resets pythonfmu's static Python state before its C++ static destructor
   runs (pythonfmu's ELF destructor would otherwise release it a second time at process exit:
   an invalid read under valgrind, now and then "corrupted double-linked list").  Both
