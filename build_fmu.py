@@ -3,7 +3,7 @@ dist/DriveRattle.ssp: the build's command line (``drive_rattle_build.cli``, inst
 ``drive-rattle-build``), kept here for running from a clone.
 
     python build_fmu.py [--out dist] [--update-templates] [--no-fmutool]
-    python build_fmu.py --update-docs | --update-kernel-header
+    python build_fmu.py --library | --update-docs
 """
 
 import sys

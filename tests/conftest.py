@@ -20,7 +20,6 @@ from pathlib import Path
 import pytest
 
 from drive_rattle_build import build
-from drive_rattle_build.native import build_native
 
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
@@ -46,6 +45,8 @@ def fmus(tmp_path_factory):
 def native_fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, linux64 and win64
     binaries and sources, built and validated for this session."""
+    from drive_rattle_build.native import build_native  # on first use: the native build alone
+
     out = tmp_path_factory.mktemp("dist_native")
     paths = build_native(out)
     return {p.stem: p for p in paths}

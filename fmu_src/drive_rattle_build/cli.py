@@ -1,8 +1,8 @@
 """The build's command line: ``drive-rattle-build`` (``python build_fmu.py`` in a clone).
 
     drive-rattle-build [--out dist] [--update-templates] [--no-fmutool] [--no-native]
-    drive-rattle-build --update-docs            # regenerate the interface tables of docs/fmi.md
-    drive-rattle-build --update-kernel-header   # regenerate fmu_src/native/rattle_kernel_layout.h
+    drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
+    drive-rattle-build --update-docs   # regenerate the interface tables of docs/fmi.md
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
@@ -17,13 +17,10 @@ from pathlib import Path
 
 from drive_rattle.interface import MODELS
 
-from . import kernel
 from .compiler import BuildError
 from .documentation import interface_docs
-from .fmu import build, slave_class
-from .native import NATIVE_SUBDIR, build_native
+from .library import build_in_place
 from .paths import DIST, FMI_DOCS
-from .system import write_system
 
 DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), "
                "validate them, and write the system dist/DriveRattle.ssp")
@@ -31,6 +28,9 @@ DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co
 
 def update_docs() -> None:
     """Regenerate the interface tables of docs/fmi.md from the specs."""
+    from .fmu import slave_class
+
+    build_in_place()
     text = FMI_DOCS.read_text(encoding="utf-8")
     classes = {name: slave_class(name) for name in MODELS}
     FMI_DOCS.write_text(interface_docs(text, classes), encoding="utf-8")
@@ -44,24 +44,31 @@ def main(argv=None) -> int:
     ap.add_argument("--no-fmutool", action="store_true", help="skip `fmutool -check`")
     ap.add_argument("--update-docs", action="store_true",
                     help="regenerate the interface tables in docs/fmi.md and exit")
-    ap.add_argument("--update-kernel-header", action="store_true",
-                    help="regenerate the compiled kernel's layout header and exit")
+    ap.add_argument("--library", action="store_true",
+                    help="build the model library in place (next to fmu_src/drive_rattle, "
+                         "where the Python API, the studies and the tests load it) and exit")
     ap.add_argument("--no-native", action="store_true",
                     help="skip the native (C only) FMUs of <out>/native/")
     args = ap.parse_args(argv)
     try:
-        if args.update_kernel_header:
-            kernel.update_header()
+        if args.library:
+            print(f"built the model library {build_in_place()}")
             return 0
         if args.update_docs:
             update_docs()
             print(f"updated {FMI_DOCS}")
             return 0
+        # imported here: building the library alone needs none of the FMU tooling
+        from .fmu import build
+        from .system import write_system
+
         fmus = build(args.out, args.update_templates, not args.no_fmutool)
         for fmu in fmus:
             print(f"built and validated {fmu}")
         print(f"wrote the system {write_system(fmus, args.out)}")
         if not args.no_native:
+            from .native import NATIVE_SUBDIR, build_native
+
             native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool)
             for fmu in native:
                 print(f"built and validated {fmu} (native: C only, linux64 and win64)")

@@ -8,21 +8,24 @@ import html
 
 from drive_rattle.interface import MODELS
 from drive_rattle.parameters import specs
+from drive_rattle.units import input_starts
 
 from .compiler import BuildError
 from .paths import FMI_DOCS
 
 
 def interface_rows(slave_cls) -> list[tuple[str, str, str, str, str, str]]:
-    """``(name, causality, type, unit, start/limits, description)`` for every public variable."""
+    """``(name, causality, type, unit, start/limits, description)`` for every public variable
+    (the inputs' start values are the model library's)."""
     rows = []
+    starts = input_starts(slave_cls.KIND)
     for _attr, spec in specs(slave_cls.PARAMETERS):
         limits = spec.allowed() if spec.fmi_type in ("Real", "Integer") else ""
         start = repr(spec.default) if spec.fmi_type != "Boolean" else str(spec.default).lower()
         allowed = f"{start}; {limits}".rstrip("; ")
         rows.append((spec.name, "parameter", spec.fmi_type, spec.unit, allowed, spec.description))
     for spec in slave_cls.INPUTS:
-        allowed = repr(spec.start)
+        allowed = repr(starts[spec.name])
         if spec.minimum is not None:
             allowed += f"; [{spec.minimum:g}, {spec.maximum:g}] {spec.unit}"
         rows.append((spec.name, "input", spec.fmi_type, spec.unit, allowed, spec.description))
@@ -42,7 +45,8 @@ def markdown_interface(slave_cls) -> str:
 
 
 def html_page(slave_cls, how_to_run: str,
-              build_note: str = "built with pythonfmu and a native status shim (linux64)") -> str:
+              build_note: str = "built with pythonfmu and a status shim (linux64), the model "
+                                "a C library (linux64, win64)") -> str:
     """documentation/index.html of the FMU (``build_note``: how this flavour is built)."""
     rows = "\n".join(
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
@@ -76,7 +80,8 @@ a rejected call leaves the instance's state as it was.</p>
 
 
 HOW_TO_RUN = """<p>The FMU needs a Python 3 interpreter (3.10 or newer) on the machine where it
-runs; its model code uses only the standard library, and pythonfmu's runtime is bundled.
+runs; its Python uses only the standard library, pythonfmu's runtime is bundled, and the model
+is a C library shipped for linux64 and win64 (<code>resources/drive_rattle/</code>).
 Inside a Python host (fmpy, libcosimpy) the host's interpreter is used:</p>
 <pre>from fmpy import simulate_fmu
 result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>

@@ -1,15 +1,20 @@
-"""Building, checking and validating the FMUs.
+"""Building, checking and validating the pythonfmu FMUs.
 
 Each FMU bundles its slave module (``fmu_src/<Model>.py``), the runtime packages whole
-(``paths.RUNTIME_PACKAGES``: the physics core and the FMI glue, standard library only), the
-compiled kernel next to ``drive_rattle/kernel.py``, the regression references, generated
-documentation and the native status shim.  Its normalised modelDescription is held against the
+(``paths.RUNTIME_PACKAGES``: the specs and the ctypes binding, the pythonfmu face; standard
+library only), the model library compiled for linux64 and win64 next to the binding
+(``resources/drive_rattle/rattle_model.so`` and ``.dll``, where the slave loads it from), the
+regression references, generated documentation and the status shim.  Its GUID is derived from
+the model library's sources and the face's (``identity.fmu_guid``), so that another build of
+the same sources accepts its FMU states.  Its normalised modelDescription is held against the
 committed template (``templates``), and every FMU is checked with fmpy's ``validate_fmu`` and,
 when installed, fmu-manipulation-toolbox's ``fmutool -check``; any problem fails the build.
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import shutil
 import subprocess
 import sys
@@ -19,16 +24,20 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from drive_rattle.interface import MODELS
-from drive_rattle.kernel import LIBRARY_NAME
 
-from . import kernel, templates
+from . import library, templates
 from .compiler import BuildError, c_compiler
 from .documentation import HOW_TO_RUN, html_page
+from .identity import fmu_guid
 from .paths import DIST, RUNTIME_PACKAGES, SOURCE, slave_module
-from .shim import install_shim
+from .shim import COMMON_SOURCE, SHIM_SOURCE, install_shim
 
-#: What is never copied from a runtime package: caches and a kernel built in place.
-_NOT_SHIPPED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.so", ".*")
+#: What is never copied from a runtime package: caches and a library built in place (the
+#: FMU gets its own, compiled for each platform).
+_NOT_SHIPPED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.so", "*.dll", "*.dylib",
+                                      "*.id", ".*")
+#: The folder of the model library inside the FMU's resources (next to the binding).
+LIBRARY_FOLDER = "drive_rattle"
 
 
 def slave_class(name: str, script: Path | None = None):
@@ -40,20 +49,57 @@ def slave_class(name: str, script: Path | None = None):
     return getattr(module, name)
 
 
-def stage_runtime(staging: Path, cc: str) -> list[Path]:
-    """Copy every runtime package whole into ``staging`` and compile the kernel next to
-    ``drive_rattle/kernel.py``; the staged package folders."""
-    kernel.update_header()
+def compile_libraries(out_dir: Path, cc: str | None = None) -> list[Path]:
+    """The model library for every platform of ``library.PLATFORMS`` (linux64 and win64) in
+    ``out_dir``, under the names the binding loads (``rattle_model.so``, ``.dll``)."""
+    return [library.compile_model_library(Path(out_dir) / name, platform,
+                                          cc=cc if target is None else None)
+            for platform, (name, target) in library.PLATFORMS.items()]
+
+
+def stage_runtime(staging: Path, libraries: list[Path]) -> list[Path]:
+    """Copy every runtime package whole into ``staging`` and the compiled model ``libraries``
+    next to the binding (``drive_rattle/``); the staged package folders."""
     out = []
     for package in RUNTIME_PACKAGES:
         dest = staging / package
         shutil.copytree(SOURCE / package, dest, ignore=_NOT_SHIPPED)
         out.append(dest)
-    try:
-        kernel.compile_kernel(staging / "drive_rattle" / LIBRARY_NAME, cc=cc)
-    except RuntimeError as err:
-        raise BuildError(str(err)) from None
+    for lib in libraries:
+        shutil.copy2(lib, staging / LIBRARY_FOLDER / Path(lib).name)
     return out
+
+
+def glue_sources(name: str) -> list[Path]:
+    """What the pythonfmu flavour adds to the model library in the FMU of ``name``: the slave
+    module, the face's package and the status shim's C."""
+    face = sorted((SOURCE / "drive_rattle_fmi").glob("*.py"))
+    return [slave_module(name), *face, SHIM_SOURCE, COMMON_SOURCE,
+            COMMON_SOURCE.with_suffix(".h")]
+
+
+def glue_id(name: str) -> str:
+    """The hash of :func:`glue_sources` (by name and content), for the GUID."""
+    digest = hashlib.sha256()
+    for path in glue_sources(name):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
+
+
+def guid(name: str) -> str:
+    """The GUID of ``name``'s pythonfmu FMU: from the model library's sources and the face's
+    (a build of the same sources gets the same GUID)."""
+    return fmu_guid(name, "pythonfmu", glue_id(name))
+
+
+@contextlib.contextmanager
+def _with_guid(cls, value: str):
+    """``cls`` renders ``value`` as its modelDescription's GUID within the block."""
+    cls.FMU_GUID = value
+    try:
+        yield
+    finally:
+        cls.FMU_GUID = None
 
 
 def stage_references(name: str, staging: Path) -> list[Path]:
@@ -72,9 +118,11 @@ def stage_references(name: str, staging: Path) -> list[Path]:
     return [dest]
 
 
-def package(script: Path, out_dir: Path, references: bool = True) -> Path:
+def package(script: Path, out_dir: Path, references: bool = True,
+            libraries: list[Path] | None = None) -> Path:
     """Build the slave module ``script`` (class = file stem) into ``out_dir/<stem>.fmu`` with
-    the runtime packages, generated documentation and the native status shim."""
+    the runtime packages, the model library (``libraries``, compiled when not given),
+    generated documentation and the status shim."""
     from pythonfmu.builder import FmuBuilder
 
     from drive_rattle_fmi.slave import (
@@ -85,6 +133,7 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
 
     script = Path(script)
     name = script.stem
+    library.build_in_place()  # what the build process itself loads (specs, slave classes)
     cls = slave_class(name, script)
     cc = c_compiler()
     out_dir = Path(out_dir)
@@ -92,16 +141,19 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
     fmu = out_dir / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix=f"build_{name}_") as tmp:
         tmp = Path(tmp)
-        packages = stage_runtime(tmp / "stage", cc)
+        if libraries is None:
+            libraries = compile_libraries(tmp / "lib", cc)
+        packages = stage_runtime(tmp / "stage", libraries)
         if references:
             packages += stage_references(name, tmp / "stage")
         doc = tmp / "documentation"
         doc.mkdir()
         (doc / "index.html").write_text(
             html_page(cls, HOW_TO_RUN.format(name=name)), encoding="utf-8")
-        FmuBuilder.build_FMU(script, dest=fmu, project_files=packages,
-                             documentation_folder=doc, canGetAndSetFMUstate=True,
-                             canSerializeFMUstate=True)
+        with _with_guid(cls, guid(name)):
+            FmuBuilder.build_FMU(script, dest=fmu, project_files=packages,
+                                 documentation_folder=doc, canGetAndSetFMUstate=True,
+                                 canSerializeFMUstate=True)
     slave = cls(instance_name="build")
     vrs = {v.name: v.value_reference for v in slave.vars.values()}
     try:
@@ -113,9 +165,9 @@ def package(script: Path, out_dir: Path, references: bool = True) -> Path:
 
 
 def build_one(name: str, out_dir: Path, update_templates: bool = False,
-              use_fmutool: bool = True) -> Path:
+              use_fmutool: bool = True, libraries: list[Path] | None = None) -> Path:
     """Build, shim, check against the template and validate one FMU; returns its path."""
-    fmu = package(slave_module(name), out_dir)
+    fmu = package(slave_module(name), out_dir, libraries=libraries)
     with zipfile.ZipFile(fmu) as z:
         root = ElementTree.fromstring(z.read("modelDescription.xml"))
     templates.check_template(name, root, update=update_templates)
@@ -141,8 +193,12 @@ def validate(fmu: Path, use_fmutool: bool = True) -> None:
 
 def build(out_dir: Path = DIST, update_templates: bool = False,
           use_fmutool: bool = True) -> list[Path]:
-    """Build and validate every FMU of ``interface.MODELS``."""
-    return [build_one(name, Path(out_dir), update_templates, use_fmutool) for name in MODELS]
+    """Build and validate every FMU of ``interface.MODELS`` (the model library compiled once
+    for all)."""
+    with tempfile.TemporaryDirectory(prefix="build_library_") as tmp:
+        libraries = compile_libraries(Path(tmp), c_compiler())
+        return [build_one(name, Path(out_dir), update_templates, use_fmutool, libraries)
+                for name in MODELS]
 
 
 def build_fmus(out_dir: Path = DIST, use_fmutool: bool = False) -> dict[str, Path]:

@@ -1,13 +1,14 @@
-"""Native shim around pythonfmu's binary: build it and put it into an FMU.
+"""The status shim around pythonfmu's binary: build it and put it into a pythonfmu FMU.
 
 pythonfmu 0.7.0's C++ wrapper turns any Python exception into ``fmi2Fatal`` (after which
 freeing the instance corrupts the host process), ignores what the slave methods return (except
 ``do_step``: False gives ``fmi2Discard``), hands log messages to the host only with debug
 logging on and as a printf *format* string, and checks nothing a master passes: docs/fmi.md
-("The native shim") lists what crashed, leaked or corrupted the host, and how the shim stops
+("The status shim") lists what crashed, leaked or corrupted the host, and how the shim stops
 each.  Its sources are not shipped, so it cannot be rebuilt; the shim stands in front of it.
 
-``fmu_src/native/rattle_fmi_shim.c`` is compiled (against the official FMI 2.0 headers that
+``fmu_src/fmi2/rattle_fmi_shim.c`` (with ``rattle_fmi_common.c``, which the native FMUs' glue
+shares) is compiled (against the official FMI 2.0 headers that
 fmpy ships, :func:`fmi2_headers`) into ``binaries/linux64/<modelIdentifier>.so``; it
 loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
 and forwards every FMI 2.0 call to it, adding:
@@ -24,7 +25,8 @@ and forwards every FMI 2.0 call to it, adding:
   (a literal ``%20``, not UTF-8);
 * **FMU states** owned by the shim: tagged with the GUID, reused when the host passes one
   back, freed with the instance; serialized with an envelope (GUID, version, length, FNV-1a
-  checksum) and never copied past pythonfmu's serialization;
+  checksum) around the model library's binary record and never copied past pythonfmu's
+  serialization;
 * status queries and unsupported functions answered with messages;
   ``fmi2LastSuccessfulTime`` from the slave's own time (``vr_last_successful_time``);
 * in a native host, the **embedded interpreter started by the shim** (as ``Py_Initialize``
@@ -35,6 +37,12 @@ and forwards every FMI 2.0 call to it, adding:
 * after pythonfmu itself returned ``fmi2Fatal`` (a Python exception), no further call reaches
   it: later calls return Fatal, and ``fmi2FreeInstance`` frees only the shim's part and leaks
   pythonfmu's instance, whose second release would corrupt the process;
+* **idle instances**: pythonfmu's fmi2Instantiate leaks about 1 kiB of Python objects per
+  call, so fmi2FreeInstance keeps pythonfmu's instance idle (at most 8 per FMU binary) and the
+  next fmi2Instantiate of the same resources folder resets it (pythonfmu's fmi2Reset makes a
+  new slave object) instead of instantiating anew; pythonfmu gets the shim's calloc/free (the
+  FMU declares canNotUseMemoryManagementFunctions), as an idle instance outlives the host's
+  callbacks;
 * an exit handler that resets pythonfmu's static Python state before its C++ static destructor
   runs (pythonfmu's ELF destructor would otherwise release it a second time at process exit:
   an invalid read under valgrind, now and then "corrupted double-linked list").  Both
@@ -80,12 +88,12 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from .compiler import compile_library
-from .paths import FMI2_SOURCE as NATIVE
+from .paths import FMI2_SOURCE
 
 #: The C source of the shim.
-SHIM_SOURCE: Path = NATIVE / "rattle_fmi_shim.c"
+SHIM_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_shim.c"
 #: What the shim shares with the native FMUs' glue (the state envelope, UTF-8), compiled with it.
-COMMON_SOURCE: Path = NATIVE / "rattle_fmi_common.c"
+COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_common.c"
 
 
 def fmi2_headers() -> Path:
@@ -136,7 +144,7 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         _check_vr("vr_last_successful_time", vr_last_successful_time)
     flags = [
         "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
-        "-I", str(fmi2_headers()), "-I", str(NATIVE),
+        "-I", str(fmi2_headers()), "-I", str(FMI2_SOURCE),
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",

@@ -4,8 +4,10 @@ pythonfmu's own rendering lacks units, limits, dependencies and InitialUnknowns;
 (FMI 2.0 schema order): CoSimulation, UnitDefinitions, LogCategories, DefaultExperiment,
 ModelVariables and ModelStructure (Outputs without direct feedthrough, InitialUnknowns).
 The hidden status-channel variables are left out; being registered last, they leave every
-public value reference equal to its registration index.  pythonfmu's builder calls it (through
-``RattleSlave.to_xml``) when the build packs an FMU; nothing calls it at run time.
+public value reference equal to its registration index (the model library's table index).  The
+inputs' start values are the library's (``drive_rattle.units.input_starts``).  pythonfmu's
+builder calls it (through ``RattleSlave.to_xml``) when the build packs an FMU; nothing calls
+it at run time.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu import __version__ as pythonfmu_version
 
 from drive_rattle.parameters import ParameterSpec
+from drive_rattle.units import input_starts
 
 from .units import BASE_UNITS, DISPLAY_UNITS, check_display_unit
 
@@ -47,8 +50,10 @@ def _fmt(value) -> str:
     return str(value)
 
 
-def model_description(slave, generation_time: str | None = None) -> Element:
-    """The <fmiModelDescription> element of a RattleSlave instance."""
+def model_description(slave, generation_time: str | None = None,
+                      guid: str | None = None) -> Element:
+    """The <fmiModelDescription> element of a RattleSlave instance, with ``guid`` ("{...}";
+    default: the slave's own, pythonfmu's random one)."""
     cls = type(slave)
     if generation_time is None:
         generation_time = datetime.datetime.now(datetime.timezone.utc).isoformat(
@@ -56,7 +61,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
     root = Element("fmiModelDescription", {
         "fmiVersion": "2.0",
         "modelName": cls.__name__,
-        "guid": f"{{{slave.guid!s}}}",
+        "guid": guid or f"{{{slave.guid!s}}}",
         "description": cls.description,
         "author": cls.author,
         "version": cls.version,
@@ -71,6 +76,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
     variables = slave.public_variables
     param_specs = slave._param_specs
     signal_specs = {s.name: s for s in (*cls.INPUTS, *cls.OUTPUTS)}
+    starts = input_starts(cls.KIND)
 
     def unit_of(name):
         spec = param_specs.get(name) or signal_specs[name]
@@ -116,7 +122,7 @@ def model_description(slave, generation_time: str | None = None) -> Element:
                     type_attrs["max"] = _fmt(spec.maximum)
         elif var.name in {s.name for s in cls.INPUTS}:
             spec = signal_specs[var.name]
-            type_attrs["start"] = _fmt(spec.start)
+            type_attrs["start"] = _fmt(starts[var.name])
             if spec.minimum is not None:
                 type_attrs["min"], type_attrs["max"] = _fmt(spec.minimum), _fmt(spec.maximum)
         if fmi_type == "Real":

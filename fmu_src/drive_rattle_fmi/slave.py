@@ -1,68 +1,78 @@
-"""FMI glue shared by the drive-rattle slaves: registration from the physics specs, parameter
-application at the end of initialization, checked stepping, full state save/restore, and
-error reporting that never lets an exception escape.
+"""The pythonfmu face of the model library: a slave class per unit (``slave_class``) whose every
+FMI call is one call of the library (``fmu_src/rattle_model``, through ``drive_rattle.library``).
 
-pythonfmu turns any exception raised in a slave method into fmi2Fatal (after which freeing the
-instance corrupts the host), and ignores every return value but do_step's.  So every entry
-point here catches everything, and reports failures through the status channel of the native
-shim (``native.py``): a C ``int`` whose address the shim reads at instantiation, plus the message
-variable.  The shim returns that status from the FMI call and logs the message to the host.
-A rejected call changes nothing: new values are computed into temporaries and committed last;
-a multi-value set is checked whole before any value is stored.
+The slave holds one library unit (``rm_new``) and forwards to it: values by value reference
+(the library's table index), setupExperiment, the initialization mode, doStep, terminate,
+reset and the FMU state (the library's binary record, ``rm_save`` / ``rm_restore``).  It holds no
+model rule, check or message of its own: what the library refuses or warns about reaches the
+host with the library's message (``rm_message``) verbatim, through the status channel of the
+status shim (``drive_rattle_build.shim``): a C ``int`` whose address the shim reads at
+instantiation, and the message variable.  Without the shim (a platform it was not built for),
+the message goes to pythonfmu's logger and doStep returns False (fmi2Discard), so that a
+failure is never silent.
 
-Subclasses declare ``PARAMETERS`` (a parameter dataclass), ``INPUTS`` and ``OUTPUTS`` (signal
-specs), and implement ``_build``, ``_step``, ``_outputs`` and the model-state pair.
+pythonfmu turns an exception raised in a slave method into fmi2Fatal (after which freeing the
+instance corrupts the host): no method lets one out.  The few refusals written here are the
+binding's (a Python value that a C argument cannot carry, when the slave is driven from Python
+directly); pythonfmu's wrapper never passes such values.
+
+Registration follows the specs (``drive_rattle.parameters`` for the parameters,
+``drive_rattle.interface`` for the inputs and outputs), in the order of the library's tables,
+which are generated from the same specs: a value reference is the library's index.  The three
+hidden variables of the status channel are registered last.
+
+The slave classes are made once per process, here (``slave_class``), and the slave modules
+(``fmu_src/GearMeshRattle.py``, ``fmu_src/Driveline.py``) only name them: pythonfmu 0.7.0's
+wrapper executes the slave module's source anew at every fmi2Instantiate and keeps a reference
+to every class that source creates, so a class defined in the slave module stayed alive once
+per instantiation (about 17 kiB each; tests/adversarial/test_endurance.py).  What the wrapper
+still leaks per call (about 1 kiB) the status shim avoids by keeping freed instances idle for
+reuse; and the wrapper's release of a reference to the module's namespace that it never took
+is made good by ``hold_namespace``.
 """
 
 from __future__ import annotations
 
-import copy
 import ctypes
-import json
+import hashlib
 import math
 import os
 import sys
-import traceback
-from typing import Any, ClassVar
+import weakref
+from pathlib import Path
+from typing import ClassVar
 
 from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Boolean, Integer, Real, String
 
-from drive_rattle.parameters import ParameterSpec, specs
-from drive_rattle.snapshots import MAX_STATE_INTEGER, is_finite_float, short_repr
+from drive_rattle import interface, library
+from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
 
-#: Names of the hidden variables of the native shim: the two String variables of the status
+#: Names of the hidden variables of the status shim: the two String variables of the status
 #: channel and the Real the shim answers fmi2GetRealStatus(fmi2LastSuccessfulTime) from.
-#: Registered last, so their value references follow the public ones; left out of the
-#: modelDescription, and refused by the shim when a host names them.
+#: Registered last, so that the public value references are the library's indexes; left out
+#: of the modelDescription, and refused by the shim when a host names them.
 STATUS_ADDRESS_VARIABLE = "_fmi.status_address"
 MESSAGE_VARIABLE = "_fmi.message"
 LAST_SUCCESSFUL_TIME_VARIABLE = "_fmi.last_successful_time"
 
-#: Version of the content of an FMU state (the dict of ``_get_fmu_state``).  The native shim
-#: wraps serialized states in an envelope with the FMU's GUID, its own version and a checksum.
-STATE_FORMAT = 3
-#: The modes of the slave's life cycle (FMI 2.0 co-simulation states, condensed).
-MODES = ("instantiated", "initialization", "stepping", "terminated")
-#: fmi2Integer is a 32-bit int: larger values (the cumulative impact counters) saturate.
-INT32_MIN, INT32_MAX = -(2**31), 2**31 - 1
-
-
-def vr_text(vr: int) -> str:
-    """A value reference as the host passed it: fmi2ValueReference is unsigned, pythonfmu hands
-    it to Python as a signed C int (so 2^31 arrives as -2^31)."""
-    return str(vr % 2**32) if isinstance(vr, int) else repr(vr)
-
-#: Tolerance of the communication-point continuity check, in units of the last step size;
-#: masters that compute t = t0 + k h differ from t_prev + h_prev by a few ulps of t.
-COMMUNICATION_POINT_TOLERANCE = 1e-9
-
 _VARIABLE_TYPES = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
-
-
+_C_TYPES = {"Real": ctypes.c_double, "Integer": ctypes.c_int32, "Boolean": ctypes.c_int32,
+            "String": ctypes.c_char_p}
+#: fmi2ValueReference is unsigned; pythonfmu hands it to Python as a signed C int (2^31 arrives
+#: as -2^31): both ranges are accepted and taken modulo 2^32, as C does.
+_VR_MIN, _VR_END = -(2**31), 2**32
+_INT32_MIN, _INT32_END = -(2**31), 2**31
 #: Instance name pythonfmu's builder instantiates the slave with to render the description.
 _BUILDER_INSTANCE = "dummyInstance"
+
+
+def _no_getter():
+    """The getter of every registered variable: pythonfmu calls getters only from the methods
+    this face overrides.  (Without one, pythonfmu would bind a closure on the slave: a
+    reference cycle that keeps a freed slave, and its unit, until the garbage collector runs.)"""
+    return None
 
 
 def _forget_resources_path(resources) -> None:
@@ -70,9 +80,9 @@ def _forget_resources_path(resources) -> None:
 
     pythonfmu inserts it at the front of the host's ``sys.path`` on every instantiation, to
     import the slave module.  Left there, it grows the path by one entry per instance and makes
-    the host import *this FMU's* partial copy of ``drive_rattle`` (without its tooling
-    modules) -- also in processes the host starts later, which inherit the path.  Every module
-    the FMU needs is imported by now (the packages import their modules eagerly)."""
+    the host import *this FMU's* copy of ``drive_rattle`` -- also in processes the host starts
+    later, which inherit the path.  Every module the FMU needs is imported by now (the packages
+    import their modules eagerly)."""
     if not resources:
         return
     target = os.path.normcase(os.path.abspath(str(resources)))
@@ -80,21 +90,46 @@ def _forget_resources_path(resources) -> None:
                    if not p or os.path.normcase(os.path.abspath(p)) != target]
 
 
-#: Returned by RattleSlave._guard when the guarded call failed.
-_FAILED = object()
+_BY_CONTENT: dict[bytes, ctypes.CDLL] = {}
 
 
-class ModelError(Exception):
-    """A rejected request; its message is reported to the host as the status' message."""
+def _library_of(resources) -> ctypes.CDLL:
+    """The model library of this FMU: its own copy in ``resources/drive_rattle/`` (all
+    pythonfmu FMUs of a process share one interpreter, so the ``drive_rattle`` package in
+    ``sys.modules`` may be another FMU's, whose folder the host may have deleted), else the
+    binding's default (a slave class driven from a source checkout).  A copy with the same
+    bytes as one loaded already is that one: a host that unpacks the FMU anew for every run
+    (fmpy's simulate_fmu) does not map one more library each time."""
+    if resources:
+        own = Path(resources) / "drive_rattle" / library.LIBRARY_NAME
+        try:
+            key = hashlib.sha256(own.read_bytes()).digest()
+        except OSError:
+            key = None
+        if key is not None:
+            lib = _BY_CONTENT.get(key)
+            if lib is None:
+                lib = _BY_CONTENT[key] = library.load(own)
+            return lib
+    return library.load()
+
+
+class _FaceError(Exception):
+    """A Python value the library's C interface cannot carry (the binding's refusal)."""
 
 
 class RattleSlave(Fmi2Slave):
-    """Base of the drive-rattle FMU slaves (see the module docstring)."""
+    """Base of the drive-rattle slaves: one library unit of kind ``KIND`` behind the FMI
+    calls (see the module docstring).  Subclasses are made by :func:`slave_class`."""
 
-    PARAMETERS: type = None  # a drive_rattle.parameters.ParameterSet subclass
-    INPUTS: tuple = ()
-    OUTPUTS: tuple = ()
-    DEFAULT_EXPERIMENT: ClassVar[dict] = {"startTime": 0.0, "stopTime": 2.0, "stepSize": 1e-4}
+    KIND: ClassVar[int] = -1  # library.MESH or library.DRIVELINE
+    PARAMETERS: ClassVar[type] = None  # the parameter dataclass of the unit (its specs)
+    INPUTS: ClassVar[tuple] = ()
+    OUTPUTS: ClassVar[tuple] = ()
+    DEFAULT_EXPERIMENT: ClassVar[dict] = interface.DEFAULT_EXPERIMENT
+    #: The FMU's GUID, written into the modelDescription by the build (None: pythonfmu's own).
+    FMU_GUID: ClassVar[str | None] = None
+    description: ClassVar[str] = ""
     author = "drive-rattle developers"
     license = "MIT"
     version = "0.1.0"
@@ -105,78 +140,85 @@ class RattleSlave(Fmi2Slave):
             _forget_resources_path(self.resources)
         self._fmi_status = ctypes.c_int(Fmi2Status.ok)
         self._fmi_message = ""
-        self._shim_attached = False  # set when the native shim reads the status address
-        self._param_specs: dict[str, ParameterSpec] = {}
-        self._values: dict[str, Any] = {}
-        self._fmi_types: dict[str, str] = {}  # variable name -> FMI type
-        self._mode = "instantiated"  # -> initialization -> stepping -> terminated
-        self._start_time = 0.0
-        self._time = 0.0  # communication point the next step must start from
-        self._model = None
-        self._provisional = None  # outputs computed in initialization mode
-        # Outputs are computed when first read after a step (``_stale``); the quick ones
-        # (``_quick_outputs``, e.g. the wheel's angle and speed) right after the step.
-        self._stale = False
-        self._output_set = frozenset(s.name for s in self.OUTPUTS)
+        self._shim_attached = False  # set when the status shim reads the status address
+        self._lib = lib = _library_of(self.resources)
+        self._register_variables(lib)
+        n = self._n_public
+        self._vr_status_address, self._vr_message, self._vr_last_time = n, n + 1, n + 2
+        self._hidden = frozenset((n, n + 1, n + 2))
+        resources = os.fsencode(self.resources) if self.resources else None
+        unit = lib.rm_new(self.KIND, resources)
+        if not unit:
+            raise library.LibraryError(f"rm_new({self.KIND}) failed: out of memory")
+        self._unit = unit
+        # Freed with the slave (pythonfmu has no free hook: fmi2FreeInstance and fmi2Reset
+        # drop the slave object); not at interpreter exit, where the library may be gone.
+        self._free = weakref.finalize(self, lib.rm_free, unit)
+        self._free.atexit = False
+        self._state_buffer = None  # made by the first getFMUstate
+
+    # ------------------------------------------------------------------ registration
+    def _register_variables(self, lib) -> None:
+        """Register the variables from the specs and check them against the library's table:
+        the same names, types and causalities in the same order.  Once per class and library:
+        the variables hold nothing of an instance (no getter or setter is used), so every
+        instance shares them."""
+        cls = type(self)
+        shared = cls.__dict__.get("_registered")
+        if shared is not None and shared[0] is lib:
+            self.vars, self._n_public = shared[1], shared[2]
+            return
         for _attr, spec in specs(self.PARAMETERS):
-            self._param_specs[spec.name] = spec
             self._register(spec.name, spec.fmi_type, Fmi2Causality.parameter,
-                           Fmi2Variability.fixed, spec.default, spec.description)
+                           Fmi2Variability.fixed, spec.description)
         for spec in self.INPUTS:
             self._register(spec.name, spec.fmi_type, Fmi2Causality.input,
-                           Fmi2Variability.continuous, spec.start, spec.description)
+                           Fmi2Variability.continuous, spec.description)
         for spec in self.OUTPUTS:
             variability = (Fmi2Variability.continuous if spec.fmi_type == "Real"
                            else Fmi2Variability.discrete)
-            zero = 0.0 if spec.fmi_type == "Real" else 0
-            self._register(spec.name, spec.fmi_type, Fmi2Causality.output, variability, zero,
+            self._register(spec.name, spec.fmi_type, Fmi2Causality.output, variability,
                            spec.description)
-        self.register_variable(String(
-            STATUS_ADDRESS_VARIABLE, causality=Fmi2Causality.local,
-            variability=Fmi2Variability.constant,
-            getter=self._attach_shim), nested=False)
-        self.register_variable(String(
-            MESSAGE_VARIABLE, causality=Fmi2Causality.local, variability=Fmi2Variability.discrete,
-            getter=lambda: self._fmi_message), nested=False)
-        self.register_variable(Real(
-            LAST_SUCCESSFUL_TIME_VARIABLE, causality=Fmi2Causality.local,
-            variability=Fmi2Variability.continuous, getter=self._last_successful_time),
-            nested=False)
-        # Per value reference: FMI type and getter, for the hot get/set paths.
-        self._vr_fmi_type = [type(v).__name__ for v in self.vars.values()]
-        self._vr_getter = [v.getter for v in self.vars.values()]
-        self._vr_setter = [v.setter for v in self.vars.values()]
-        self._vr_name = [v.name for v in self.vars.values()]
-        self._vrs_of_type = {
-            fmi_type: frozenset(vr for vr, t in enumerate(self._vr_fmi_type) if t == fmi_type)
-            for fmi_type in _VARIABLE_TYPES}
+        _check_table(cls, lib, [(v.name, type(v).__name__, v.causality.name)
+                                for v in self.vars.values()])
+        self._n_public = len(self.vars)
+        for name, var_type, variability in (
+                (STATUS_ADDRESS_VARIABLE, String, Fmi2Variability.constant),
+                (MESSAGE_VARIABLE, String, Fmi2Variability.discrete),
+                (LAST_SUCCESSFUL_TIME_VARIABLE, Real, Fmi2Variability.continuous)):
+            self.register_variable(var_type(name, causality=Fmi2Causality.local,
+                                            variability=variability, getter=_no_getter),
+                                   nested=False)
+        cls._registered = (lib, self.vars, self._n_public)
 
-    # ------------------------------------------------------------------ registration
-    def _register(self, name, fmi_type, causality, variability, start, description) -> None:
-        self._values[name] = start
-        self._fmi_types[name] = fmi_type
-        var = _VARIABLE_TYPES[fmi_type](
+    def _register(self, name, fmi_type, causality, variability, description) -> None:
+        self.register_variable(_VARIABLE_TYPES[fmi_type](
             name, causality=causality, variability=variability, description=description,
-            getter=lambda n=name: self._get(n), setter=lambda v, n=name: self._set(n, v))
-        self.register_variable(var, nested=False)
+            getter=_no_getter), nested=False)
 
     @property
     def public_variables(self) -> list:
         """Registered variables of the interface, in value-reference order (no hidden ones)."""
-        return [v for v in self.vars.values() if not v.name.startswith("_fmi.")]
+        return list(self.vars.values())[:self._n_public]
+
+    @property
+    def _param_specs(self) -> dict:
+        """Public name -> ParameterSpec of the unit's parameters."""
+        return {spec.name: spec for _attr, spec in specs(self.PARAMETERS)}
+
+    @property
+    def _fmi_types(self) -> dict:
+        """Public name -> FMI type of every public variable."""
+        return {v.name: type(v).__name__ for v in self.public_variables}
 
     # ------------------------------------------------------------------ status channel
     def _attach_shim(self) -> str:
-        """Address of the status int, read by the native shim once at instantiation."""
+        """Address of the status int, read by the status shim once at instantiation."""
         self._shim_attached = True
         return hex(ctypes.addressof(self._fmi_status))
 
     def _report(self, status: int, message: str) -> None:
-        """Make the current FMI call return ``status`` with ``message`` logged to the host.
-
-        Without the shim (a platform it was not built for) the message goes to pythonfmu's
-        logger, which delivers it only with debug logging on, and do_step returns False
-        (fmi2Discard) so that a failure is never silent."""
+        """Make the current FMI call return ``status`` with ``message`` logged to the host."""
         if status >= self._fmi_status.value:
             self._fmi_message = message
             self._fmi_status.value = status
@@ -184,383 +226,271 @@ class RattleSlave(Fmi2Slave):
             # pythonfmu hands messages to the host as a printf format: escape '%'.
             self.log(message.replace("%", "%%"), Fmi2Status(status))
 
-    def _last_successful_time(self) -> float:
-        """End of the last accepted communication step (the start time before the first):
-        the native shim's answer to fmi2GetRealStatus(fmi2LastSuccessfulTime)."""
-        if self._model is None:
-            self._report(Fmi2Status.error,
-                         "getRealStatus(fmi2LastSuccessfulTime): no communication step is "
-                         f"possible yet (mode '{self._mode}'); allowed after "
-                         "exitInitializationMode")
-            return math.nan
-        return self._time
+    def _answer(self, status: int) -> int:
+        """Pass a library status with its message to the host; returns it."""
+        if status != library.OK:
+            msg = self._lib.rm_message(self._unit)
+            self._report(status if status in (library.WARNING, library.ERROR) else
+                         library.ERROR, msg.decode("utf-8", "replace") if msg else "")
+        return status
 
-    def _guard(self, action: str, fn, *args):
-        """Run ``fn``; a ModelError/ValueError becomes an Error status with its message, any
-        other exception an Error with its traceback.  Returns fn's result or ``_FAILED``."""
-        try:
-            return fn(*args)
-        except (ModelError, ValueError) as err:
-            self._report(Fmi2Status.error, f"{action}: {err}")
-        except Exception:  # never let anything reach pythonfmu (it would be fmi2Fatal)
-            self._report(Fmi2Status.error, f"{action}: unexpected error\n{traceback.format_exc()}")
-        return _FAILED
+    def _failed(self, action: str, err: Exception) -> int:
+        """A call the face could not make: an Error with the reason (never an exception)."""
+        reason = str(err) if isinstance(err, _FaceError) else f"unexpected {err!r}"
+        self._report(library.ERROR, f"{action}: {reason}")
+        return library.ERROR
+
+    def _last_successful_time(self) -> float:
+        t = ctypes.c_double(math.nan)
+        self._answer(self._lib.rm_last_successful_time(self._unit, ctypes.byref(t)))
+        return t.value
 
     # ------------------------------------------------------------------ values
-    def _get(self, name: str):
-        if name in self._output_set:
-            if self._mode == "initialization":
-                self._refresh_provisional()
-                return self._provisional[name]
-            if self._stale:
-                self._refresh_outputs()
-        return self._values[name]
+    def _get(self, fmi_type: str, vrs, default) -> list:
+        action = f"get{fmi_type}"
+        try:
+            if self._hidden.isdisjoint(vrs):
+                return self._get_values(fmi_type, vrs, action)
+            return self._get_hidden(fmi_type, vrs, action)
+        except Exception as err:
+            self._failed(action, err)
+            return [default] * _length(vrs)
 
-    def _refresh_outputs(self) -> None:
-        """Compute the outputs of the last step (they depend only on the model's state)."""
-        self._values.update(self._outputs(self._model))
-        self._stale = False
+    def _get_values(self, fmi_type: str, vrs, action: str) -> list:
+        """One library call: the values of ``vrs`` (the library's refusals for bad ones)."""
+        n = len(vrs)
+        out = (_C_TYPES[fmi_type] * n)()
+        self._answer(getattr(self._lib, f"rm_get_{fmi_type.lower()}")(
+            self._unit, _vr_array(vrs, action), n, out))
+        return out[:]
 
-    def _checked_value(self, name: str, value):
-        """``value`` converted to the variable's type, if ``name`` may be set now; ModelError
-        (nothing stored) otherwise."""
-        fmi_type = self._fmi_types[name]
-        if name in self._output_set:
-            raise ModelError(f"'{name}' is an output and cannot be set")
-        if name in self._param_specs and self._mode not in ("instantiated", "initialization"):
-            raise ModelError(
-                f"parameter '{name}' is fixed: it can only be set before the end of "
-                f"initialization (mode is '{self._mode}'); value {value!r} rejected")
-        if fmi_type == "Real":
-            return float(value)
-        if fmi_type == "Integer":
-            return int(value)
-        if fmi_type == "Boolean":
-            return bool(value)
-        return str(value)
-
-    def _set(self, name: str, value) -> None:
-        self._values[name] = self._checked_value(name, value)
-        self._provisional = None
-
-    def _set_values(self, vrs, values, fmi_type: str) -> None:
-        """Set several values: every entry is checked before any is stored, so a refused call
-        (one bad entry) stores nothing."""
-        types, setters, names = self._vr_fmi_type, self._vr_setter, self._vr_name
-        n = len(types)
-
-        def apply():
-            if len(vrs) != len(values):
-                raise ModelError(f"{len(vrs)} value references but {len(values)} values")
-            staged = []
-            for vr, value in zip(vrs, values, strict=True):
-                if not (0 <= vr < n and types[vr] == fmi_type and setters[vr] is not None):
-                    raise ModelError(f"no {fmi_type} variable with value reference "
-                                     f"{vr_text(vr)}; "
-                                     "nothing of this call was stored")
-                name = names[vr]
-                try:
-                    staged.append((name, self._checked_value(name, value)))
-                except ModelError as err:
-                    raise ModelError(f"{err}; nothing of this call was stored") from None
-            for name, value in staged:
-                self._values[name] = value
-            if staged:
-                self._provisional = None
-        self._guard(f"set{fmi_type}", apply)
-
-    def _get_values(self, vrs, fmi_type: str, default) -> list:
-        getters = self._vr_getter
-        if self._vrs_of_type[fmi_type].issuperset(vrs):
-            try:  # fast path: every getter at once (they only read stored values)
-                return [getters[vr]() for vr in vrs]
-            except Exception:  # redone value by value below, with the reports
-                pass
-        types = self._vr_fmi_type
-        n = len(types)
-        out = []
-        for vr in vrs:
-            if not (0 <= vr < n and types[vr] == fmi_type):
-                self._report(Fmi2Status.error, f"get{fmi_type}: no {fmi_type} variable with "
-                                               f"value reference {vr_text(vr)}")
-                out.append(default)
-                continue
-            value = self._guard(f"get{fmi_type} vr {vr_text(vr)}", getters[vr])
-            out.append(default if value is _FAILED else value)
-        return out
-
-    def set_real(self, vrs, values):
-        self._set_values(vrs, values, "Real")
-
-    def set_integer(self, vrs, values):
-        self._set_values(vrs, values, "Integer")
-
-    def set_boolean(self, vrs, values):
-        self._set_values(vrs, values, "Boolean")
-
-    def set_string(self, vrs, values):
-        self._set_values(vrs, values, "String")
+    def _get_hidden(self, fmi_type: str, vrs, action: str) -> list:
+        """A get that names hidden variables (the status shim's reads): those of the right
+        type are answered here, the others by the library (which refuses them)."""
+        hidden = {(self._vr_status_address, "String"): self._attach_shim,
+                  (self._vr_message, "String"): lambda: self._fmi_message,
+                  (self._vr_last_time, "Real"): self._last_successful_time}
+        ours = [(vr, fmi_type) in hidden for vr in vrs]
+        rest = [vr for vr, own in zip(vrs, ours, strict=True) if not own]
+        values = iter(self._get_values(fmi_type, rest, action) if rest else ())
+        return [hidden[vr, fmi_type]() if own else next(values)
+                for vr, own in zip(vrs, ours, strict=True)]
 
     def get_real(self, vrs):
-        return [float(v) for v in self._get_values(vrs, "Real", math.nan)]
+        return self._get("Real", vrs, math.nan)
 
     def get_integer(self, vrs):
-        # fmi2Integer is 32 bits: saturate (the cumulative counters can exceed it), never wrap.
-        return [min(INT32_MAX, max(INT32_MIN, int(v)))
-                for v in self._get_values(vrs, "Integer", 0)]
+        return self._get("Integer", vrs, 0)
 
     def get_boolean(self, vrs):
-        return [bool(v) for v in self._get_values(vrs, "Boolean", False)]
+        return [bool(v) for v in self._get("Boolean", vrs, False)]
 
     def get_string(self, vrs):
-        return [str(v) for v in self._get_values(vrs, "String", "")]
+        values = self._get("String", vrs, "")
+        return [v.decode("utf-8", "replace") if isinstance(v, bytes) else v or ""
+                for v in values]
 
-    # ------------------------------------------------------------------ parameters
-    def parameters(self):
-        """The parameter set from the current parameter values (ValueError if invalid)."""
-        return self.PARAMETERS.from_public(
-            {name: self._values[name] for name in self._param_specs})
-
-    def inputs(self) -> dict[str, float]:
-        return {s.name: self._values[s.name] for s in self.INPUTS}
-
-    def _check_inputs(self, inputs: dict[str, float]) -> None:
-        for spec in self.INPUTS:
-            spec.check(inputs[spec.name])
-
-    def _refresh_provisional(self) -> None:
-        """Initial unknowns in initialization mode: outputs of a model built from the current
-        values (nothing committed; an invalid set leaves the start values)."""
-        if self._provisional is not None:
-            return
+    def _set(self, fmi_type: str, vrs, values) -> None:
+        action = f"set{fmi_type}"
         try:
-            self._check_inputs(self.inputs())
-            model = self._build(self.parameters(), self.inputs())
-            self._provisional = {**self._values, **self._outputs(model)}
-        except Exception:  # reported at exitInitializationMode, where it matters
-            self._provisional = dict(self._values)
+            n = len(vrs)
+            if len(values) != n:
+                raise _FaceError(f"{n} value references but {len(values)} values; nothing of "
+                                 "this call was stored")
+            array = (_C_TYPES[fmi_type] * n)(*_c_values(fmi_type, values))
+            self._answer(getattr(self._lib, f"rm_set_{fmi_type.lower()}")(
+                self._unit, _vr_array(vrs, action), n, array))
+        except Exception as err:
+            self._failed(action, err)
+
+    def set_real(self, vrs, values):
+        self._set("Real", vrs, values)
+
+    def set_integer(self, vrs, values):
+        self._set("Integer", vrs, values)
+
+    def set_boolean(self, vrs, values):
+        self._set("Boolean", vrs, values)
+
+    def set_string(self, vrs, values):
+        self._set("String", vrs, values)
 
     # ------------------------------------------------------------------ FMI life cycle
+    def _call(self, action: str, name: str, *args) -> int:
+        try:
+            return self._answer(getattr(self._lib, name)(self._unit, *args))
+        except Exception as err:
+            return self._failed(action, err)
+
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
-        def setup():
-            if not math.isfinite(start_time):
-                raise ModelError(f"start time {start_time!r} is not finite")
-            if self._mode != "instantiated":
-                raise ModelError(f"setupExperiment is not allowed in mode '{self._mode}'")
-            self._start_time = float(start_time)
-        self._guard("setupExperiment", setup)
+        self._call("setupExperiment", "rm_setup", start_time)
 
     def enter_initialization_mode(self):
-        def enter():
-            if self._mode != "instantiated":
-                raise ModelError(
-                    f"enterInitializationMode is not allowed in mode '{self._mode}'")
-            self._mode = "initialization"
-            self._provisional = None
-        self._guard("enterInitializationMode", enter)
+        self._call("enterInitializationMode", "rm_enter_initialization")
 
     def exit_initialization_mode(self):
-        def leave():
-            if self._mode != "initialization":
-                raise ModelError(
-                    f"exitInitializationMode is not allowed in mode '{self._mode}'")
-            params = self.parameters()
-            inputs = self.inputs()
-            self._check_inputs(inputs)
-            model = self._build(params, inputs)
-            outputs = self._outputs(model)
-            # Commit only now that everything succeeded.
-            self._model = model
-            self._values.update(outputs)
-            self._time = self._start_time
-            self._mode = "stepping"
-            self._provisional = None
-        self._guard("exitInitializationMode", leave)
+        self._call("exitInitializationMode", "rm_exit_initialization")
 
     def do_step(self, current_time, step_size, no_set_fmu_state_prior=False):
-        def step():
-            if self._mode != "stepping":
-                raise ModelError(f"doStep is not allowed in mode '{self._mode}' (initialize first)")
-            if not (math.isfinite(step_size) and step_size > 0.0):
-                raise ModelError(
-                    f"communication step size {step_size!r} s is invalid; allowed: finite, > 0")
-            if not math.isfinite(current_time):  # (its ulp, inf, would pass the check below)
-                raise ModelError(f"communication point {current_time!r} s is not finite; "
-                                 f"allowed: the end of the last step, {self._time!r} s")
-            tol = COMMUNICATION_POINT_TOLERANCE * step_size + 16.0 * math.ulp(
-                max(abs(self._time), abs(current_time)))
-            if not (abs(current_time - self._time) <= tol):
-                raise ModelError(
-                    f"communication point {current_time!r} s does not continue the last step, "
-                    f"which ended at {self._time!r} s (tolerance {tol:.3g} s)")
-            inputs = self.inputs()
-            self._check_inputs(inputs)
-            self._step(current_time, step_size, inputs)
-            quick = self._quick_outputs(self._model)
-            self._values.update(quick)
-            self._stale = len(quick) < len(self._output_set)
-            self._time = current_time + step_size
-        failed = self._guard("doStep", step) is _FAILED
+        status = self._call("doStep", "rm_do_step", current_time, step_size)
         # With the shim the status channel carries the failure (and True keeps pythonfmu from
         # flagging the instance as terminated); without it, Discard is the only non-OK status.
-        return self._shim_attached or not failed
+        return self._shim_attached or status in (library.OK, library.WARNING)
 
     def terminate(self):
-        def stop():
-            if self._mode not in ("stepping", "initialization"):
-                raise ModelError(f"terminate is not allowed in mode '{self._mode}'")
-            self._mode = "terminated"
-        self._guard("terminate", stop)
+        self._call("terminate", "rm_terminate")
+
+    def reset(self):
+        """The unit as new (pythonfmu's fmi2Reset makes a new slave instead)."""
+        self._call("reset", "rm_reset")
 
     # ------------------------------------------------------------------ FMU state
-    def _get_fmu_state(self) -> dict:
-        if self._stale:
-            self._guard("getFMUstate", self._refresh_outputs)
-        state = self._guard("getFMUstate", lambda: copy.deepcopy({
-            "format": STATE_FORMAT,
-            "mode": self._mode,
-            "start_time": self._start_time,
-            "time": self._time,
-            "values": self._values,
-            "model": None if self._model is None else self._model_state(self._model),
-        }))
-        return {} if state is _FAILED else state
-
-    def _set_fmu_state(self, state: dict) -> None:
-        """Restore a state of ``_get_fmu_state``: its content is checked whole (format, mode,
-        finite times, every variable present with a value of its type, the model's snapshot)
-        and the model is rebuilt from the snapshot -- no start equilibrium is solved, no start
-        condition checked and no file read.  An invalid state changes nothing."""
-        def restore():
-            s = self._checked_state(state)
-            model = None
-            if s["model"] is not None:
-                params_values = {name: s["values"][name] for name in self._param_specs}
-                try:
-                    params = self.PARAMETERS.from_public(params_values)
-                    model = self._model_from_snapshot(params, s["start_time"], s["model"])
-                except (ValueError, TypeError, KeyError, IndexError) as err:
-                    raise ModelError(f"the FMU state is invalid: {err}; nothing changed"
-                                     ) from None
-            self._values = s["values"]
-            self._model = model
-            self._stale = False
-            self._mode = s["mode"]
-            self._start_time = s["start_time"]
-            self._time = s["time"]
-            self._provisional = None
-        self._guard("setFMUstate", restore)
-
-    def _checked_state(self, state) -> dict:
-        """A deep copy of ``state`` if its content is a valid state of this slave; ModelError
-        naming the first problem otherwise."""
-        def invalid(what: str) -> ModelError:
-            return ModelError(f"the FMU state is invalid: {what}; nothing changed")
-
-        if not isinstance(state, dict) or not state:
-            raise invalid("it is empty or not a state of this FMU")
-        if state.get("format") != STATE_FORMAT:
-            raise invalid(f"its format is {state.get('format')!r}, this FMU reads format "
-                          f"{STATE_FORMAT}")
-        keys = {"format", "mode", "start_time", "time", "values", "model"}
-        if set(state) != keys:
-            raise invalid(f"its entries are {sorted(state)}, expected {sorted(keys)}")
-        s = copy.deepcopy(state)
-        if s["mode"] not in MODES:
-            raise invalid(f"mode {s['mode']!r} is not one of {', '.join(MODES)}")
-        for key in ("start_time", "time"):
-            if not is_finite_float(s[key]):
-                raise invalid(f"{key} = {s[key]!r} is not a finite float")
-        values = s["values"]
-        if not isinstance(values, dict) or set(values) != set(self._values):
-            missing = sorted(set(self._values) - set(values)) if isinstance(values, dict) else []
-            extra = sorted(set(values) - set(self._values)) if isinstance(values, dict) else []
-            raise invalid(f"its variables do not match this FMU's (missing {missing[:3]}, "
-                          f"unknown {extra[:3]})")
-        for name, value in values.items():
-            problem = _value_problem(self._fmi_types[name], value, name in self._output_set)
-            if problem:
-                raise invalid(f"variable '{name}' = {short_repr(value)}: {problem}")
-        model_expected = s["mode"] == "stepping" or (
-            s["mode"] == "terminated" and s["model"] is not None)
-        if model_expected != (s["model"] is not None) or (
-                s["model"] is not None and not isinstance(s["model"], dict)):
-            raise invalid(f"mode {s['mode']!r} does not go with model snapshot "
-                          f"{short_repr(s['model'])}")
-        return s
-
-    @staticmethod
-    def _fmu_state_to_bytes(state: dict) -> bytes:
-        # repr-based JSON: every finite float round-trips bit for bit.
-        return json.dumps(state, sort_keys=True).encode("utf-8")
-
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes) -> dict:
+    def _get_fmu_state(self) -> bytes:
+        """The unit as the library's binary record (``rm_save``); b"" when it failed."""
         try:
-            return json.loads(state.decode("utf-8"))
+            size = ctypes.c_size_t()
+            buf = self._state_buffer
+            if buf is None:
+                self._state_buffer = buf = ctypes.create_string_buffer(1024)
+            if self._answer(self._lib.rm_save(self._unit, buf, len(buf),
+                                              ctypes.byref(size))) == library.ERROR:
+                return b""
+            if size.value > len(buf):  # grown: save again into a buffer that fits
+                self._state_buffer = buf = ctypes.create_string_buffer(size.value)
+                if self._answer(self._lib.rm_save(self._unit, buf, len(buf),
+                                                  ctypes.byref(size))) == library.ERROR:
+                    return b""
+            return buf.raw[:size.value]
+        except Exception as err:
+            self._failed("getFMUstate", err)
+            return b""
+
+    def _set_fmu_state(self, state) -> None:
+        """The unit as the record ``state`` left it (``rm_restore``: checked whole by the
+        library; a refused record changes nothing)."""
+        try:
+            record = state if isinstance(state, bytes) else bytes(state)
         except Exception:
-            return {}
+            self._failed("setFMUstate", _FaceError(
+                f"the FMU state is a {type(state).__name__}, not a record of this FMU; "
+                "nothing changed"))
+            return
+        self._call("setFMUstate", "rm_restore", record, len(record))
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        return state if isinstance(state, bytes) else b""
+
+    @staticmethod
+    def _fmu_state_from_bytes(state) -> bytes:
+        try:
+            return state if isinstance(state, bytes) else bytes(state)
+        except Exception:  # refused by _set_fmu_state
+            return b""
 
     # ------------------------------------------------------------------ model description
     def to_xml(self, model_options=None):
         from .model_description import model_description
 
-        return model_description(self)
-
-    # ------------------------------------------------------------------ subclass hooks
-    def _build(self, params, inputs: dict[str, float]):
-        """A new model for the parameters and the initial inputs (raise ValueError if invalid)."""
-        raise NotImplementedError
-
-    def _step(self, t: float, h: float, inputs: dict[str, float]) -> None:
-        """Advance ``self._model`` from t by h with the inputs; raise ValueError to reject
-        (the model must then be unchanged)."""
-        raise NotImplementedError
-
-    def _outputs(self, model) -> dict[str, Any]:
-        """Output values of a model."""
-        raise NotImplementedError
-
-    def _quick_outputs(self, model) -> dict[str, Any]:
-        """Outputs cheap enough to refresh right after every step (those a master reads every
-        step); the rest are computed when first read.  Default: none."""
-        return {}
-
-    def _model_state(self, model) -> dict:
-        """JSON-able snapshot of the model's complete state."""
-        raise NotImplementedError
-
-    def _model_from_snapshot(self, params, start_time: float, snapshot: dict):
-        """The model in the state of a snapshot made by ``_model_state`` (which may come from
-        a forged or corrupted FMU state: raise ValueError naming what is invalid).  It must
-        not solve start conditions or read files: the snapshot holds everything."""
-        raise NotImplementedError
+        return model_description(self, guid=self.FMU_GUID)
 
 
-def _value_problem(fmi_type: str, value, output: bool) -> str:
-    """Why ``value`` cannot be a stored value of a variable of FMI type ``fmi_type`` ("" if
-    it can).  Parameters and inputs may hold what a master set (a NaN is refused where it is
-    used); outputs are finite."""
-    if fmi_type == "Real":
-        if not isinstance(value, float):
-            return "expected a float"
-        if output and not math.isfinite(value):
-            return "an output must be finite"
-    elif fmi_type == "Integer":
-        if isinstance(value, bool) or not isinstance(value, int):
-            return "expected an integer"
-        if abs(value) > MAX_STATE_INTEGER:
-            return f"beyond +-2^53 (+-{MAX_STATE_INTEGER})"
-    elif fmi_type == "Boolean":
-        if not isinstance(value, bool):
-            return "expected true or false"
-    elif not isinstance(value, str):
-        return "expected a string"
-    elif "\0" in value:
-        return "a string with a NUL character"
-    else:
-        try:
-            value.encode("utf-8")
-        except UnicodeEncodeError:
-            return "a string that is not valid Unicode"
-    return ""
+def _length(values) -> int:
+    try:
+        return len(values)
+    except Exception:
+        return 0
+
+
+def _vr_array(vrs, action: str) -> ctypes.Array:
+    """The value references as fmi2ValueReference (unsigned 32 bits)."""
+    for vr in vrs:
+        if isinstance(vr, bool) or not isinstance(vr, int) or not _VR_MIN <= vr < _VR_END:
+            raise _FaceError(f"value reference {vr!r} is not an fmi2ValueReference (an "
+                             f"integer in [0, {_VR_END - 1}]); nothing of this call was done")
+    return (ctypes.c_uint * len(vrs))(*vrs)
+
+
+def _c_values(fmi_type: str, values) -> list:
+    """``values`` as the C arguments of the library's setter; _FaceError for a value a C
+    argument of the FMI type cannot carry."""
+    def refuse(k, value, what):
+        return _FaceError(f"value {k} ({value!r}) {what}; nothing of this call was stored")
+
+    out = []
+    for k, value in enumerate(values):
+        if fmi_type == "Real":
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise refuse(k, value, "is not a real number")
+            try:
+                out.append(float(value))
+            except OverflowError:
+                raise refuse(k, value, "is beyond the range of a double") from None
+        elif fmi_type == "Integer":
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise refuse(k, value, "is not an integer")
+            if not _INT32_MIN <= value < _INT32_END:
+                raise refuse(k, value, "is beyond the 32 bits of an fmi2Integer")
+            out.append(value)
+        elif fmi_type == "Boolean":
+            out.append(1 if value else 0)
+        else:
+            if not isinstance(value, str):
+                raise refuse(k, value, "is not a string")
+            if "\0" in value:
+                raise refuse(k, value, "holds a NUL character, which an fmi2String cannot")
+            # lone surrogates pass as the bytes they would be, for the library's UTF-8 check
+            out.append(value.encode("utf-8", "surrogatepass"))
+    return out
+
+
+def hold_namespace(namespace: dict) -> None:
+    """Give pythonfmu the reference to a slave module's namespace that it releases at every
+    fmi2Instantiate: pythonfmu 0.7.0 executes the slave module's source anew in it to find the
+    slave class and then releases it (``Py_DECREF`` of ``PyModule_GetDict``'s borrowed
+    reference).  A slave module that defines no class of its own (see the module docstring)
+    leaves nothing else holding its namespace, which would then be freed after a few
+    instantiations (a crash).  The slave modules call it once per execution: one reference
+    each, no memory; with a wrapper that does not release it, the namespace just lives on
+    (as it does anyway, in ``sys.modules``)."""
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
+
+
+def _check_table(cls, lib, registered: list[tuple[str, str, str]]) -> None:
+    """LibraryError unless the registration (name, FMI type, causality per value reference)
+    is the library's table (both come from the specs; a stale or foreign library differs)."""
+    table = [(v["name"], v["type"], v["causality"])
+             for v in library.variables(cls.KIND, lib)]
+    if table != registered:
+        first = next((k for k, (a, b) in enumerate(zip(table, registered, strict=False))
+                      if a != b), min(len(table), len(registered)))
+        raise library.LibraryError(
+            f"{cls.__name__}: the model library's variable table does not match the specs "
+            f"(value reference {first}: library {table[first:first + 1]}, specs "
+            f"{registered[first:first + 1]}; {len(table)} and {len(registered)} variables): "
+            "rebuild the FMU")
+
+
+#: The unit of each model and its interface.
+_UNITS = {
+    interface.MESH: (library.MESH, MeshParameters, interface.MESH_INPUTS,
+                     interface.MESH_OUTPUTS),
+    interface.DRIVELINE: (library.DRIVELINE, DrivelineParameters, interface.DRIVELINE_INPUTS,
+                          interface.DRIVELINE_OUTPUTS),
+}
+_CLASSES: dict[str, type] = {}
+
+
+def slave_class(model: str, description: str, doc: str = "") -> type:
+    """The slave class of ``model`` (``interface.MODELS``), made once per process: a
+    :class:`RattleSlave` of the model's unit kind, parameters and signals, named ``model``
+    (the FMU's model identifier), with the modelDescription's ``description``."""
+    cls = _CLASSES.get(model)
+    if cls is None:
+        kind, parameters, inputs, outputs = _UNITS[model]
+        cls = type(model, (RattleSlave,), {
+            "__doc__": doc or description, "__module__": __name__, "KIND": kind,
+            "PARAMETERS": parameters, "INPUTS": inputs, "OUTPUTS": outputs,
+            "description": description})
+        _CLASSES[model] = cls
+    return cls

@@ -4,7 +4,7 @@
  * pythonfmu 0.7.0's C++ wrapper (whose sources are not shipped, so it cannot be rebuilt) turns
  * every Python exception into fmi2Fatal, ignores the return value of every slave method except
  * do_step, hands log messages to the host only when debug logging is on (and as a printf
- * FORMAT), and does not check what a master passes.  Measured (docs/fmi.md, "The native
+ * FORMAT), and does not check what a master passes.  Measured (docs/fmi.md, "The status
  * shim"), each of these killed or corrupted the host process:
  *   - it replaces "%20" in the resource path by a space (after any decoding of ours) and
  *     deletes "file://"; a resource location without slavemodule.txt and <module>.py (the
@@ -38,7 +38,10 @@
  *     reported through the host's logger whatever the debug-logging setting (start_python);
  *   - pythonfmu's own log messages reach the host as "%s" arguments; after pythonfmu returned
  *     fmi2Fatal its instance is never called (nor freed) again; and a pythonfmu double
- *     release at process exit is defused (see release_python_state_at_exit).
+ *     release at process exit is defused (see release_python_state_at_exit);
+ *   - pythonfmu's fmi2Instantiate leaks about 1 kiB each time it is called: a freed instance
+ *     is kept idle instead and the next fmi2Instantiate of the same resources folder resets
+ *     it (see "idle instances").
  *
  * Build (drive_rattle_build.shim.compile_shim does this):
  *        gcc -std=c99 -O2 -Wall -Wextra -shared -fPIC -I <fmpy>/c-code \
@@ -330,8 +333,8 @@ typedef struct ShimState ShimState;
 typedef struct {
     fmi2Component inner;
     fmi2CallbackFunctions host;     /* the host's callbacks, copied */
-    fmi2CallbackFunctions to_inner; /* given to pythonfmu, which keeps the POINTER: must live
-                                       as long as the inner instance */
+    fmi2CallbackFunctions* to_inner; /* given to pythonfmu, which keeps the POINTER: lives as
+                                        long as the inner instance (idle ones included) */
     char* instance_name;
     int* status;                    /* the slave's C int; NULL disables the status protocol */
     int inner_dead;                 /* pythonfmu returned fmi2Fatal: do not touch it again */
@@ -343,6 +346,7 @@ typedef struct {
     char collected[4096];           /* ... here, for the host if instantiation fails */
     fmi2Status collected_status;
     ShimState* states;              /* FMU states made by this instance (freed with it) */
+    char* inner_path;               /* the resources folder given to pythonfmu (idle key) */
     double last_time;               /* end of the last accepted step, without RATTLE_VR_LAST_TIME */
 } Shim;
 
@@ -404,8 +408,9 @@ static void inner_logger(fmi2ComponentEnvironment env, fmi2String instanceName, 
         if (status > s->collected_status) s->collected_status = status;
         return;
     }
+    (void)instanceName; /* the name of the instance that made pythonfmu's (see idle ones) */
     if (s->host.logger != NULL)
-        s->host.logger(s->host.componentEnvironment, instanceName, status,
+        s->host.logger(s->host.componentEnvironment, s->instance_name, status,
                        category != NULL ? category : "", "%s", text);
 }
 
@@ -641,7 +646,7 @@ struct ShimState {
 };
 
 /* Serialized states: the envelope of rattle_fmi_common.h around pythonfmu's serialization of
- * the slave's state (JSON). */
+ * the slave's state (the model library's binary record, rm_save). */
 
 /* `state` as a state of this FMU, or NULL with the refusal logged. */
 static ShimState* own_state(const Shim* s, fmi2FMUstate state, const char* function)
@@ -732,8 +737,103 @@ static void free_shim(Shim* s)
     while (s->states != NULL) delete_state(s, s->states);
     free_kept_strings(s);
     if (s->resource_fd >= 0) close(s->resource_fd);
+    free(s->inner_path);
+    free(s->to_inner);
     free(s->instance_name);
     free(s);
+}
+
+/* ------------------------------------------------------------------ idle instances */
+
+/* pythonfmu 0.7.0's fmi2Instantiate leaks about 1 kiB of Python objects at every call: it
+ * executes the slave module's source anew to find the slave class and keeps a list and two
+ * strings per class of its method-resolution order, and it inserts the resources folder into
+ * sys.path with a reference it never releases.  (A slave module that defines its class kept
+ * the whole class, 17 kiB, at every call; drive_rattle_fmi/slave.py.)  So fmi2FreeInstance
+ * keeps pythonfmu's instance idle instead of freeing it, at most IDLE_MAX of them (the oldest
+ * is freed for a new one), and fmi2Instantiate for the same resources folder takes an idle
+ * one and resets it: pythonfmu's fmi2Reset makes a new slave object, releasing the old one
+ * and its model unit.  Cycles of instantiate and free then cost nothing after the first.
+ * Only instances whose folder pythonfmu got by its path are kept (not /proc/self/fd/<n>,
+ * whose descriptor closes with the instance). */
+#define IDLE_MAX 8
+
+typedef struct {
+    fmi2Component inner;
+    fmi2CallbackFunctions* to_inner; /* pythonfmu's pointer to it stays valid */
+    char* path;                      /* the resources folder pythonfmu was given */
+} Idle;
+
+static Idle idle[IDLE_MAX];
+static size_t n_idle;
+static pthread_mutex_t idle_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void free_idle(Idle* e)
+{
+    inner_api.fmi2FreeInstance(e->inner); /* logs nowhere: the environment is NULL */
+    free(e->to_inner);
+    free(e->path);
+}
+
+/* Keeps the inner instance of `s` idle (1), or 0 when it is not to be kept.  Its states are
+ * freed already. */
+static int keep_idle(Shim* s)
+{
+    Idle e, evicted;
+    int evict = 0;
+    if (s->inner_dead || s->status == NULL || s->resource_fd >= 0 || s->inner_path == NULL)
+        return 0;
+    e.inner = s->inner;
+    e.to_inner = s->to_inner;
+    e.path = s->inner_path;
+    e.to_inner->componentEnvironment = NULL; /* inner_logger drops what it logs now */
+    pthread_mutex_lock(&idle_lock);
+    if (n_idle == IDLE_MAX) {
+        evicted = idle[0];
+        memmove(idle, idle + 1, (IDLE_MAX - 1) * sizeof *idle);
+        n_idle--;
+        evict = 1;
+    }
+    idle[n_idle++] = e;
+    pthread_mutex_unlock(&idle_lock);
+    if (evict) free_idle(&evicted);
+    s->inner = NULL;
+    s->to_inner = NULL;
+    s->inner_path = NULL;
+    return 1;
+}
+
+/* An idle inner instance of the resources folder `path` made ready for `s` (reset, its
+ * messages collected by `s`), or NULL when there is none (or its reset failed: then it is
+ * abandoned, as after any fmi2Fatal, and the caller instantiates anew). */
+static fmi2Component reuse_idle(Shim* s, const char* path)
+{
+    Idle e;
+    size_t k;
+    int found = 0;
+    pthread_mutex_lock(&idle_lock);
+    for (k = n_idle; k-- > 0;)
+        if (strcmp(idle[k].path, path) == 0) {
+            e = idle[k];
+            memmove(idle + k, idle + k + 1, (n_idle - k - 1) * sizeof *idle);
+            n_idle--;
+            found = 1;
+            break;
+        }
+    pthread_mutex_unlock(&idle_lock);
+    if (!found) return NULL;
+    e.to_inner->componentEnvironment = s;
+    s->to_inner = e.to_inner;
+    free(e.path);
+    if (inner_api.fmi2SetDebugLogging(e.inner, fmi2True, 0, NULL) == fmi2Fatal
+        || inner_api.fmi2Reset(e.inner) == fmi2Fatal) {
+        e.to_inner->componentEnvironment = NULL; /* abandoned with its callbacks */
+        s->to_inner = NULL;
+        s->collected[0] = '\0';
+        s->collected_status = fmi2OK;
+        return NULL;
+    }
+    return e.inner;
 }
 
 /* Reads the address of the slave's status int.  Returns 0 only if pythonfmu failed (Fatal). */
@@ -820,13 +920,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     s->resource_fd = fd;
     s->host_logging = loggingOn != fmi2False;
     s->last_time = NAN;
-    /* pythonfmu logs through to_inner with the shim as environment (see inner_logger).
-     * stepFinished is withheld: pythonfmu never steps asynchronously, and its environment
-     * argument would be the shim, not the host's. */
-    s->to_inner = s->host;
-    s->to_inner.logger = inner_logger;
-    s->to_inner.stepFinished = NULL;
-    s->to_inner.componentEnvironment = s;
+    s->inner_path = path;
     if (path != NULL && fd >= 0 && s->host_logging)
         shim_log(s, fmi2OK, "the resources folder's path holds \"%%20\" or is not UTF-8, which "
                             "pythonfmu would misread: it gets %s instead", path);
@@ -835,10 +929,26 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
      * ...) only with debug logging on: it is on during the call, and its messages are held
      * and given to the host if the instantiation fails (or if the host asked for them). */
     s->collecting = 1;
-    s->inner = inner_api.fmi2Instantiate(s->instance_name, fmi2CoSimulation, fmuGUID, path,
-                                         &s->to_inner, visible, fmi2True);
+    s->inner = fd < 0 ? reuse_idle(s, path) : NULL;
+    if (s->inner == NULL) {
+        /* pythonfmu logs through to_inner with the shim as environment (see inner_logger).
+         * stepFinished is withheld: pythonfmu never steps asynchronously, and its
+         * environment argument would be the shim, not the host's.  Memory is the shim's
+         * (canNotUseMemoryManagementFunctions): an idle instance outlives the host's
+         * callbacks. */
+        s->to_inner = calloc(1, sizeof *s->to_inner);
+        if (s->to_inner != NULL) {
+            *s->to_inner = s->host;
+            s->to_inner->logger = inner_logger;
+            s->to_inner->allocateMemory = calloc;
+            s->to_inner->freeMemory = free;
+            s->to_inner->stepFinished = NULL;
+            s->to_inner->componentEnvironment = s;
+            s->inner = inner_api.fmi2Instantiate(s->instance_name, fmi2CoSimulation, fmuGUID,
+                                                 path, s->to_inner, visible, fmi2True);
+        }
+    }
     s->collecting = 0;
-    free(path);
     if (s->inner == NULL) {
         char python3[PATH_BUFFER];
         python3_on_path(python3, sizeof python3);
@@ -864,10 +974,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                      s->collected);
     if (!s->host_logging) inner_api.fmi2SetDebugLogging(s->inner, fmi2False, 0, NULL);
     if (!fetch_status_address(s)) {
-        /* pythonfmu's instance is broken (already released its Python objects): leak it. */
+        /* pythonfmu's instance is broken (already released its Python objects): leak it, and
+         * the callbacks it points to. */
         shim_log(s, fmi2Fatal, "rattle FMI shim: reading variable %u (status address) failed",
                  (unsigned)RATTLE_VR_STATUS_ADDRESS);
         s->inner_dead = 1;
+        s->to_inner = NULL;
         free_shim(s);
         return NULL;
     }
@@ -879,7 +991,8 @@ void fmi2FreeInstance(fmi2Component c)
     Shim* s = c;
     if (s == NULL) return;
     while (s->states != NULL) delete_state(s, s->states); /* before the instance goes */
-    if (!s->inner_dead) inner_api.fmi2FreeInstance(s->inner);
+    if (!s->inner_dead && !keep_idle(s)) inner_api.fmi2FreeInstance(s->inner);
+    if (s->inner_dead) s->to_inner = NULL; /* abandoned with pythonfmu's instance */
     free_shim(s);
 }
 

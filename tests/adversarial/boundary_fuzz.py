@@ -44,8 +44,10 @@ from raw_fmi import (
     state_payload,
     unpack,
 )
+from records import Record
 
 ALLOWED = {OK, WARNING, ERROR}  # what these FMUs may answer; FATAL/DISCARD/PENDING never
+MODES = ("instantiated", "initialization", "stepping", "terminated")  # the record's phases
 H = 1e-4
 SLOTS = 3
 
@@ -75,6 +77,10 @@ class Fuzz:
         hidden = range(self.n_vars, self.n_vars + 3)  # the shim's hidden variables
         self.bad_vrs = [*hidden, self.n_vars + 3, 4096, 2**31, 2**31 + 7, 2**32 - 1]
         self.inputs = {n: vr for n, (vr, _, c) in names.items() if c == "input"}
+        #: the inputs that carry the partner's motion (inputs.continue_when_held)
+        self.motion_vrs = {vr for n, vr in self.inputs.items()
+                           if n in ("pinion.phi", "pinion.w", "pinion.a", "wheel.phi",
+                                    "wheel.w")}
         self.defaults = []  # (kind, vrs, start values) of the parameters
         for kind in ("Real", "Integer", "Boolean", "String"):
             params = [(vr, start) for n, (vr, k, c) in names.items()
@@ -196,9 +202,9 @@ def run_example(f: Fuzz, calls: list) -> None:
             f.calls += 1
             print("CALL", repr(call)[:300], file=sys.stderr, flush=True)
             before = f.observe(inst)
-            payload = state_payload(before[1])
-            mode, next_t = payload["mode"], payload["time"]
-            assert math.isfinite(next_t), payload["time"]
+            record = Record.decode(state_payload(before[1]), m.variables)
+            mode, next_t = MODES[record.phase], record.time
+            assert math.isfinite(next_t), record
             k = round(next_t / H)  # for the realistic inputs
             n_log = len(inst.log)
             op = call[0]
@@ -322,6 +328,10 @@ def run_example(f: Fuzz, calls: list) -> None:
                     continue
                 after = f.observe(inst)
                 assert after[0] == before[0], ("a refused call changed variables", call)
+                if op == "set" and kind == "Real" and f.motion_vrs.intersection(vrs):
+                    # the library's rule: a set naming a motion input marks the inputs set
+                    # (the master holds nothing), accepted or not -- the record says so
+                    after = (after[0], _motion_set(m, after[1], record.motion_set))
                 assert after[1] == before[1], ("a refused call changed the state", call)
             elif readback is not None:
                 kind, vrs, values = readback
@@ -337,6 +347,15 @@ def run_example(f: Fuzz, calls: list) -> None:
             if state is not None and state.value is not None and f.calls % 2:
                 inst.free_state(state)  # every other example leaves them to fmi2FreeInstance
         inst.free()
+
+
+def _motion_set(m: Model, blob: bytes, flag: int) -> bytes:
+    """``blob`` (a serialized state) with the record's motion_set flag set to ``flag``."""
+    from raw_fmi import with_payload
+
+    record = Record.decode(state_payload(blob), m.variables)
+    record.motion_set = flag
+    return with_payload(blob, record)
 
 
 def _bad_utf8(value) -> bool:

@@ -30,9 +30,9 @@ from raw_fmi import (
     unpack,
     with_payload,
 )
+from records import Record
 
-from drive_rattle.driveline import DrivelineParameters
-from drive_rattle_fmi.slave import STATE_FORMAT
+from drive_rattle.parameters import DrivelineParameters
 
 H = 1e-4
 #: The default drag, which the Driveline hands to the wheel in steady state.
@@ -111,7 +111,7 @@ def row_1(fmus, work):
             assert inst is not None, model.pending_log
             assert inst.setup() == OK and inst.enter() == OK
             assert inst.set_named(MESH_INPUTS if name == "GearMeshRattle" else DRIVE_INPUTS) == OK
-            assert inst.exit() == OK, inst.log  # no warning: the kernel was found there
+            assert inst.exit() == OK, inst.log  # the model library was found there
             advance(inst, 0)
             inst.free()
 
@@ -374,7 +374,7 @@ def row_9(fmus, work):
         str(work): "not a regular file (a directory)",
         str(big): "bytes; allowed: a readable regular file of at most 4194304 bytes",
         "x" * 100_000: "too long a path",
-        str(work / "missing.csv"): "No such file or directory",
+        str(work / "missing.csv"): "no such file or directory",
     }
     for value, fragment in cases.items():
         inst = model.instantiate()
@@ -451,31 +451,38 @@ def row_11(fmus, work):
 
 def row_12(fmus, work):
     """Corrupt, forged and foreign states are refused at deserialization or set, with a
-    message, and change nothing."""
+    message, and change nothing.  The forged ones are re-sealed (a valid envelope around an
+    edited record), so that they reach the library's checks."""
     mesh = Model(unpack(fmus["GearMeshRattle"], work / "m"))
     drive = Model(unpack(fmus["Driveline"], work / "d"))
     inst = started(mesh, MESH_INPUTS, steps=4)
     blob = inst.serialized()
     payload = state_payload(blob)
-    assert payload["format"] == STATE_FORMAT and blob[32:70].rstrip(b"\0").decode() == mesh.guid
+    assert payload.startswith(b"RATLUNIT") and blob[32:70].rstrip(b"\0").decode() == mesh.guid
+    assert Record.decode(payload, mesh.variables).encode() == payload  # the reader is right
 
     def edited(fn):
-        p = json.loads(json.dumps(payload))
-        fn(p)
-        return p
+        r = Record.decode(payload, mesh.variables)
+        fn(r)
+        return r.encode()
 
     forged = {
-        "mode 'bogus'": edited(lambda p: p.__setitem__("mode", "bogus")),
-        "time = nan": edited(lambda p: p.__setitem__("time", math.nan)),
-        "wheel[1] = nan": edited(lambda p: p["model"]["wheel"].__setitem__(1, math.nan)),
-        "'wheel.tau_mesh' = 'x'": edited(lambda p: p["values"].__setitem__("wheel.tau_mesh", "x")),
-        "'mesh.n_contact' = 1.5": edited(lambda p: p["values"].__setitem__("mesh.n_contact", 1.5)),
-        "wheel[2] = 7": edited(lambda p: p["model"]["wheel"].__setitem__(2, 7)),
-        "format is 1": edited(lambda p: p.__setitem__("format", 1)),
-        "does not go with model snapshot None": edited(lambda p: p.__setitem__("model", None)),
-        "gear.backlash": edited(lambda p: p["values"].__setitem__("gear.backlash", -1.0)),
-        "missing": edited(lambda p: p["values"].pop("pinion.w")),
-        "not a state": [1, 2, 3],
+        "mode 7": edited(lambda r: setattr(r, "phase", 7)),
+        "record version is 9": edited(lambda r: setattr(r, "version", 9)),
+        "another unit": edited(lambda r: setattr(r, "kind", 1)),
+        "time nan s do not go together": edited(lambda r: setattr(r, "time", math.nan)),
+        "do not go together": edited(lambda r: setattr(r, "start_time", 1e300)),
+        "the wheel speed = nan": edited(lambda r: r.model.__setitem__("wheel.w", math.nan)),
+        "the flank in contact = 7": edited(lambda r: r.model.__setitem__("flank", 7)),
+        "'friction.enabled' = 2": edited(lambda r: r.values.__setitem__("friction.enabled", 2)),
+        "'gear.z_pinion' = 4294967296": edited(
+            lambda r: r.values.__setitem__("gear.z_pinion", 2**32)),
+        "'gear.backlash'": edited(lambda r: r.values.__setitem__("gear.backlash", -1.0)),
+        "does not go with no model state": edited(lambda r: setattr(r, "has_model", 0)),
+        "the record ends before variable": payload[:60],
+        "follow the end of the record": payload + b"\0" * 8,
+        "not a state of this model": b"{}" + payload[2:],
+        "not a state": b"",
     }
     before = inst.snapshot()
     state_before = inst.serialized()
@@ -483,11 +490,12 @@ def row_12(fmus, work):
         st, state = inst.deserialize(with_payload(blob, p))
         assert st == OK, inst.log[-2:]  # the envelope is intact; the content is checked at set
         n = len(inst.log)
-        refused(inst, inst.set_state(state), n, "the FMU state is invalid", fragment)
+        refused(inst, inst.set_state(state), n, "the FMU state is invalid", fragment,
+                "nothing changed")
         assert inst.snapshot() == before and inst.serialized() == state_before
         inst.free_state(state)
     envelopes = {
-        "checksum mismatch": with_payload(blob, edited(lambda p: p.__setitem__("mode", "bogus")),
+        "checksum mismatch": with_payload(blob, edited(lambda r: setattr(r, "phase", 7)),
                                           fix_checksum=False),
         "envelope version 9": blob[:8] + (9).to_bytes(4, "little") + blob[12:],
         "not a serialized state": b"{}" + blob[2:],
@@ -504,6 +512,11 @@ def row_12(fmus, work):
     foreign_blob = d.serialized()
     n = len(inst.log)
     refused(inst, inst.deserialize(foreign_blob)[0], n, "belongs to the FMU")
+    # ... and its record re-sealed with this FMU's GUID: the library refuses the other kind
+    st, state = inst.deserialize(with_payload(blob, state_payload(foreign_blob)))
+    assert st == OK
+    n = len(inst.log)
+    refused(inst, inst.set_state(state), n, "another unit")
     n = len(inst.log)
     refused(inst, inst.free_state(foreign), n, "belongs to the FMU")
     fake = c_void_p(id(blob))  # some readable memory that is not a state
@@ -515,26 +528,25 @@ def row_12(fmus, work):
 
 def row_13(fmus, work):
     """Counters beyond the fmi2Integer range saturate at 2^31 - 1 (documented); beyond 2^53
-    (where the kernel's double counter stops being exact) a state is refused."""
+    (where a double counter stops being exact) a state is refused."""
     model = Model(unpack(fmus["GearMeshRattle"], work / "m"))
     inst = started(model, MESH_INPUTS, steps=2)
     blob = inst.serialized()
     payload = state_payload(blob)
     vr = [model.vr("mesh.impacts_drive"), model.vr("mesh.impacts_coast")]
     for count, expected in ((2**31 - 1, 2**31 - 1), (2**31 + 5, 2**31 - 1), (2**53, 2**31 - 1)):
-        p = json.loads(json.dumps(payload))
-        p["model"]["wheel"][6] = count
-        p["values"]["mesh.impacts_drive"] = count
-        st, state = inst.deserialize(with_payload(blob, p))
+        r = Record.decode(payload, model.variables)
+        r.model["n_drive"] = count
+        st, state = inst.deserialize(with_payload(blob, r))
         assert st == OK and inst.set_state(state) == OK, inst.log[-2:]
         assert inst.get("Integer", vr) == (OK, [expected, 0])
         advance(inst, 2)  # the counter goes on inside (drive-flank contact: no new onsets)
         assert inst.get("Integer", vr)[0] == OK
         assert inst.get("Integer", vr)[1][0] == expected
-    for count in (2**53 + 1, 2**63, 2**64):
-        p = json.loads(json.dumps(payload))
-        p["model"]["wheel"][6] = count
-        st, state = inst.deserialize(with_payload(blob, p))
+    for count in (2**53 + 1, 2**62, -1):
+        r = Record.decode(payload, model.variables)
+        r.model["n_drive"] = count
+        st, state = inst.deserialize(with_payload(blob, r))
         n = len(inst.log)
         refused(inst, inst.set_state(state), n, "expected an integer in [0, 2^53]")
 

@@ -46,6 +46,34 @@ def cycles(fmu: Path, n: int = 1000) -> dict:
     return {"rss_kib": samples, "seconds": time.perf_counter() - t0, "cycles": n}
 
 
+def live_rounds(fmu: Path, n: int = 300, rounds: int = 4) -> dict:
+    """``rounds`` times: ``n`` instances alive at once (initialized, one step), then all freed;
+    resident memory after each round.  Memory freed in one round serves the next."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(fmu))
+    folder = extract(str(fmu))
+    samples, t0 = [rss_kib()], time.perf_counter()
+    for _ in range(rounds):
+        alive = []
+        for k in range(n):
+            s = FMU2Slave(guid=md.guid, unzipDirectory=folder,
+                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName=f"i{k}")
+            s.instantiate()
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            s.exitInitializationMode()
+            s.doStep(0.0, H)
+            alive.append(s)
+        for s in alive:
+            s.terminate()
+            s.freeInstance()
+        del alive, s
+        samples.append(rss_kib())
+    return {"rss_kib": samples, "seconds": time.perf_counter() - t0, "instances": n}
+
+
 def soak(fmu_dir: Path, n: int) -> dict:
     """n communication steps of one GearMeshRattle instance: the wheel bounces freely between
     the flanks of a pinion at rest (impacts on both flanks, contact and free flight), with the
@@ -142,6 +170,7 @@ if __name__ == "__main__":
     scenario, fmu_dir = sys.argv[1], Path(sys.argv[2])
     arg = int(sys.argv[3]) if len(sys.argv) > 3 and sys.argv[3].isdigit() else None
     report = {"cycles": lambda: cycles(fmu_dir, arg or 1000),  # here fmu_dir is an .fmu
+              "live": lambda: live_rounds(fmu_dir, arg or 300),  # here too
               "soak": lambda: soak(fmu_dir, arg or 1_000_000),
               "many": lambda: many_instances(fmu_dir),
               "once": lambda: run_once(fmu_dir),

@@ -11,7 +11,6 @@ the format itself (a printf format injection) is recorded with category "FORMAT"
 from __future__ import annotations
 
 import ctypes
-import json
 import os
 import zipfile
 from ctypes import (
@@ -298,15 +297,17 @@ def fnv1a64(data: bytes) -> int:
     return h
 
 
-def state_payload(blob: bytes) -> dict:
-    """The slave's state (JSON) inside a serialized state."""
+def state_payload(blob: bytes) -> bytes:
+    """The unit's record (the model library's ``rm_save``; ``records.Record``) inside a
+    serialized state."""
     n = int.from_bytes(blob[16:24], "little")
-    return json.loads(blob[HEADER:HEADER + n])
+    return blob[HEADER:HEADER + n]
 
 
-def with_payload(blob: bytes, payload: dict | bytes, fix_checksum: bool = True) -> bytes:
-    """``blob`` with its payload replaced (and, by default, a matching checksum)."""
-    data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
+def with_payload(blob: bytes, payload, fix_checksum: bool = True) -> bytes:
+    """``blob`` with its payload replaced (bytes, or a ``records.Record``), and by default a
+    matching checksum: re-sealed, so that the content reaches the library's checks."""
+    data = payload if isinstance(payload, bytes) else payload.encode()
     checksum = fnv1a64(data) if fix_checksum else int.from_bytes(blob[24:32], "little")
     return (blob[:16] + len(data).to_bytes(8, "little") + checksum.to_bytes(8, "little")
             + blob[32:HEADER] + data)

@@ -1,8 +1,8 @@
 """Many instances, instantiate/free cycles, a soak of 10^6 steps with resident memory measured,
-rollback across processes, determinism.  Each scenario runs in its own process."""
+rollback across processes, determinism (the pythonfmu flavour).  Each scenario runs in its own
+process."""
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -13,7 +13,6 @@ import pytest
 from drive_rattle_cosim.harness import CoSimulation
 
 SCRIPT = Path(__file__).with_name("endurance.py")
-PROBE = Path(__file__).resolve().parents[1] / "fmi" / "shim_probe" / "ShimProbe.py"
 
 
 def scenario(*args, timeout=900) -> dict:
@@ -23,41 +22,43 @@ def scenario(*args, timeout=900) -> dict:
     return json.loads(run.stdout.strip().splitlines()[-1])
 
 
-def slope_kib_per_cycle(report) -> float:
+def slope_kib_per_cycle(report, every: int = 100) -> float:
     rss = np.asarray(report["rss_kib"], dtype=float)
-    return float(np.polyfit(np.arange(len(rss)) * 100, rss, 1)[0])
+    return float(np.polyfit(np.arange(len(rss)) * every, rss, 1)[0])
 
 
-@pytest.fixture(scope="module")
-def probe_fmu(tmp_path_factory):
-    """A trivial pythonfmu slave with the same shim: pythonfmu's own per-cycle baseline."""
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the native shim cannot be compiled")
-    from fmpy import read_model_description
-
-    from drive_rattle_build.shim import install_shim
-
-    out = tmp_path_factory.mktemp("probe")
-    subprocess.run([sys.executable, "-m", "pythonfmu", "build", "-f", str(PROBE), "-d",
-                    str(out)], check=True, capture_output=True)
-    fmu = out / "ShimProbe.fmu"
-    vr = {v.name: v.valueReference for v in read_model_description(str(fmu)).modelVariables}
-    install_shim(fmu, vr["_fmi.status_address"], vr["_fmi.message"])
-    return fmu
+#: Issue 20 item 5: each instantiate/free cycle kept about 17 kiB (a slave class per cycle),
+#: 1,000 live instances 138 MB after all were freed.
+CYCLES = 5000
+MAX_KIB_PER_CYCLE = 1.0
 
 
-def test_instantiate_free_cycles_add_no_memory_beyond_pythonfmu(fmus, probe_fmu):
-    """1000 cycles of each FMU.  pythonfmu's wrapper itself keeps about 10-20 kB per
-    instantiation (measured with a trivial probe slave): our slaves must add nothing to it."""
-    baseline = slope_kib_per_cycle(scenario("cycles", probe_fmu, 1000))
-    for name in ("GearMeshRattle", "Driveline"):
-        report = scenario("cycles", fmus[name], 1000)
-        assert report["cycles"] == 1000
-        slope = slope_kib_per_cycle(report)
-        print(f"{name}: {slope:.1f} kiB/cycle, probe {baseline:.1f} kiB/cycle")
-        assert slope <= 1.25 * baseline + 2.0, (name, slope, baseline)
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_instantiate_free_cycles_keep_no_memory(fmus, name):
+    """5,000 cycles of instantiate, initialize, step, terminate, free (unpacked once, as a
+    simulation tool does): resident memory grows by at most 1 kiB per cycle (measured:
+    none; before, 17 kiB).  The status shim resets an idle instance instead of letting
+    pythonfmu instantiate anew, which leaks ~1 kiB per call."""
+    report = scenario("cycles", fmus[name], CYCLES)
+    assert report["cycles"] == CYCLES
+    slope = slope_kib_per_cycle(report)
+    print(f"{name}: {slope:.3f} kiB/cycle over {CYCLES} cycles, {report['seconds']:.1f} s")
+    assert slope <= MAX_KIB_PER_CYCLE, (name, slope, report["rss_kib"][::10])
 
 
+def test_many_live_instances_keep_little_once_freed(fmus):
+    """Rounds of 300 live instances, all freed after each: memory freed in one round serves
+    the next.  Beyond the first round, fresh instantiations (the idle instances serve only a
+    few) still leak pythonfmu's ~1 kiB each and fragment the heap: a few kiB per instance
+    (measured 3-6), where a slave class per instantiation kept 12-47 kiB."""
+    report = scenario("live", fmus["GearMeshRattle"], 300)
+    rss = report["rss_kib"]
+    per_instance = (rss[-1] - rss[1]) / (300 * (len(rss) - 2))
+    print(f"live rounds: RSS {rss} kiB; {per_instance:.1f} kiB per instance and round")
+    assert per_instance <= 8.0, rss
+
+
+@pytest.mark.slow
 def test_soak_of_a_million_steps_keeps_memory_flat(fmus):
     report = scenario("soak", fmus["GearMeshRattle"].parent, 1_000_000, timeout=1800)
     rss = report["rss_kib"]

@@ -58,6 +58,7 @@ def test_issue12_row(row, flavour_fmus, tmp_path):
     assert f"row {row} ok" in run.stdout
 
 
+@pytest.mark.slow  # 5 to 25 s per FMU, with the seed
 @pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
 def test_boundary_fuzzer(name, flavour_fmus, tmp_path):
     """Random call sequences against each FMU of each flavour (a new seed every run, printed;

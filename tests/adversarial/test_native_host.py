@@ -17,10 +17,12 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from drive_rattle.driveline import DrivelineParameters, EngineOrderKinematics
+from drive_rattle.parameters import DrivelineParameters
 from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.harness import Unit
 from drive_rattle_cosim.system import communication_points
+
+from ..fmu.closed_forms import engine_orders
 
 HOST_SOURCE = Path(__file__).resolve().parents[1] / "native" / "fmu_host.c"
 STOP, STEP = 0.1, 1e-4
@@ -65,7 +67,7 @@ def scenario_inputs() -> list[tuple[float, ...]]:
     drag.  The default amplitudes give dozens of drive-flank impacts in 0.1 s (asserted below),
     so no larger order amplitude is needed."""
     p = DrivelineParameters()
-    kinematics = EngineOrderKinematics(p)
+    kinematics = engine_orders(p)
     points = communication_points(0.0, STEP, STOP)
     assert points == [(k * 100_000) / 1e9 for k in range(len(points))]
     return [(t, *kinematics(t), p.drag) for t in points]

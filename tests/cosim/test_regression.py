@@ -8,8 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from drive_rattle.driveline import DrivelineParameters
-from drive_rattle.parameters import MeshParameters
+from drive_rattle.parameters import DrivelineParameters, MeshParameters
 from drive_rattle_cosim.regression import REFERENCE_ROOT, check, read_opt, reference_files
 
 MODELS = ["GearMeshRattle", "Driveline"]

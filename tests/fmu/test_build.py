@@ -1,4 +1,5 @@
-"""The built FMUs: validators, interface completeness, templates, documentation."""
+"""The built FMUs: validators, interface completeness, templates, documentation, what they
+ship (the model library for linux64 and win64) and their GUIDs."""
 
 import subprocess
 import sys
@@ -11,14 +12,15 @@ from fmpy.validation import validate_fmu
 
 from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS, MESH_INPUTS, MESH_OUTPUTS
 from drive_rattle.parameters import specs
-from drive_rattle_build import BuildError, build_one, templates
+from drive_rattle_build import BuildError, build_one, fmu, templates
 from drive_rattle_build.documentation import interface_docs
+from drive_rattle_build.identity import fmu_guid
 from drive_rattle_build.paths import RUNTIME_PACKAGES, SOURCE
 
 from ..fmi.slave_driver import SLAVES
 
 ROOT = Path(__file__).resolve().parents[2]
-INTERFACE = {  # the slaves' parameters: the physics' and how the unit reads its inputs
+INTERFACE = {  # the units' parameters, inputs and outputs
     "GearMeshRattle": (SLAVES["GearMeshRattle"].PARAMETERS, MESH_INPUTS, MESH_OUTPUTS),
     "Driveline": (SLAVES["Driveline"].PARAMETERS, DRIVELINE_INPUTS, DRIVELINE_OUTPUTS),
 }
@@ -99,13 +101,17 @@ def test_fmu_contents(fmus, name):
     assert f"binaries/linux64/{name}.so" in names  # the shim
     assert f"binaries/linux64/{name}_pythonfmu.so" in names
     assert f"resources/{name}.py" in names
-    # The runtime packages are shipped whole, and nothing else of the sources.
+    # The runtime packages are shipped whole, with the model library next to the binding,
+    # and nothing else of the sources (no C: the library is compiled).
     shipped = {n.removeprefix("resources/") for n in names
                if n.startswith("resources/drive_rattle")}
     sources = {str(p.relative_to(SOURCE)) for package in RUNTIME_PACKAGES
                for p in (SOURCE / package).glob("*.py")}
-    assert "drive_rattle/stepper.py" in sources
-    assert shipped == sources | {"drive_rattle/_rattle_kernel.so"}
+    assert "drive_rattle/library.py" in sources and "drive_rattle_fmi/slave.py" in sources
+    assert shipped == sources | {"drive_rattle/rattle_model.so", "drive_rattle/rattle_model.dll"}
+    with zipfile.ZipFile(fmus[name]) as z:
+        assert z.read("resources/drive_rattle/rattle_model.so")[:4] == b"\x7fELF"
+        assert z.read("resources/drive_rattle/rattle_model.dll")[:2] == b"MZ"  # win64 PE
     _, inputs, outputs = INTERFACE[name]
     for s in (*inputs, *outputs):
         assert f"<td>{s.name}</td>" in html
@@ -115,3 +121,82 @@ def test_docs_interface_tables_are_generated_from_the_specs():
     text = (ROOT / "docs" / "fmi.md").read_text(encoding="utf-8")
     assert interface_docs(text, SLAVES) == text, (
         "docs/fmi.md is stale: run `python build_fmu.py --update-docs`")
+
+
+@pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
+def test_guid_is_derived_from_the_sources(fmus, name):
+    """The same sources give the same GUID (a state saved by one build restores in another);
+    the model library's and the face's sources are both in it."""
+    guid = read_model_description(str(fmus[name])).guid
+    assert guid == fmu.guid(name) == fmu_guid(name, "pythonfmu", fmu.glue_id(name))
+    assert guid != fmu.guid("Driveline" if name == "GearMeshRattle" else "GearMeshRattle")
+    assert guid != fmu_guid(name, "native", fmu.glue_id(name))
+    assert fmu_guid(name, "pythonfmu", "another face") != guid
+    sources = fmu.glue_sources(name)
+    assert SOURCE / f"{name}.py" in sources and SOURCE / "drive_rattle_fmi" / "slave.py" in sources
+    # the status shim refuses another GUID and was compiled with this one
+    with zipfile.ZipFile(fmus[name]) as z:
+        assert guid.encode() in z.read(f"binaries/linux64/{name}.so")
+
+
+_LOADED = """
+import sys
+{prelude}
+from fmpy import simulate_fmu
+simulate_fmu(sys.argv[1], stop_time=1e-3, output_interval=1e-4)
+library = sys.modules["drive_rattle.library"]
+print(repr((sys.modules["drive_rattle"].__file__, sorted(library._LOADED))))
+"""
+
+
+@pytest.mark.parametrize("prelude", ["", "import drive_rattle"],
+                         ids=["fresh host", "host with the source package"])
+def test_the_fmu_runs_its_own_model_library(fmus, prelude):
+    """The slave loads the library shipped in its resources, also in a host that imported
+    another drive_rattle before (all pythonfmu FMUs of a process share sys.modules)."""
+    run = subprocess.run([sys.executable, "-c", _LOADED.format(prelude=prelude),
+                          str(fmus["GearMeshRattle"])], capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    package, loaded = eval(run.stdout.strip().splitlines()[-1])
+    own = [p for p in loaded if p.endswith("/resources/drive_rattle/rattle_model.so")]
+    assert own, loaded
+    if not prelude:
+        assert package.endswith("/resources/drive_rattle/__init__.py")
+
+
+def test_the_cli_builds_the_library_in_place():
+    run = subprocess.run([sys.executable, str(ROOT / "build_fmu.py"), "--library"],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "built the model library" in run.stdout
+    assert (SOURCE / "drive_rattle" / "rattle_model.so").is_file()
+
+
+def test_a_state_saved_by_one_build_restores_in_another_of_the_same_sources(fmus, tmp_path):
+    """Issue 20: the GUID was random per build, so a state saved by one build could not be
+    restored by another build of the same source."""
+    from drive_rattle_cosim.harness import Unit
+
+    other = fmu.package(SOURCE / "GearMeshRattle.py", tmp_path, references=False)
+    assert read_model_description(str(other)).guid == read_model_description(
+        str(fmus["GearMeshRattle"])).guid
+    units = [Unit(path, f"u{k}") for k, path in enumerate((fmus["GearMeshRattle"], other))]
+    for u in units:
+        u.slave.setupExperiment(startTime=0.0)
+        u.slave.enterInitializationMode()
+        u.set({"pinion.w": 86.92, "wheel.tau_load": 0.15})
+        u.slave.exitInitializationMode()
+    saver, restorer = units
+    vrs = [saver.var(n).vr for n in ("wheel.phi", "wheel.w", "mesh.W")]
+    for k in range(10):
+        saver.set({"pinion.phi": 86.92 * k * 1e-4})
+        saver.slave.doStep(k * 1e-4, 1e-4)
+    blob = saver.slave.serializeFMUstate(saver.slave.getFMUstate())
+    restorer.slave.setFMUstate(restorer.slave.deSerializeFMUstate(blob))
+    for u in units:
+        u.set({"pinion.phi": 86.92 * 10 * 1e-4})
+        u.slave.doStep(10 * 1e-4, 1e-4)
+    assert saver.slave.getReal(vrs) == restorer.slave.getReal(vrs)
+    for u in units:
+        u.close()

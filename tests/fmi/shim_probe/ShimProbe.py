@@ -1,4 +1,4 @@
-"""Probe slave for the native status shim (tests/fmi/test_native_shim.py).
+"""Probe slave for the status shim (tests/fmi/test_status_shim.py).
 
 Integer parameter ``mode`` selects what it reports through the status protocol of
 ``drive_rattle_build.shim`` (it never raises, except in mode 5):
@@ -24,7 +24,7 @@ WARNING, ERROR = Fmi2Status.warning, Fmi2Status.error
 
 class ShimProbe(Fmi2Slave):
     author = "drive-rattle tests"
-    description = "Probe slave for the native status shim"
+    description = "Probe slave for the status shim"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)

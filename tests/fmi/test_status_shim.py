@@ -1,7 +1,7 @@
-"""The native status shim (fmu_src/native/rattle_fmi_shim.c) around pythonfmu's binary.
+"""The status shim (fmu_src/fmi2/rattle_fmi_shim.c) around pythonfmu's binary.
 
 The probe slave (shim_probe/ShimProbe.py) is built with pythonfmu, the shim is installed with
-``drive_rattle_fmi.native.install_shim`` and the FMU is driven through fmpy's low-level
+``drive_rattle_build.shim.install_shim`` and the FMU is driven through fmpy's low-level
 ``FMU2Slave``.  Every FMU run happens in a child process (this file run as a script): without
 a working shim several scenarios crash the process (segfault), and that must show up as a
 failed test, not as a dead pytest session.
@@ -49,11 +49,13 @@ def _drive(unzipdir: str, scenario: str, logging_on: bool) -> dict:
     vr = {v.name: v.valueReference for v in md.modelVariables}
     log: list[list] = []
     steps: list[list] = []
-    out: dict = {"log": log, "steps": steps}
+    names: list[str] = []  # the instance name of each message
+    out: dict = {"log": log, "steps": steps, "names": names}
 
     def logger(env, instance, status, category, message):
         log.append([status, category.decode() if category else None,
                     message.decode("utf-8", "replace") if message else None])
+        names.append(instance.decode("utf-8", "replace") if instance else None)
 
     callbacks = fmi2CallbackFunctions()
     callbacks.logger = fmi2CallbackLoggerTYPE(logger)
@@ -70,11 +72,12 @@ def _drive(unzipdir: str, scenario: str, logging_on: bool) -> dict:
         steps.append([label, status])
         return status
 
-    def open_slave(mode):
+    def open_slave(mode, name="probe"):
         s = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
-                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="probe")
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
         s.instantiate(callbacks=callbacks, loggingOn=logging_on)
-        s.setInteger([vr["mode"]], [mode])
+        if mode is not None:
+            s.setInteger([vr["mode"]], [mode])
         return s
 
     def initialize(s):
@@ -152,6 +155,21 @@ def _drive(unzipdir: str, scenario: str, logging_on: bool) -> dict:
         s.setInteger([vr["mode"]], [1])
         initialize(s)
         s.freeInstance()
+    elif scenario == "reuse":
+        # a freed instance is kept idle and reset for the next one: a fresh slave, the new
+        # instance's name on its messages
+        first = open_slave(2, "first")
+        initialize(first)
+        first.setReal([vr["u"]], [1.0])
+        record("doStep-first", first.fmi2DoStep, first.component, 0.0, 0.1, 1)
+        first.freeInstance()
+        second = open_slave(None, "second")
+        out["mode_fresh"] = second.getInteger([vr["mode"]])[0]
+        out["u_fresh"] = second.getReal([vr["u"]])[0]
+        second.setInteger([vr["mode"]], [2])
+        initialize(second)
+        record("doStep-second", second.fmi2DoStep, second.component, 0.0, 0.1, 1)
+        second.freeInstance()
     elif scenario == "inner_fatal":
         # pythonfmu releases the slave's Python objects at the Fatal and again when the
         # instance is freed.  Re-reading the model description each cycle (as a host opening
@@ -203,7 +221,7 @@ def _drive(unzipdir: str, scenario: str, logging_on: bool) -> dict:
 def fmus(tmp_path_factory) -> dict:
     """The probe FMU built with pythonfmu, as is ("plain") and with the shim ("shim")."""
     if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the native shim cannot be compiled")
+        pytest.skip("gcc is not installed: the status shim cannot be compiled")
     from fmpy import read_model_description
 
     from drive_rattle_build.shim import install_shim
@@ -309,6 +327,16 @@ def test_reset_reads_the_new_status_address(fmus, tmp_path):
     assert [m[2] for m in r["log"]] == [f"exit refused {PERCENT}"] * 2
 
 
+def test_a_freed_instance_is_reset_for_the_next_one(fmus, tmp_path):
+    """pythonfmu's instantiation leaks: the shim keeps a freed instance idle and resets it for
+    the next fmi2Instantiate of the same resources folder; the host sees a new instance."""
+    r = run(fmus["shim"], tmp_path / "fmu", "reuse")
+    assert statuses(r)["doStep-first"] == statuses(r)["doStep-second"] == ERROR
+    assert (r["mode_fresh"], r["u_fresh"]) == (0, 0.0)  # a new slave object
+    assert r["names"] == ["first", "second"]
+    assert [m[2] for m in r["log"]] == [f"step refused at t=0.0 {PERCENT}"] * 2
+
+
 def test_resource_directory_with_non_ascii_percent_and_space(fmus, tmp_path):
     unzipdir = tmp_path / "dïr 100% é" / "fmu"
     r = run(fmus["shim"], unzipdir, "normal")
@@ -356,19 +384,19 @@ def test_without_the_shim_the_error_is_lost(fmus, tmp_path):
 def test_compile_shim_reports_compiler_errors(tmp_path, monkeypatch):
     if shutil.which("gcc") is None:
         pytest.skip("gcc is not installed")
-    from drive_rattle_build import shim as native
+    from drive_rattle_build import shim
 
     broken = tmp_path / "broken.c"
     broken.write_text("int f(void) { return missing_symbol; }\n")
-    monkeypatch.setattr(native, "SHIM_SOURCE", broken)
+    monkeypatch.setattr(shim, "SHIM_SOURCE", broken)
     with pytest.raises(RuntimeError, match="missing_symbol"):
-        native.compile_shim(tmp_path / "x.so", "x_pythonfmu.so", 4, 5)
+        shim.compile_shim(tmp_path / "x.so", "x_pythonfmu.so", 4, 5)
     with pytest.raises(ValueError):
-        native.compile_shim(tmp_path / "x.so", "../x.so", 4, 5)
+        shim.compile_shim(tmp_path / "x.so", "../x.so", 4, 5)
     with pytest.raises(ValueError, match="model_identifier"):
-        native.compile_shim(tmp_path / "x.so", "x.so", 4, 5, model_identifier='a"; b')
+        shim.compile_shim(tmp_path / "x.so", "x.so", 4, 5, model_identifier='a"; b')
     with pytest.raises(ValueError, match="vr_last_successful_time"):
-        native.compile_shim(tmp_path / "x.so", "x.so", 4, 5, vr_last_successful_time=-1)
+        shim.compile_shim(tmp_path / "x.so", "x.so", 4, 5, vr_last_successful_time=-1)
 
 
 if __name__ == "__main__":
