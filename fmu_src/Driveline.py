@@ -11,11 +11,4 @@ from drive_rattle_fmi.slave import hold_namespace, slave_class
 
 hold_namespace(globals())
 
-Driveline = slave_class(
-    "Driveline",
-    description=(
-        "Driveline around the drive-rattle gear mesh: input-shaft kinematics from engine orders "
-        "or a measured speed table, output shaft as a torsional spring-damper to a reflected "
-        "vehicle inertia with drag"),
-    doc=("Engine-order (or measured) pinion kinematics out; wheel angle and speed in, "
-         "output-shaft load torque out."))
+Driveline = slave_class("Driveline")

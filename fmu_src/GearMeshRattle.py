@@ -10,12 +10,4 @@ from drive_rattle_fmi.slave import hold_namespace, slave_class
 
 hold_namespace(globals())
 
-GearMeshRattle = slave_class(
-    "GearMeshRattle",
-    description=(
-        "Transmission drive rattle: gear-mesh impact (Hertz, every tooth pair, both flanks) and "
-        "flank friction of a helical pair with backlash; kinematic pinion, wheel integrated "
-        "inside (Theodossiades, Rahnejat, De la Cruz, Kelly, ENOC 2008)"),
-    doc=("Helical gear mesh with backlash: Hertzian impacts of every tooth pair on both flanks "
-         "and mixed boundary/viscous flank friction; pinion kinematics in, wheel motion and "
-         "torques out."))
+GearMeshRattle = slave_class("GearMeshRattle")

@@ -15,8 +15,6 @@ import argparse
 import sys
 from pathlib import Path
 
-from drive_rattle.interface import MODELS
-
 from .compiler import BuildError
 from .documentation import interface_docs
 from .library import build_in_place
@@ -28,12 +26,9 @@ DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co
 
 def update_docs() -> None:
     """Regenerate the interface tables of docs/fmi.md from the specs."""
-    from .fmu import slave_class
-
     build_in_place()
     text = FMI_DOCS.read_text(encoding="utf-8")
-    classes = {name: slave_class(name) for name in MODELS}
-    FMI_DOCS.write_text(interface_docs(text, classes), encoding="utf-8")
+    FMI_DOCS.write_text(interface_docs(text), encoding="utf-8")
 
 
 def main(argv=None) -> int:

@@ -69,6 +69,14 @@ def c_compiler() -> str:
     return str(wrapper)
 
 
+#: IEEE arithmetic without contraction (docs/model_library.md: "Reproducible numbers"),
+#: warnings on: the flags of every C the build compiles for an FMU or the library.
+IEEE_CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra")
+#: The FMI platforms the build compiles for: the ziglang target of each (None: the build
+#: machine's compiler).
+TARGETS = {"linux64": None, "win64": "x86_64-windows-gnu"}
+
+
 def zig_cc(target: str) -> list[str]:
     """``python -m ziglang cc -target <target>`` (the ziglang package, a dependency): the
     cross-compiler of the win64 binaries."""

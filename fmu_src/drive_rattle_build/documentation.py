@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import html
 
-from drive_rattle.interface import MODELS
+from drive_rattle.catalog import UNITS, UnitSpec
+from drive_rattle.interface import DEFAULT_EXPERIMENT, MODELS
 from drive_rattle.parameters import specs
 from drive_rattle.units import input_starts
 
@@ -14,51 +15,51 @@ from .compiler import BuildError
 from .paths import FMI_DOCS
 
 
-def interface_rows(slave_cls) -> list[tuple[str, str, str, str, str, str]]:
+def interface_rows(unit: UnitSpec) -> list[tuple[str, str, str, str, str, str]]:
     """``(name, causality, type, unit, start/limits, description)`` for every public variable
-    (the inputs' start values are the model library's)."""
+    of ``unit`` (the inputs' start values are the model library's)."""
     rows = []
-    starts = input_starts(slave_cls.KIND)
-    for _attr, spec in specs(slave_cls.PARAMETERS):
+    starts = input_starts(unit.kind)
+    for _attr, spec in specs(unit.parameters):
         limits = spec.allowed() if spec.fmi_type in ("Real", "Integer") else ""
         start = repr(spec.default) if spec.fmi_type != "Boolean" else str(spec.default).lower()
         allowed = f"{start}; {limits}".rstrip("; ")
         rows.append((spec.name, "parameter", spec.fmi_type, spec.unit, allowed, spec.description))
-    for spec in slave_cls.INPUTS:
+    for spec in unit.inputs:
         allowed = repr(starts[spec.name])
         if spec.minimum is not None:
             allowed += f"; [{spec.minimum:g}, {spec.maximum:g}] {spec.unit}"
         rows.append((spec.name, "input", spec.fmi_type, spec.unit, allowed, spec.description))
-    for spec in slave_cls.OUTPUTS:
+    for spec in unit.outputs:
         rows.append((spec.name, "output", spec.fmi_type, spec.unit, "", spec.description))
     return rows
 
 
-def markdown_interface(slave_cls) -> str:
+def markdown_interface(unit: UnitSpec) -> str:
     """Markdown table of the interface."""
     head = "| name | causality | type | unit | start; allowed | description |\n"
     head += "|---|---|---|---|---|---|\n"
     body = "".join(
         "| `" + r[0] + "` | " + " | ".join(c.replace("|", "\\|") for c in r[1:]) + " |\n"
-        for r in interface_rows(slave_cls))
+        for r in interface_rows(unit))
     return head + body
 
 
-def html_page(slave_cls, how_to_run: str,
+def html_page(unit: UnitSpec, how_to_run: str,
               build_note: str = "built with pythonfmu and a status shim (linux64), the model "
                                 "a C library (linux64, win64)") -> str:
     """documentation/index.html of the FMU (``build_note``: how this flavour is built)."""
     rows = "\n".join(
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
-        for r in interface_rows(slave_cls))
-    exp = slave_cls.DEFAULT_EXPERIMENT
+        for r in interface_rows(unit))
+    exp = DEFAULT_EXPERIMENT
     return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>{slave_cls.__name__}</title>
+<html lang="en"><head><meta charset="utf-8"><title>{unit.model}</title>
 <style>body{{font-family:sans-serif;max-width:70em}}td,th{{border:1px solid #ccc;padding:2px 6px;
 vertical-align:top}}table{{border-collapse:collapse}}code{{background:#f4f4f4}}</style></head>
 <body>
-<h1>{slave_cls.__name__}</h1>
-<p>{html.escape(slave_cls.description)}</p>
+<h1>{unit.model}</h1>
+<p>{html.escape(unit.description)}</p>
 <p>FMI 2.0 co-simulation, {build_note}. Default
 experiment: start {exp['startTime']} s, stop {exp['stopTime']} s, communication step
 {exp['stepSize']} s. All values are SI; display units are declared in the modelDescription.</p>
@@ -92,9 +93,9 @@ needs escaping beyond what the shim decodes (any %XX is decoded).</p>
 """
 
 
-def interface_docs(text: str, slave_classes: dict) -> str:
+def interface_docs(text: str) -> str:
     """``text`` (docs/fmi.md) with each ``<!-- BEGIN <Model> interface -->`` ...
-    ``<!-- END ... -->`` block replaced by the interface table of ``slave_classes[<Model>]``.
+    ``<!-- END ... -->`` block replaced by the interface table of the unit ``<Model>``.
     BuildError when a marker is missing."""
     for name in MODELS:
         begin, end = f"<!-- BEGIN {name} interface -->", f"<!-- END {name} interface -->"
@@ -102,5 +103,5 @@ def interface_docs(text: str, slave_classes: dict) -> str:
         _, _, tail = rest.partition(end)
         if not rest:
             raise BuildError(f"{FMI_DOCS} lacks the marker {begin}")
-        text = f"{head}{begin}\n{markdown_interface(slave_classes[name])}{end}{tail}"
+        text = f"{head}{begin}\n{markdown_interface(UNITS[name])}{end}{tail}"
     return text

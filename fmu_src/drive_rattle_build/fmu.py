@@ -23,9 +23,10 @@ import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
+from drive_rattle.catalog import UNITS
 from drive_rattle.interface import MODELS
 
-from . import library, templates
+from . import library, model_description, templates
 from .compiler import BuildError, c_compiler
 from .documentation import HOW_TO_RUN, html_page
 from .identity import fmu_guid
@@ -92,14 +93,23 @@ def guid(name: str) -> str:
     return fmu_guid(name, "pythonfmu", glue_id(name))
 
 
+#: The generation tool of the pythonfmu FMUs' modelDescription.
+def generation_tool() -> str:
+    from pythonfmu import __version__ as pythonfmu_version
+
+    return f"drive-rattle-build (pythonfmu {pythonfmu_version})"
+
+
 @contextlib.contextmanager
-def _with_guid(cls, value: str):
-    """``cls`` renders ``value`` as its modelDescription's GUID within the block."""
-    cls.FMU_GUID = value
+def _describing(cls, name: str):
+    """Within the block, ``cls`` hands pythonfmu's builder the modelDescription of ``name``
+    rendered from the specs (``model_description.render``) with its GUID."""
+    cls.MODEL_DESCRIPTION = model_description.render(name, guid(name), generation_tool(),
+                                                     needs_execution_tool=True)
     try:
         yield
     finally:
-        cls.FMU_GUID = None
+        cls.MODEL_DESCRIPTION = None
 
 
 def stage_references(name: str, staging: Path) -> list[Path]:
@@ -149,8 +159,8 @@ def package(script: Path, out_dir: Path, references: bool = True,
         doc = tmp / "documentation"
         doc.mkdir()
         (doc / "index.html").write_text(
-            html_page(cls, HOW_TO_RUN.format(name=name)), encoding="utf-8")
-        with _with_guid(cls, guid(name)):
+            html_page(UNITS[name], HOW_TO_RUN.format(name=name)), encoding="utf-8")
+        with _describing(cls, name):
             FmuBuilder.build_FMU(script, dest=fmu, project_files=packages,
                                  documentation_folder=doc, canGetAndSetFMUstate=True,
                                  canSerializeFMUstate=True)

@@ -16,17 +16,15 @@ from pathlib import Path
 from drive_rattle import library as binding
 
 from . import model_tables
-from .compiler import BuildError, c_compiler, compile_library, zig_cc
+from .compiler import IEEE_CFLAGS, TARGETS, BuildError, c_compiler, compile_library, zig_cc
 from .paths import MODEL_SOURCE
 
-#: IEEE arithmetic without contraction (docs/model.md: "Reproducible numbers"), warnings on,
-#: the interface exported.
-CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra",
-          "-DRM_BUILD_SHARED")
+#: The IEEE flags with the interface exported.
+CFLAGS = (*IEEE_CFLAGS, "-DRM_BUILD_SHARED")
 #: platform folder -> (file name of the library, ziglang target or None for the build
 #: machine's compiler).
-PLATFORMS = {"linux64": ("rattle_model.so", None),
-             "win64": ("rattle_model.dll", "x86_64-windows-gnu")}
+PLATFORMS = {platform: (f"rattle_model{'.dll' if target else '.so'}", target)
+             for platform, target in TARGETS.items()}
 
 
 def sources() -> list[Path]:

@@ -22,40 +22,31 @@ package for win64.
 
 from __future__ import annotations
 
-import datetime
 import difflib
 import hashlib
-import importlib.util
 import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from xml.etree import ElementTree
-from xml.etree.ElementTree import Element, SubElement
+from xml.etree.ElementTree import Element
 
-from drive_rattle import library as binding
+from drive_rattle.catalog import UNITS
 from drive_rattle.interface import (
-    DEFAULT_EXPERIMENT,
     DRIVELINE,
-    DRIVELINE_INPUTS,
-    DRIVELINE_OUTPUTS,
     MESH,
-    MESH_INPUTS,
-    MESH_OUTPUTS,
     MODELS,
 )
-from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
 
-from . import model_tables, templates
-from .compiler import BuildError, c_compiler, compile_library, zig_cc
+from . import model_description, model_tables, templates
+from .compiler import IEEE_CFLAGS, TARGETS, BuildError, c_compiler, compile_library, zig_cc
 from .documentation import html_page
+from .fmu import validate
 from .identity import fmu_guid
-from .library import build_in_place, source_flags
-from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, SOURCE, TEMPLATES
+from .library import source_flags
+from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
 from .shim import fmi2_headers
 
 #: The FMI 2.0 face, compiled with the model library into every native FMU.
@@ -65,10 +56,11 @@ GLUE_HEADERS = ("rattle_fmi_common.h",)
 CONFIG_HEADER = "rattle_fmu_config.h"
 #: The FMI 2.0 headers, as the standard ships them (fmpy bundles them).
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-#: IEEE arithmetic without contraction (docs/model.md: "Reproducible numbers"), warnings on.
-CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra")
+#: The IEEE flags (the library's symbols stay hidden: only the fmi2 functions are exported).
+CFLAGS = IEEE_CFLAGS
 #: platform folder -> (binary suffix, ziglang target or None for the build's compiler)
-PLATFORMS = {"linux64": (".so", None), "win64": (".dll", "x86_64-windows-gnu")}
+PLATFORMS = {platform: (".dll" if target else ".so", target)
+             for platform, target in TARGETS.items()}
 #: The file in resources/ that identifies the FMU (the native counterpart of pythonfmu's
 #: slavemodule.txt): its model identifier on the first line.
 RESOURCE_MARKER = "model_identifier.txt"
@@ -162,156 +154,12 @@ def compile_binary(sources: Path, out: Path, platform: str = "linux64",
 
 
 # ------------------------------------------------------------------ modelDescription
-#: Capability flags of <CoSimulation> (the pythonfmu FMUs' too, except needsExecutionTool).
-CAPABILITIES = {
-    "needsExecutionTool": "true",
-    "canHandleVariableCommunicationStepSize": "true",
-    "canInterpolateInputs": "false",
-    "canBeInstantiatedOnlyOncePerProcess": "false",
-    "canNotUseMemoryManagementFunctions": "true",
-    "canGetAndSetFMUstate": "true",
-    "canSerializeFMUstate": "true",
-}
-LOG_CATEGORIES = {
-    "logStatusWarning": "Messages with status fmi2Warning",
-    "logStatusDiscard": "Messages with status fmi2Discard",
-    "logStatusError": "Messages with status fmi2Error (rejected calls, with the reason)",
-    "logStatusFatal": "Messages with status fmi2Fatal",
-    "logAll": "All messages",
-}
-#: The units' descriptions and the FMUs' metadata.
-DESCRIPTIONS = {
-    MESH: ("Transmission drive rattle: gear-mesh impact (Hertz, every tooth pair, both "
-           "flanks) and flank friction of a helical pair with backlash; kinematic pinion, "
-           "wheel integrated inside (Theodossiades, Rahnejat, De la Cruz, Kelly, ENOC 2008)"),
-    DRIVELINE: ("Driveline around the drive-rattle gear mesh: input-shaft kinematics from "
-                "engine orders or a measured speed table, output shaft as a torsional "
-                "spring-damper to a reflected vehicle inertia with drag"),
-}
-ABOUT = {"author": "drive-rattle developers", "version": "0.1.0", "license": "MIT"}
-#: Each unit's specs: (parameter class, inputs, outputs, library kind).
-UNIT_SPECS = {MESH: (MeshParameters, MESH_INPUTS, MESH_OUTPUTS, binding.MESH),
-              DRIVELINE: (DrivelineParameters, DRIVELINE_INPUTS, DRIVELINE_OUTPUTS,
-                          binding.DRIVELINE)}
-
-
-def _unit_definitions():
-    """(BASE_UNITS, DISPLAY_UNITS, check_display_unit) of ``drive_rattle_fmi.units``, loaded
-    from its file when the package does not import (it needs pythonfmu)."""
-    try:
-        from drive_rattle_fmi import units
-    except ImportError:
-        spec = importlib.util.spec_from_file_location(
-            "_drive_rattle_fmi_units", SOURCE / "drive_rattle_fmi" / "units.py")
-        units = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(units)
-    return units.BASE_UNITS, units.DISPLAY_UNITS, units.check_display_unit
-
-
-def _fmt(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, float):
-        return repr(value)
-    return str(value)
-
-
-def render_model_description(model: str, guid: str, generation_tool: str = GENERATION_TOOL,
-                             needs_execution_tool: bool = False,
-                             sources: Sequence[str] = (),
-                             generation_time: str | None = None) -> Element:
-    """The complete modelDescription of ``model``, rendered from the specs (parameters,
-    signals, default experiment; the inputs' start values from the model library): FMI 2.0
-    schema order, units and display units, limits, InitialUnknowns, outputs without direct
-    feedthrough.  ``sources``: the C files of <SourceFiles> (none: no element)."""
-    base_units, display_units, check_display_unit = _unit_definitions()
-    parameters, inputs, outputs, kind = UNIT_SPECS[model]
-    if generation_time is None:
-        generation_time = datetime.datetime.now(datetime.timezone.utc).isoformat(
-            timespec="seconds")
-    root = Element("fmiModelDescription", {
-        "fmiVersion": "2.0", "modelName": model, "guid": guid,
-        "description": DESCRIPTIONS[model], **ABOUT,
-        "generationTool": generation_tool, "generationDateAndTime": generation_time,
-        "variableNamingConvention": "structured", "numberOfEventIndicators": "0"})
-    cosim = SubElement(root, "CoSimulation", {
-        "modelIdentifier": model, **CAPABILITIES,
-        "needsExecutionTool": "true" if needs_execution_tool else "false"})
-    if sources:
-        files = SubElement(cosim, "SourceFiles")
-        for name in sources:
-            SubElement(files, "File", {"name": name})
-
-    # (name, causality, spec, start) in value-reference order
-    starts = _input_starts(kind)
-    rows = [(spec.name, "parameter", spec, spec.default) for _, spec in specs(parameters)]
-    rows += [(s.name, "input", s, starts[s.name]) for s in inputs]
-    rows += [(s.name, "output", s, None) for s in outputs]
-    table = binding.variables(kind, binding.load(build_in_place()))
-    if [r[0] for r in rows] != [v["name"] for v in table]:
-        raise BuildError(f"{model}: the model library's variables are not the specs' "
-                         "(rebuild the library: drive-rattle-build --library)")
-
-    units = SubElement(root, "UnitDefinitions")
-    for unit in sorted({spec.unit for _, _, spec, _ in rows if spec.fmi_type == "Real"}):
-        check_display_unit(unit, None)
-        u = SubElement(units, "Unit", {"name": unit})
-        SubElement(u, "BaseUnit", {k: str(e) for k, e in base_units[unit].items()})
-        for name, factor in display_units.get(unit, {}).items():
-            SubElement(u, "DisplayUnit", {"name": name, "factor": repr(factor)})
-    categories = SubElement(root, "LogCategories")
-    for name, text in LOG_CATEGORIES.items():
-        SubElement(categories, "Category", {"name": name, "description": text})
-    SubElement(root, "DefaultExperiment", {k: repr(v) for k, v in DEFAULT_EXPERIMENT.items()})
-
-    variables = SubElement(root, "ModelVariables")
-    for vr, (name, causality, spec, start) in enumerate(rows):
-        fmi_type = spec.fmi_type
-        variability = ("fixed" if causality == "parameter" else
-                       "continuous" if fmi_type == "Real" else "discrete")
-        attrs = {"name": name, "valueReference": str(vr), "description": spec.description,
-                 "causality": causality, "variability": variability}
-        typed = {}
-        if causality != "output":
-            typed["start"] = _fmt(start)
-            if fmi_type in ("Real", "Integer"):
-                if spec.minimum is not None:
-                    typed["min"] = _fmt(spec.minimum)
-                if spec.maximum is not None:
-                    typed["max"] = _fmt(spec.maximum)
-        if causality == "parameter":
-            attrs["initial"] = "exact"
-        if fmi_type == "Real":
-            check_display_unit(spec.unit, spec.display_unit)
-            typed["unit"] = spec.unit
-            if spec.display_unit:
-                typed["displayUnit"] = spec.display_unit
-            # attribute order as the schema lists them: unit first, to read
-            typed = {k: typed[k] for k in ("unit", "displayUnit", "min", "max", "start")
-                     if k in typed}
-        sv = SubElement(variables, "ScalarVariable", attrs)
-        SubElement(sv, fmi_type, typed)
-
-    structure = SubElement(root, "ModelStructure")
-    indices = [str(vr + 1) for vr, row in enumerate(rows) if row[1] == "output"]
-    outputs_el = SubElement(structure, "Outputs")
-    for index in indices:
-        # co-simulation outputs are values at the communication point, computed by the last
-        # step from the inputs held over it: no direct feedthrough of the current inputs
-        SubElement(outputs_el, "Unknown", {"index": index, "dependencies": ""})
-    initial = SubElement(structure, "InitialUnknowns")
-    for index in indices:
-        # initial outputs depend on the parameters and the initial inputs (the start solved)
-        SubElement(initial, "Unknown", {"index": index})
-    return root
-
-
-def _input_starts(kind: int) -> dict[str, float]:
-    """The inputs' start values of a unit kind, from the model library (built in place)."""
-    from drive_rattle.units import input_starts
-
-    build_in_place()
-    return input_starts(kind)
+def render_model_description(model: str, guid: str, generation_time: str | None = None
+                             ) -> Element:
+    """The native FMU's modelDescription (``model_description.render``: the same rendering as
+    the pythonfmu FMU's, no execution tool, the C sources listed)."""
+    return model_description.render(model, guid, GENERATION_TOOL, needs_execution_tool=False,
+                                    sources=source_files(), generation_time=generation_time)
 
 
 def interface_of(root: Element, reference: Element) -> Element:
@@ -354,20 +202,6 @@ result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
 """
 
 
-def _documentation_unit(model: str) -> type:
-    """What ``documentation.html_page`` reads of a unit (its name, description, specs and
-    default experiment), the inputs with their start values from the library."""
-    from types import SimpleNamespace
-
-    parameters, inputs, outputs, kind = UNIT_SPECS[model]
-    starts = _input_starts(kind)
-    with_starts = tuple(SimpleNamespace(**{f: getattr(s, f) for f in s.__dataclass_fields__},
-                                        start=starts[s.name]) for s in inputs)
-    return type(model, (), {"description": DESCRIPTIONS[model], "PARAMETERS": parameters,
-                            "INPUTS": with_starts, "OUTPUTS": outputs,
-                            "DEFAULT_EXPERIMENT": DEFAULT_EXPERIMENT})
-
-
 def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = None,
                    platforms: Sequence[str] = tuple(PLATFORMS),
                    reference_files: Sequence[Path] = ()) -> Path:
@@ -384,9 +218,9 @@ def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = N
         stage_sources(model, guid, sources)
         binaries = {p: compile_binary(sources, tmp / "binaries" / p / f"{model}"
                                       f"{PLATFORMS[p][0]}", p, cc) for p in platforms}
-        root = render_model_description(model, guid, sources=source_files())
+        root = render_model_description(model, guid)
         xml = ElementTree.tostring(root, encoding="unicode", xml_declaration=False)
-        page = html_page(_documentation_unit(model), NATIVE_HOW_TO_RUN.format(name=model),
+        page = html_page(UNITS[model], NATIVE_HOW_TO_RUN.format(name=model),
                          build_note="implemented in C (no Python at run time), binaries for "
                                     f"{' and '.join(platforms)} and C sources")
         part = fmu.with_name(f".{fmu.name}.{os.getpid()}.part")
@@ -422,24 +256,6 @@ def check_interface(fmu: Path) -> None:
             f"native {model}: the interface differs from {templates.template_path(model)} "
             "(review the change, rewrite the templates with `drive-rattle-build "
             f"--update-templates` and commit their diff):\n{shown}")
-
-
-def validate(fmu: Path, use_fmutool: bool = True) -> None:
-    """fmpy's validate_fmu and (if installed) ``fmutool -check``; BuildError on problems (the
-    check of ``drive_rattle_build.fmu.validate``, here while that module is being moved to the
-    model library)."""
-    from fmpy.validation import validate_fmu
-
-    problems = validate_fmu(str(fmu))
-    if problems:
-        raise BuildError(f"{fmu.name}: fmpy validate_fmu found problems:\n" + "\n".join(problems))
-    tool = shutil.which("fmutool") or (Path(sys.executable).parent / "fmutool")
-    if use_fmutool and Path(tool).exists():
-        run = subprocess.run([str(tool), "-input", str(fmu), "-check"], capture_output=True,
-                             text=True)
-        report = run.stdout + run.stderr
-        if run.returncode != 0 or "ERROR" in report:
-            raise BuildError(f"{fmu.name}: fmutool -check failed:\n{report}")
 
 
 def build_native(out_dir: Path = DIST / NATIVE_SUBDIR, use_fmutool: bool = True,

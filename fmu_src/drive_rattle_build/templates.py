@@ -3,7 +3,7 @@ committed ``modelDescription_templates/<Model>.xml``.
 
 The templates are a checked OUTPUT of the build, not a source: the interface is declared in
 the specs (``drive_rattle.parameters``, ``drive_rattle.interface``; the inputs' start values
-computed by the model library) and rendered by ``drive_rattle_fmi.model_description``.  A
+computed by the model library) and rendered by ``drive_rattle_build.model_description``.  A
 build whose interface differs from its template fails until the template is rewritten
 (``drive-rattle-build --update-templates``) and the diff reviewed and committed: an interface
 change is always a visible, deliberate diff.  Each template's first line is a comment saying

@@ -47,7 +47,8 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from pythonfmu.variables import Boolean, Integer, Real, String
 
 from drive_rattle import interface, library
-from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
+from drive_rattle.catalog import UNITS
+from drive_rattle.parameters import specs
 
 #: Names of the hidden variables of the status shim: the two String variables of the status
 #: channel and the Real the shim answers fmi2GetRealStatus(fmi2LastSuccessfulTime) from.
@@ -127,12 +128,10 @@ class RattleSlave(Fmi2Slave):
     INPUTS: ClassVar[tuple] = ()
     OUTPUTS: ClassVar[tuple] = ()
     DEFAULT_EXPERIMENT: ClassVar[dict] = interface.DEFAULT_EXPERIMENT
-    #: The FMU's GUID, written into the modelDescription by the build (None: pythonfmu's own).
-    FMU_GUID: ClassVar[str | None] = None
+    #: The FMU's modelDescription, rendered from the specs by the build
+    #: (``drive_rattle_build.model_description``) and handed to pythonfmu's builder here.
+    MODEL_DESCRIPTION: ClassVar = None
     description: ClassVar[str] = ""
-    author = "drive-rattle developers"
-    license = "MIT"
-    version = "0.1.0"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -390,9 +389,11 @@ class RattleSlave(Fmi2Slave):
 
     # ------------------------------------------------------------------ model description
     def to_xml(self, model_options=None):
-        from .model_description import model_description
-
-        return model_description(self, guid=self.FMU_GUID)
+        """The modelDescription the build rendered (pythonfmu's builder writes it)."""
+        if self.MODEL_DESCRIPTION is None:
+            raise RuntimeError(f"{type(self).__name__}: the modelDescription is rendered by "
+                               "the build (drive-rattle-build), not by the slave")
+        return self.MODEL_DESCRIPTION
 
 
 def _length(values) -> int:
@@ -471,26 +472,19 @@ def _check_table(cls, lib, registered: list[tuple[str, str, str]]) -> None:
             "rebuild the FMU")
 
 
-#: The unit of each model and its interface.
-_UNITS = {
-    interface.MESH: (library.MESH, MeshParameters, interface.MESH_INPUTS,
-                     interface.MESH_OUTPUTS),
-    interface.DRIVELINE: (library.DRIVELINE, DrivelineParameters, interface.DRIVELINE_INPUTS,
-                          interface.DRIVELINE_OUTPUTS),
-}
 _CLASSES: dict[str, type] = {}
 
 
-def slave_class(model: str, description: str, doc: str = "") -> type:
+def slave_class(model: str) -> type:
     """The slave class of ``model`` (``interface.MODELS``), made once per process: a
-    :class:`RattleSlave` of the model's unit kind, parameters and signals, named ``model``
-    (the FMU's model identifier), with the modelDescription's ``description``."""
+    :class:`RattleSlave` of the unit's kind, parameters and signals (``catalog.UNITS``), named
+    ``model`` (the FMU's model identifier)."""
     cls = _CLASSES.get(model)
     if cls is None:
-        kind, parameters, inputs, outputs = _UNITS[model]
+        unit = UNITS[model]
         cls = type(model, (RattleSlave,), {
-            "__doc__": doc or description, "__module__": __name__, "KIND": kind,
-            "PARAMETERS": parameters, "INPUTS": inputs, "OUTPUTS": outputs,
-            "description": description})
+            "__doc__": unit.summary, "__module__": __name__, "KIND": unit.kind,
+            "PARAMETERS": unit.parameters, "INPUTS": unit.inputs, "OUTPUTS": unit.outputs,
+            "description": unit.description})
         _CLASSES[model] = cls
     return cls

@@ -26,7 +26,7 @@ import pytest
 from fmpy import read_model_description
 
 from drive_rattle.interface import MODELS
-from drive_rattle_build.native import render_model_description, source_files
+from drive_rattle_build.native import render_model_description
 from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.regression import reference_files
 
@@ -56,8 +56,7 @@ def fmu_folder(model: str, folder: Path, flags) -> tuple[Path, Path]:
     (binary, folder)."""
     binary, _, guid = build_fmu_binary(model, folder, flags)
     md = folder / "modelDescription.xml"
-    md.write_text(ElementTree.tostring(render_model_description(model, guid,
-                                                                sources=source_files()),
+    md.write_text(ElementTree.tostring(render_model_description(model, guid),
                                        encoding="unicode"), encoding="utf-8")
     return binary, folder
 

@@ -42,6 +42,6 @@ DISPLAY_UNITS: dict[str, dict[str, float]] = {
 def check_display_unit(unit: str, display_unit: str | None) -> None:
     """Raise ValueError if a spec names a unit or display unit that is not defined here."""
     if unit not in BASE_UNITS:
-        raise ValueError(f"unit {unit!r} has no definition in drive_rattle_fmi.units")
+        raise ValueError(f"unit {unit!r} has no definition in drive_rattle_build.unit_definitions")
     if display_unit is not None and display_unit not in DISPLAY_UNITS.get(unit, {}):
         raise ValueError(f"display unit {display_unit!r} is not defined for unit {unit!r}")
