@@ -517,19 +517,6 @@ static Shim* usable(fmi2Component c, const char* function)
 
 /* ------------------------------------------------------------------ resource location */
 
-/* The first line of a small text file (without the line end) into `out`; 0 on success. */
-static int first_line(const char* path, char* out, size_t size)
-{
-    FILE* f = fopen(path, "r");
-    size_t n;
-    if (f == NULL) return 1;
-    if (fgets(out, (int)size, f) == NULL) out[0] = '\0';
-    fclose(f);
-    n = strcspn(out, "\r\n");
-    out[n] = '\0';
-    return 0;
-}
-
 static int is_regular_file(const char* path)
 {
     struct stat st;
@@ -554,6 +541,8 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
     char file[PATH_BUFFER + 64];
     char module[256];
     char shown[256];
+    char marker_why[200];
+    int marker;
     struct stat st;
 
     *fd = -1;
@@ -581,7 +570,15 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
         return NULL;
     }
     snprintf(file, sizeof file, "%s/slavemodule.txt", real);
-    if (first_line(file, module, sizeof module) != 0) {
+    /* read only when a regular file, opened non-blocking: a FIFO here must not block */
+    marker = rattle_read_marker(file, module, sizeof module, marker_why, sizeof marker_why);
+    if (marker == RATTLE_MARKER_BAD) {
+        snprintf(why, why_size, "names '%s', whose slavemodule.txt %s: not the resources "
+                                "folder of this FMU", shown, marker_why);
+        free(real);
+        return NULL;
+    }
+    if (marker == RATTLE_MARKER_MISSING) {
         snprintf(file, sizeof file, "%s/resources/slavemodule.txt", real);
         if (is_regular_file(file))
             snprintf(why, why_size, "names '%s', the folder the FMU was unpacked to; allowed: "
