@@ -25,7 +25,12 @@ from drive_rattle.parameters import MeshParameters, specs
 from drive_rattle_build import write_system
 from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, time_grid
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
-from drive_rattle_cosim.ssp import SSD_NAME, consistent_input_starts, validate_ssd
+from drive_rattle_cosim.ssp import (
+    PARAMETER_SET,
+    SSD_NAME,
+    consistent_input_starts,
+    validate_ssd,
+)
 
 STOP, STEP = 0.5, 1e-4
 RUNNER = Path(__file__).with_name("run_master.py")
@@ -121,6 +126,8 @@ def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ss
     assert [c.name for c in ssd.system.elements] == ["Driveline", "GearMeshRattle"]
     assert len(ssd.system.connections) == 6
     text = (tmp_path / SSD_NAME).read_text()
+    # one parameter set per component (parameters and input starts), of one name
+    assert text.count(f'<ssv:ParameterSet version="1.0" name="{PARAMETER_SET}">') == 2
     n_parameters = len(list(specs(MeshParameters))) + len(list(specs(DrivelineParameters)))
     # every parameter (the physics' and the two input-handling ones per unit), every input
     assert text.count("<ssv:Parameter ") == n_parameters + 2 * 2 + 6
@@ -136,6 +143,14 @@ def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
     result, _ = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
     assert MASTER_GRIDS["libcosim"] == "nanoseconds"
     assert_identical(result, harness(fmus, "nanoseconds"), first=1)
+
+
+def test_ecos_runs_the_shipped_system(fmus, system_ssp):
+    """ecos (Vico, native C++): exchanges during initialization, accumulated time; records
+    from the start.  Its parameter set is named (masters.PARAMETER_SET); here the SSP binds
+    the defaults, so the run is the default one either way."""
+    result, _ = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
+    assert_identical(result, harness(fmus, MASTER_GRIDS["ecos"]), first=0)
 
 
 def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
