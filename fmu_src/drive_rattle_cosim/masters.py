@@ -8,9 +8,14 @@ Each master places its points with its own arithmetic (``MASTER_GRIDS``,
 (tests/cosim/test_masters.py), so these functions are also the reference for what each master
 computes.  docs/tools.md explains each workaround for users of the masters directly.
 
-Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0 and
-gemseo-fmu 3.1.1.  Run one master per process where a master can abort at exit (libcosim and
-fmpy in one process).
+The SSP masters that ignore the SSD's parameter bindings (fmpy's SSP runner,
+fmu-manipulation-toolbox's container) get them from their runners here (``ssp.read_bindings``);
+ecos applies them only when the set is named, which ``run_ecos`` does; gemseo-fmu gets
+parameters its own way (``gemseo_system(..., parameters)``).
+
+Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0,
+gemseo-fmu 3.1.1 and ecospy 0.7.2.  Run one master per process where a master can abort at
+exit (libcosim and fmpy in one process).
 """
 
 from __future__ import annotations
