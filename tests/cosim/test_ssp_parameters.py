@@ -52,7 +52,7 @@ _REFERENCES: dict = {}
 
 
 def harness(fmus, parameters: dict, grid: str, outputs=COUPLING):
-    key = (json.dumps(parameters, sort_keys=True), grid, tuple(outputs))
+    key = (str(fmus[MESH]), json.dumps(parameters, sort_keys=True), grid, tuple(outputs))
     if key not in _REFERENCES:
         with CoSimulation(fmus[MESH], fmus[DRIVELINE], parameters, step=STEP) as sim:
             _REFERENCES[key] = sim.run(STOP, list(outputs), grid=grid)
@@ -86,6 +86,14 @@ def edited(shipped, tmp_path_factory):
     """Both SSPs with EDIT in their SSD."""
     out = tmp_path_factory.mktemp("edited")
     return {kind: edit_bindings(path, EDIT, out / path.name) for kind, path in shipped.items()}
+
+
+@pytest.fixture(scope="module")
+def edited_flavour(flavour_fmus, tmp_path_factory):
+    """(the FMUs of one flavour, DriveRattle.ssp of that flavour with EDIT in its SSD)."""
+    out = tmp_path_factory.mktemp("edited_flavour")
+    plain, _ = write_systems(list(flavour_fmus.values()), out / "dist")
+    return flavour_fmus, edit_bindings(plain, EDIT, out / "DriveRattle.ssp")
 
 
 # ------------------------------------------------------------------ the SSP files
@@ -138,9 +146,11 @@ IGNORED = {
 
 
 @pytest.mark.parametrize("master", list(APPLIED))
-def test_the_edited_parameters_are_applied(master, fmus, edited, tmp_path):
+def test_the_edited_parameters_are_applied(master, edited_flavour, tmp_path):
+    """Both flavours: the pythonfmu FMUs and the native ones (dist/native/DriveRattle.ssp)."""
+    fmus, ssp = edited_flavour
     kind, args = APPLIED[master]
-    result, _ = run_master(kind, ssp=str(edited["plain"]), stop=STOP, dir=str(tmp_path), **args)
+    result, _ = run_master(kind, ssp=str(ssp), stop=STOP, dir=str(tmp_path), **args)
     grid = MASTER_GRIDS[master]
     assert first_difference(result, harness(fmus, EDIT, grid), FIRST[master]) == {}
     assert first_difference(result, harness(fmus, {}, grid), FIRST[master]) != {}
