@@ -6,7 +6,8 @@
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
-own system ``DriveRattle.ssp`` (``native``; ``--no-native`` skips them).
+own system files (``native``; ``--no-native`` skips them).  The system files: ``DriveRattle.ssp``
+and ``DriveRattle_outputs.ssp`` (the same with every output a system output, ``system``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from .library import build_in_place
 from .paths import DIST, FMI_DOCS
 
 DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), "
-               "validate them, and write the system dist/DriveRattle.ssp")
+               "validate them, and write the systems dist/DriveRattle.ssp and "
+               "dist/DriveRattle_outputs.ssp")
 
 
 def update_docs() -> None:
@@ -55,19 +57,21 @@ def main(argv=None) -> int:
             return 0
         # imported here: building the library alone needs none of the FMU tooling
         from .fmu import build
-        from .system import write_system
+        from .system import write_systems
 
         fmus = build(args.out, args.update_templates, not args.no_fmutool)
         for fmu in fmus:
             print(f"built and validated {fmu}")
-        print(f"wrote the system {write_system(fmus, args.out)}")
+        for system in write_systems(fmus, args.out):
+            print(f"wrote the system {system}")
         if not args.no_native:
             from .native import NATIVE_SUBDIR, build_native
 
             native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool)
             for fmu in native:
                 print(f"built and validated {fmu} (native: C only, linux64 and win64)")
-            print(f"wrote the system {write_system(native, args.out / NATIVE_SUBDIR)}")
+            for system in write_systems(native, args.out / NATIVE_SUBDIR):
+                print(f"wrote the system {system}")
     except BuildError as err:
         print(f"drive-rattle-build: {err}", file=sys.stderr)
         return 1

@@ -1,4 +1,5 @@
-"""The system file of the build: ``DriveRattle.ssp`` next to the FMUs."""
+"""The system files of the build: ``DriveRattle.ssp`` and ``DriveRattle_outputs.ssp`` next to
+the FMUs."""
 
 from __future__ import annotations
 
@@ -10,13 +11,19 @@ from drive_rattle.interface import DRIVELINE, MESH
 
 from .compiler import BuildError
 
-#: The system file written next to the FMUs.
+#: The system file written next to the FMUs: runs in every SSP master measured (libcosim,
+#: ecos, fmpy's SSP runner, fmu-manipulation-toolbox's container).
 SYSTEM_NAME = "DriveRattle.ssp"
+#: The same system with every output of both units also a system output, for masters that
+#: expose or record only system connectors (fmu-manipulation-toolbox's container); libcosim
+#: and ecos refuse an SSD with connections to system connectors.
+SYSTEM_OUTPUTS_NAME = "DriveRattle_outputs.ssp"
 
 
-def write_system(fmus: list[Path], out_dir: Path) -> Path:
-    """``out_dir/DriveRattle.ssp``: both FMUs, their connections, every parameter at its
-    default and every input's start value at what its partner outputs at the start (so it
+def write_system(fmus: list[Path], out_dir: Path, system_outputs: bool = False) -> Path:
+    """``out_dir/DriveRattle.ssp`` (``DriveRattle_outputs.ssp`` with ``system_outputs``):
+    both FMUs, their connections, one parameter set per component with every parameter at
+    its default and every input's start value at what its partner outputs at the start (so it
     also runs in masters that exchange nothing during initialization), at the FMUs' default
     experiment; validated against the SSP 1.0 schema."""
     from fmpy import read_model_description
@@ -25,10 +32,12 @@ def write_system(fmus: list[Path], out_dir: Path) -> Path:
 
     by_name = {Path(p).stem: Path(p) for p in fmus}
     experiment = read_model_description(str(by_name[MESH])).defaultExperiment
-    path = write_ssp(Path(out_dir) / SYSTEM_NAME, by_name[MESH], by_name[DRIVELINE],
+    name = SYSTEM_OUTPUTS_NAME if system_outputs else SYSTEM_NAME
+    path = write_ssp(Path(out_dir) / name, by_name[MESH], by_name[DRIVELINE],
                      default_parameters(by_name), step=float(experiment.stepSize),
                      start_time=float(experiment.startTime),
-                     stop_time=float(experiment.stopTime), input_starts="consistent")
+                     stop_time=float(experiment.stopTime), input_starts="consistent",
+                     system_outputs=system_outputs)
     with tempfile.TemporaryDirectory() as tmp, zipfile.ZipFile(path) as z:
         z.extract(SSD_NAME, tmp)
         try:
@@ -36,3 +45,8 @@ def write_system(fmus: list[Path], out_dir: Path) -> Path:
         except Exception as err:
             raise BuildError(f"{path.name}: the SSD is not valid SSP 1.0: {err}") from None
     return path
+
+
+def write_systems(fmus: list[Path], out_dir: Path) -> list[Path]:
+    """Both system files (``write_system`` without and with system outputs)."""
+    return [write_system(fmus, out_dir), write_system(fmus, out_dir, system_outputs=True)]

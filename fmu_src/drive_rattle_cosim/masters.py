@@ -8,29 +8,38 @@ Each master places its points with its own arithmetic (``MASTER_GRIDS``,
 (tests/cosim/test_masters.py), so these functions are also the reference for what each master
 computes.  docs/tools.md explains each workaround for users of the masters directly.
 
-Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0 and
-gemseo-fmu 3.1.1.  Run one master per process where a master can abort at exit (libcosim and
-fmpy in one process).
+The SSP masters that ignore the SSD's parameter bindings (fmpy's SSP runner,
+fmu-manipulation-toolbox's container) get them from their runners here (``ssp.read_bindings``);
+ecos applies them only when the set is named, which ``run_ecos`` does; gemseo-fmu gets
+parameters its own way (``gemseo_system(..., parameters)``).
+
+Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0,
+gemseo-fmu 3.1.1 and ecospy 0.7.2.  Run one master per process where a master can abort at
+exit (libcosim and fmpy in one process).
 """
 
 from __future__ import annotations
 
 import contextlib
+import io
 import logging
 import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
 from .harness import Result
+from .ssp import PARAMETER_SET, component_sources, read_bindings
 
 #: The coupling signals every master exchanges, ``"<Unit>.<output>"``.
 COUPLING = [f"{src}.{out}" for src, out, _, _ in CONNECTIONS]
 #: ``harness.time_grid`` name of each master's communication points.
 MASTER_GRIDS = {"libcosim": "nanoseconds", "fmpy.ssp": "accumulated",
-                "container": "multiplied", "gemseo": "accumulated-clipped"}
+                "container": "multiplied", "gemseo": "accumulated-clipped",
+                "ecos": "accumulated"}
 #: Real inputs and outputs of each unit, for masters that read every variable as Real.
 REAL_INPUTS = {MESH: [i for _, _, d, i in CONNECTIONS if d == MESH],
                DRIVELINE: [i for _, _, d, i in CONNECTIONS if d == DRIVELINE]}
@@ -46,50 +55,165 @@ def _result(time, columns: dict) -> Result:
 
 # ---------------------------------------------------------------- fmpy's SSP runner
 @contextlib.contextmanager
-def fmpy_ssp_keeps_start_values():
-    """Work around fmpy.ssp's first step (fmpy 0.3.19 to 0.3.32).
+def fmpy_ssp_workarounds(first_step: bool = True):
+    """Work around two defects of fmpy.ssp (fmpy 0.3.19 to 0.3.32) inside this context.
 
-    ``fmpy.ssp.simulate_ssp`` exchanges nothing during initialization and starts every
-    connector at 0.0, so the first ``doStep`` of each unit gets 0 on every input: a pinion at
-    rest while the wheel turns at 44.6 rad/s.  Inside this context each unit's first step
-    gets the values its inputs already hold (their start values, which are the partner's
-    start outputs), as a master that exchanged during initialization would send."""
+    * Its ``set_value`` sets Real, Integer and Boolean variables only and raises
+      ``Unsupported type: String`` for any String parameter of a ``parameter_set`` (the
+      Driveline's ``engine.speed_table``): here it sets Strings with ``fmi2SetString``.
+    * ``first_step``: ``simulate_ssp`` exchanges nothing during initialization and starts
+      every connector at 0.0, so the first ``doStep`` of each unit gets 0 on every input: a
+      pinion at rest while the wheel turns at 44.6 rad/s.  Here the units exchange as a
+      master that initializes them in the SSD's order does (the container does so): each
+      unit, in initialization mode, gets the outputs of the units initialized before it
+      (the Driveline, first, keeps its inputs' start values), and before the first step
+      every connection carries what its start unit outputs after initialization.  So the
+      first step of each unit gets its partner's outputs at the start time, whatever the
+      SSP's bound input starts: a unit whose inputs then differ from those at the end of its
+      initialization (the Driveline, when an edited parameter moved the mesh's start) settles
+      at its first step (``init.settle_first_step``, fmi2Warning), as it would have done
+      during initialization."""
     from fmpy.ssp import simulation
+    from fmpy.ssp.ssd import Component
 
-    original = simulation.do_step
+    original_do_step, original_set_value = simulation.do_step, simulation.set_value
+    original_instantiate = simulation.instantiate_fmu
     started: set[int] = set()
 
-    def do_step(component, time, step_size):
-        if id(component) not in started:
-            started.add(id(component))
-            for connector in component.connectors:
-                if connector.kind == "input":
-                    connector.value = simulation.get_value(component, connector.name)
-        original(component, time, step_size)
+    def feed(component, initialized) -> None:
+        """Set ``component``'s connected inputs to the outputs of the ``initialized`` units."""
+        sources = {e.name: e for e in initialized}
+        for c in component.parent.connections:
+            if c.endElement == component.name and c.startElement in sources:
+                value = simulation.get_value(sources[c.startElement], c.startConnector)
+                connector = next(k for k in component.connectors if k.name == c.endConnector)
+                connector.value = value
+                original_set_value(component, c.endConnector, value)
 
-    simulation.do_step = do_step
+    def instantiate_fmu(component, ssp_unzipdir, start_time, stop_time=None,
+                        parameter_set=None):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        filename = str(Path(ssp_unzipdir) / component.source)
+        md = read_model_description(filename, validate=False)
+        if md.fmiVersion != "2.0":
+            return original_instantiate(component, ssp_unzipdir, start_time, stop_time,
+                                        parameter_set)
+        component.unzipdir = extract(filename)
+        component.variables = {v.name: v for v in md.modelVariables}
+        component.fmu = FMU2Slave(guid=md.guid, unzipDirectory=component.unzipdir,
+                                  modelIdentifier=md.coSimulation.modelIdentifier,
+                                  instanceName=component.name)
+        component.fmu.instantiate()
+        component.fmu.setupExperiment(startTime=start_time)
+        if parameter_set is not None:
+            simulation.set_parameters(component, parameter_set)
+        component.fmu.enterInitializationMode()
+        siblings = [e for e in component.parent.elements if isinstance(e, Component)]
+        feed(component, [e for e in siblings[:siblings.index(component)]
+                         if getattr(e, "fmu", None) is not None])
+        component.fmu.exitInitializationMode()
+
+    def do_step(component, time, step_size):
+        system = component.parent
+        if id(system) not in started:
+            started.add(id(system))
+            units = [e for e in system.elements if isinstance(e, Component)]
+            for unit in units:
+                feed(unit, units)
+        original_do_step(component, time, step_size)
+
+    def set_value(component, name, value):
+        variable = component.variables[name]
+        if variable.type == "String":
+            component.fmu.setString([variable.valueReference], [str(value)])
+        else:
+            original_set_value(component, name, value)
+
+    simulation.set_value = set_value
+    if first_step:
+        simulation.do_step, simulation.instantiate_fmu = do_step, instantiate_fmu
     try:
         yield
     finally:
-        simulation.do_step = original
+        simulation.do_step, simulation.set_value = original_do_step, original_set_value
+        simulation.instantiate_fmu = original_instantiate
 
 
-def run_fmpy_ssp(ssp: Path, stop_time: float, step: float, workaround: bool = True) -> Result:
-    """``fmpy.ssp.simulate_ssp`` (accumulated time ``t += step``).  Its rows carry the time at
-    the start of each step and the values at its end; the result carries the end times."""
+def fmpy_ssp_keeps_start_values():
+    """``fmpy_ssp_workarounds()`` (its former name)."""
+    return fmpy_ssp_workarounds()
+
+
+def fmpy_parameter_set(ssp: Path):
+    """The SSD's bindings (``ssp.read_bindings``) as the ``parameter_set`` that
+    ``fmpy.ssp.simulate_ssp`` applies (fmpy 0.3.19 to 0.3.32 reads the SSD's bindings but
+    never applies them).  Names are ``<Component>.<name>``, as fmpy matches them; values keep
+    their Python type, because fmpy sets a Boolean as ``value != 0.0``, which is True for the
+    SSV text ``"false"``."""
+    from fmpy.ssp.ssd import Parameter, ParameterSet
+
+    kinds = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
+    parameter_set = ParameterSet(name=PARAMETER_SET)
+    parameter_set.parameters = [Parameter(name=name, type=kinds[type(value)], value=value)
+                                for name, value in read_bindings(ssp).items()]
+    return parameter_set
+
+
+def run_fmpy_ssp(ssp: Path, stop_time: float, step: float, workaround: bool = True,
+                 bindings: bool = True, outputs: list[str] | None = None) -> Result:
+    """``fmpy.ssp.simulate_ssp`` (accumulated time ``t += step``) with the SSD's bindings
+    passed as its ``parameter_set`` (``fmpy_parameter_set``; ``bindings=False``: as fmpy
+    runs the SSP by itself, on the FMUs' defaults), inside ``fmpy_ssp_workarounds``
+    (``workaround=False``: without its first-step part).  Its rows carry the time at the start of
+    each step and the values at its end; the result carries the end times.  ``outputs``:
+    connector paths to record (default ``COUPLING``; system connectors by their name)."""
     from fmpy.ssp.simulation import simulate_ssp
 
-    context = fmpy_ssp_keeps_start_values() if workaround else contextlib.nullcontext()
-    with context:
-        rows = simulate_ssp(str(ssp), stop_time=stop_time, step_size=step)
-    return _result([t + step for t in rows["time"]], {name: rows[name] for name in COUPLING})
+    parameter_set = fmpy_parameter_set(ssp) if bindings else None
+    with fmpy_ssp_workarounds(first_step=workaround):
+        rows = simulate_ssp(str(ssp), stop_time=stop_time, step_size=step,
+                            parameter_set=parameter_set)
+    return _result([t + step for t in rows["time"]],
+                   {name: rows[name] for name in outputs or COUPLING})
 
 
 # ---------------------------------------------------------------- fmu-manipulation-toolbox
-def build_container(ssp: Path, out_dir: Path) -> Path:
-    """``fmucontainer -container DriveRattle.ssp`` in ``out_dir``: a container FMU of both
-    units with the SSD's connections (its parameter and input-start bindings are not read).
-    The links appear as local variables ``<unit in lower case>.<output>``."""
+def build_container(ssp: Path, out_dir: Path, bindings: bool = True) -> Path:
+    """A container FMU of the SSP's units built by fmu-manipulation-toolbox in ``out_dir``
+    (as ``fmucontainer -container DriveRattle.ssp``), with the SSD's connections, and its
+    system connectors as the container's outputs.
+
+    fmucontainer reads no parameter binding of the SSD (2.0: only its components and
+    connections), so with ``bindings`` every bound value (``ssp.read_bindings``) is added as
+    a start value of its unit, the container's ``START`` rule, which the container sets on the
+    unit before initializing it.  The links appear as local variables
+    ``<unit in lower case>.<output>``."""
+    from fmu_manipulation_toolbox.assembly import Assembly
+
+    from .ssp import _value
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(ssp, out_dir / Path(ssp).name)
+    assembly = Assembly(Path(ssp).name, fmu_directory=out_dir)
+    if bindings:
+        by_file = {Path(name).name: name for name in assembly.root.fmu_names_list}
+        units = {unit: by_file[Path(source).name]
+                 for unit, source in component_sources(ssp).items()}
+        for qualified, value in read_bindings(ssp).items():
+            unit, _, name = qualified.partition(".")
+            assembly.root.add_start_value(units[unit], name, _value(value))
+    assembly.make_fmu()
+    container = out_dir / f"{Path(ssp).stem}.fmu"
+    if not container.is_file():
+        raise RuntimeError(f"fmu-manipulation-toolbox wrote no {container}")
+    return container
+
+
+def build_container_cli(ssp: Path, out_dir: Path) -> Path:
+    """``fmucontainer -container DriveRattle.ssp`` as a user runs it (no bindings applied)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     shutil.copy2(ssp, out_dir / Path(ssp).name)
@@ -103,13 +227,17 @@ def build_container(ssp: Path, out_dir: Path) -> Path:
     return container
 
 
-def run_container(container: Path, stop_time: float, step: float, log=None) -> Result:
-    """The container FMU in fmpy's ``simulate_fmu`` (``t_k = k step``), recording the links;
-    ``log(message)`` receives the messages of the container and its units."""
+def run_container(container: Path, stop_time: float, step: float, log=None,
+                  outputs: list[str] | None = None) -> Result:
+    """The container FMU in fmpy's ``simulate_fmu`` (``t_k = k step``), recording the links
+    (``COUPLING``, as ``<unit in lower case>.<output>``) and the container's ``outputs``
+    (its variables by name); ``log(message)`` receives the messages of the container and its
+    units."""
     from fmpy import simulate_fmu
 
     names = {name: name.split(".", 1)[0].lower() + "." + name.split(".", 1)[1]
              for name in COUPLING}
+    names.update({name: name for name in outputs or []})
 
     def logger(*args):
         if log is not None:
@@ -120,8 +248,65 @@ def run_container(container: Path, stop_time: float, step: float, log=None) -> R
     return _result(rows["time"], {name: rows[local] for name, local in names.items()})
 
 
+# ---------------------------------------------------------------- ecos
+def run_ecos(ssp: Path, stop_time: float, step: float, outputs: list[str] | None = None,
+             parameter_set: str | None = PARAMETER_SET, log_level: str = "warn") -> Result:
+    """Vico's ecos (pip ``ecospy``; Debian's ``libtbb12``) on the SSP: Jacobi fixed step,
+    accumulated time ``t += step``, exchanges during initialization (one round per unit).
+
+    ecos applies an SSP parameter set only when it is named (``parameter_set``, the command
+    line's ``--parameterSet``): without a name every unit runs on its FMU's defaults, with no
+    warning (``parameter_set=None`` does that).  Records ``outputs`` (``"<Unit>.<name>"``,
+    default ``COUPLING``; Integer outputs through ``get_integer``) from the start time, after
+    initialization."""
+    from ecospy import EcosLib, EcosSimulation
+    from fmpy import read_model_description
+
+    EcosLib.set_log_level(log_level)
+    outputs = outputs or COUPLING
+    types = {}
+    for unit, source in component_sources(ssp).items():
+        with zipfile.ZipFile(ssp) as z:
+            data = z.read(source)
+        md = read_model_description(io.BytesIO(data))
+        types.update({f"{unit}.{v.name}": v.type for v in md.modelVariables})
+    sim = EcosSimulation(ssp_path=str(ssp), step_size=step)
+    try:
+        if not sim.init(parameter_set=parameter_set):
+            raise RuntimeError(f"ecos: init failed: {EcosLib.get_last_error()}")
+        getters = {name: (sim.get_integer if types[name] == "Integer" else sim.get_real,
+                          name.replace(".", "::", 1)) for name in outputs}
+        result = Result(units=dict.fromkeys(outputs, ""))
+        result.columns = {name: [] for name in outputs}
+        time = sim.get_time()
+        while True:
+            result.time.append(time)
+            for name, (get, identifier) in getters.items():
+                result.columns[name].append(get(identifier))
+            if time >= stop_time:
+                break
+            time = sim.step(1)
+        sim.terminate()
+        return result
+    finally:
+        sim.free()
+
+
 # ---------------------------------------------------------------- gemseo-fmu
-def gemseo_system(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float):
+def _set_once(variable) -> None:
+    """Make a gemseo-fmu variable set its FMU value only when it changes (the first time)."""
+    set_value, last = variable.set_value, []
+
+    def set_when_changed(value):
+        if not last or not (last[0] == value).all():
+            set_value(value)
+            last[:] = [value]
+
+    variable.set_value = set_when_changed
+
+
+def gemseo_system(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float,
+                  parameters: dict | None = None):
     """gemseo-fmu's ``TimeSteppingSystem`` of both units (Jacobi, no exchange during
     initialization: the first step gets the inputs' start values).
 
@@ -130,21 +315,52 @@ def gemseo_system(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: f
     with a Boolean parameter (``could not convert string to float: 'true'``); without
     ``output_names`` it reads every output with ``fmi2GetReal`` and fails on the Integer
     outputs (the impact counters).  So each unit gets its Real coupling inputs and outputs
-    explicitly; parameters stay at their defaults (set them with the FMU's start values or
-    through ``input_names`` of Real parameters)."""
+    explicitly.
+
+    ``parameters`` (``"<Unit>.<name>"``: Real parameters only, gemseo-fmu sets FMI 2
+    variables with ``fmi2SetReal``) are set gemseo's way, as inputs of the unit's discipline
+    with these values as their defaults.  gemseo-fmu sets every input of a discipline before
+    every step, parameters too, and FMI 2.0 allows a fixed parameter to be set only until
+    initialization ends: the units refuse the second setting (``fmi2SetReal failed with
+    status 3``, ``parameter 'gear.backlash' is fixed``).  So each parameter is set only when
+    its value changes, i.e. once, before initialization (``_set_once``).  And since gemseo
+    exchanges nothing during initialization, the coupling inputs' defaults are the partner's
+    start outputs for these parameters (``ssp.consistent_input_starts``), as the FMUs' start
+    values are for the defaults."""
     from gemseo_fmu.disciplines.do_step_fmu_discipline import DoStepFMUDiscipline
     from gemseo_fmu.disciplines.time_stepping_system import TimeSteppingSystem
+    from numpy import array
+
+    from .ssp import consistent_input_starts
 
     logging.getLogger("gemseo").setLevel(logging.ERROR)  # one MDA warning per step
-    units = [DoStepFMUDiscipline(str(path), input_names=REAL_INPUTS[name],
-                                 output_names=REAL_OUTPUTS[name], name=name)
-             for name, path in ((DRIVELINE, driveline_fmu), (MESH, mesh_fmu))]
+    parameters = parameters or {}
+    for qualified, value in parameters.items():
+        if type(value) is not float:
+            raise ValueError(f"gemseo-fmu sets FMI 2 variables as Real: '{qualified}' = "
+                             f"{value!r} cannot be set")
+    starts = consistent_input_starts(parameters) if parameters else {}
+    units = []
+    for unit, path in ((DRIVELINE, driveline_fmu), (MESH, mesh_fmu)):
+        own = {k.partition(".")[2]: v for k, v in parameters.items()
+               if k.partition(".")[0] == unit}
+        discipline = DoStepFMUDiscipline(str(path), input_names=REAL_INPUTS[unit] + list(own),
+                                         output_names=REAL_OUTPUTS[unit], name=unit)
+        defaults = discipline.io.input_grammar.defaults
+        for name, value in own.items():
+            defaults[name] = array([value])
+            _set_once(discipline._to_fmu_variables[name])
+        for name in REAL_INPUTS[unit]:
+            if f"{unit}.{name}" in starts:
+                defaults[name] = array([starts[f"{unit}.{name}"]])
+        units.append(discipline)
     return TimeSteppingSystem(units, final_time=stop_time, time_step=step)
 
 
-def run_gemseo(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float) -> Result:
+def run_gemseo(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float,
+               parameters: dict | None = None) -> Result:
     """Run ``gemseo_system``; the result holds the values after every step."""
-    system = gemseo_system(mesh_fmu, driveline_fmu, stop_time, step)
+    system = gemseo_system(mesh_fmu, driveline_fmu, stop_time, step, parameters)
     system.execute()
     data = system.io.data
     columns = {f"{unit}.{name}": data[name] for unit, names in REAL_OUTPUTS.items()

@@ -16,17 +16,24 @@ from drive_rattle_cosim.ssp import run_libcosim
 
 
 def run(kind: str, args: dict) -> dict:
+    outputs = args.get("outputs")
     if kind == "libcosim":
-        result = run_libcosim(Path(args["ssp"]), args["stop"], masters.COUPLING)
+        result = run_libcosim(Path(args["ssp"]), args["stop"], outputs or masters.COUPLING)
     elif kind == "fmpy.ssp":
         result = masters.run_fmpy_ssp(Path(args["ssp"]), args["stop"], args["step"],
-                                      args["workaround"])
+                                      args["workaround"], args.get("bindings", True), outputs)
     elif kind == "container":
-        container = masters.build_container(Path(args["ssp"]), Path(args["dir"]))
-        result = masters.run_container(container, args["stop"], args["step"], log=print)
+        build = masters.build_container if args.get("bindings", True) \
+            else masters.build_container_cli
+        container = build(Path(args["ssp"]), Path(args["dir"]))
+        result = masters.run_container(container, args["stop"], args["step"], log=print,
+                                       outputs=outputs)
+    elif kind == "ecos":
+        result = masters.run_ecos(Path(args["ssp"]), args["stop"], args["step"], outputs,
+                                  args.get("parameter_set", masters.PARAMETER_SET))
     elif kind == "gemseo":
         result = masters.run_gemseo(Path(args["mesh"]), Path(args["driveline"]), args["stop"],
-                                    args["step"])
+                                    args["step"], args.get("parameters"))
     elif kind == "alone":
         result, step = masters.run_alone(Path(args["fmu"]), args["stop"])
         return {"time": result.time, "columns": result.columns, "step": step}

@@ -18,14 +18,19 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from drive_rattle.driveline import DrivelineModel, DrivelineParameters
-from drive_rattle.interface import CONNECTIONS, DRIVELINE_INPUTS, MESH_INPUTS, coupled_start_inputs
-from drive_rattle.kernel import LIBRARY_NAME, CompiledWheelStepper, load_kernel
-from drive_rattle.parameters import MeshParameters, specs
+from drive_rattle import DRIVELINE, MESH, DrivelineUnit, MeshUnit, input_starts
+from drive_rattle.interface import CONNECTIONS
+from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
+from drive_rattle.units import coupled_start_inputs
 from drive_rattle_build import write_system
 from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, time_grid
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
-from drive_rattle_cosim.ssp import SSD_NAME, consistent_input_starts, validate_ssd
+from drive_rattle_cosim.ssp import (
+    PARAMETER_SET,
+    SSD_NAME,
+    consistent_input_starts,
+    validate_ssd,
+)
 
 STOP, STEP = 0.5, 1e-4
 RUNNER = Path(__file__).with_name("run_master.py")
@@ -121,6 +126,8 @@ def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ss
     assert [c.name for c in ssd.system.elements] == ["Driveline", "GearMeshRattle"]
     assert len(ssd.system.connections) == 6
     text = (tmp_path / SSD_NAME).read_text()
+    # one parameter set per component (parameters and input starts), of one name
+    assert text.count(f'<ssv:ParameterSet version="1.0" name="{PARAMETER_SET}">') == 2
     n_parameters = len(list(specs(MeshParameters))) + len(list(specs(DrivelineParameters)))
     # every parameter (the physics' and the two input-handling ones per unit), every input
     assert text.count("<ssv:Parameter ") == n_parameters + 2 * 2 + 6
@@ -136,6 +143,14 @@ def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
     result, _ = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
     assert MASTER_GRIDS["libcosim"] == "nanoseconds"
     assert_identical(result, harness(fmus, "nanoseconds"), first=1)
+
+
+def test_ecos_runs_the_shipped_system(fmus, system_ssp):
+    """ecos (Vico, native C++): exchanges during initialization, accumulated time; records
+    from the start.  Its parameter set is named (masters.PARAMETER_SET); here the SSP binds
+    the defaults, so the run is the default one either way."""
+    result, _ = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
+    assert_identical(result, harness(fmus, MASTER_GRIDS["ecos"]), first=0)
 
 
 def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
@@ -191,19 +206,17 @@ def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
     assert "error" not in result, result["error"]
     step = fmpy_default_step(stop)
     assert result["step"] == step == 0.0128
-    starts = {s.name: s.start for s in MESH_INPUTS}
-    with zipfile.ZipFile(fmus["GearMeshRattle"]) as z:
-        z.extract(f"resources/drive_rattle/{LIBRARY_NAME}", tmp_path)
-    lib = load_kernel(tmp_path / "resources" / "drive_rattle" / LIBRARY_NAME)
-    core = CompiledWheelStepper(MeshParameters(), starts["pinion.phi"], starts["pinion.w"],
-                                starts["wheel.tau_load"], library=lib)
+    starts = input_starts(MESH)
+    tau = starts["wheel.tau_load"]
+    core = MeshUnit(MeshParameters(), starts["pinion.phi"], starts["pinion.w"], tau)
     times, sizes = time_grid(0.0, step, stop, "multiplied")
     assert result["time"] == times
     columns = result["columns"]
+    phi, w = starts["pinion.phi"], starts["pinion.w"]
     for k in range(len(times)):
-        if k:
-            phi, w = core.pinion
-            core.step(sizes[k - 1], phi, w, 0.0, starts["wheel.tau_load"])
+        if k:  # the held pinion runs on at its start speed, set explicitly here
+            core.step(sizes[k - 1], phi, w, 0.0, tau)
+            phi += w * sizes[k - 1]
         for name, value in core.outputs().items():
             assert columns[name][k] == value, (name, times[k])
     # Steady loaded drive: the wheel follows the constant-speed pinion, rippled only by the
@@ -221,15 +234,14 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
     result, _ = run_master("alone", fmu=str(fmus["Driveline"]), stop=stop)
     assert "error" not in result, result["error"]
     step = result["step"]
-    starts = {s.name: s.start for s in DRIVELINE_INPUTS}
+    starts = input_starts(DRIVELINE)
     phi_w, w_w = starts["wheel.phi"], starts["wheel.w"]
-    core = DrivelineModel(DrivelineParameters(), 0.0, phi_w, w_w)
-    times, _ = time_grid(0.0, step, stop, "multiplied")
+    core = DrivelineUnit(DrivelineParameters(), phi_w, w_w)
+    times, sizes = time_grid(0.0, step, stop, "multiplied")
     assert result["time"] == times
-    _, sizes = time_grid(0.0, step, stop, "multiplied")
     for k, t in enumerate(times):
         if k:
-            core.step(sizes[k - 1], phi_w, w_w, t=times[k - 1])
+            core.step(sizes[k - 1], phi_w, w_w)
             phi_w += w_w * sizes[k - 1]  # the held wheel runs on at constant speed
         for name, value in core.outputs().items():
             assert result["columns"][name][k] == value, (name, t)

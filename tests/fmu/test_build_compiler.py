@@ -35,7 +35,7 @@ def test_without_gcc_the_build_uses_ziglang_and_runs_the_same(fmus, tmp_path):
     out = tmp_path / "dist"
     run = build_without_gcc(out)
     assert run.returncode == 0, run.stdout + run.stderr
-    assert (out / "DriveRattle.ssp").is_file()
+    assert (out / "DriveRattle.ssp").is_file() and (out / "DriveRattle_outputs.ssp").is_file()
     # The model library and the shim compiled by ziglang's clang compute what gcc's do, bit
     # for bit.
     results = []
