@@ -200,11 +200,15 @@ class Unit:
     def phase(self) -> str:
         return library.PHASES[self._lib.rm_phase(self._ptr)]
 
-    def advance(self, h: float, inputs: Mapping[str, float] | None = None) -> None:
-        """Set ``inputs`` (public names) and step by ``h`` [s] from the current time."""
+    def advance(self, h: float, inputs: Mapping[str, float] | None = None, *,
+                at: float | None = None) -> None:
+        """Set ``inputs`` (public names) and step by ``h`` [s] from the communication point
+        ``at`` [s] (default: the current time).  A master's grid passes its own points, which
+        can differ from the accumulated time by rounding; time-dependent loads (the engine's
+        firing) see the point passed, as in an FMU."""
         if inputs:
             self.set(inputs)
-        self.call("rm_do_step", self.time, float(h))
+        self.call("rm_do_step", self.time if at is None else float(at), float(h))
 
     def report(self) -> StepReport:
         """The events and cost of the last accepted step."""
@@ -283,9 +287,10 @@ class DrivelineUnit(Unit):
     def __init__(self, parameters=None, phi_w: float = 0.0, w_w: float = 0.0, **options):
         super().__init__(DRIVELINE, parameters, {"wheel.phi": phi_w, "wheel.w": w_w}, **options)
 
-    def step(self, h: float, phi_w: float, w_w: float) -> None:
-        """Advance by ``h`` [s] with the wheel's angle and speed at the step start."""
-        self.advance(h, {"wheel.phi": phi_w, "wheel.w": w_w})
+    def step(self, h: float, phi_w: float, w_w: float, at: float | None = None) -> None:
+        """Advance by ``h`` [s] with the wheel's angle and speed at the step start (from the
+        communication point ``at`` [s], default the current time)."""
+        self.advance(h, {"wheel.phi": phi_w, "wheel.w": w_w}, at=at)
 
 
 def check_parameters(kind: int, public_values: Mapping[str, Any]) -> None:

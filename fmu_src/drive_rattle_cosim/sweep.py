@@ -1,13 +1,24 @@
 """Parameter sweeps of the co-simulation on dask.distributed, with rattle metrics per case.
 
 A design (full grid or Latin hypercube) over any FMU parameters becomes a list of cases; each
-case is a full co-simulation (the fmpy harness) run in a dask worker process.  Results are
-appended to a CSV file case by case, as they finish, so that an interrupted sweep resumes
-without redoing finished cases; a failed case is recorded with its error and the sweep goes on.
+case is a full co-simulation run in a dask worker process.  Results are appended to a CSV file
+case by case, as they finish, so that an interrupted sweep resumes without redoing finished
+cases; a failed case is recorded with its error and the sweep goes on.  One client writes a
+result file at a time (a lock file beside it refuses a second).
 
-The FMUs travel with the work: the client reads their bytes once and scatters them to every
-worker (``FmuBundle``), and each worker process unpacks them once into its own local folder,
-so workers on other machines need no copy of ``dist/`` -- only this package installed.
+Two engines, named in every result row (``engine``):
+
+* ``library`` (the default): the two units of the model library coupled in its compiled loop
+  (``drive_rattle.units.run_coupled``) -- the same calls the FMUs make, so the same numbers
+  as the co-simulation of the FMUs, bit for bit (tests/cosim/test_sweep.py), at the model's
+  own cost.  Each worker loads the library once; a case only instantiates its two units.
+* ``fmu``: the FMUs of ``--fmu-dir`` in the fmpy harness (either flavour).  The FMUs travel
+  with the work: the client reads their bytes once and scatters them to every worker
+  (``FmuBundle``), and each worker process unpacks them once into its own local folder, so
+  workers on other machines need no copy of ``dist/``.
+
+Workers on other machines need this package installed with the client's versions of dask and
+numpy (dask refuses mismatched versions).
 
     python -m drive_rattle_cosim.sweep \\
         --param GearMeshRattle.gear.backlash=0.05e-3:0.2e-3 \\
@@ -33,6 +44,7 @@ import hashlib
 import itertools
 import json
 import math
+import os
 import shutil
 import sys
 import tempfile
@@ -65,8 +77,12 @@ STATISTIC_OF = {
 _MEANS = [*list(STATISTIC_OF)[:7], *(f"band_{int(lo)}_{int(hi)}_Hz_dB" for lo, hi in BANDS),
           *list(STATISTIC_OF)[7:]]
 #: Result columns: each metric (mean over the windows after the transient), then each
-#: metric's window-to-window standard deviation, the number of windows and the wall time.
-METRICS = [*_MEANS, *(f"{m}_std" for m in _MEANS), "windows", "wall_seconds"]
+#: metric's window-to-window standard deviation, the number of windows, the wall time and the
+#: engine that ran the case.
+TEXT_COLUMNS = ("case_id", "error", "engine")  # the rest are numbers
+METRICS = [*_MEANS, *(f"{m}_std" for m in _MEANS), "windows", "wall_seconds", "engine"]
+#: The engines of a case (module docstring).
+ENGINES = ("library", "fmu")
 
 
 @dataclass(frozen=True)
@@ -201,27 +217,68 @@ class FmuBundle:
         return folder
 
 
-def run_case(case: Case, fmus: FmuBundle | str | Path, stop_time: float, step: float,
+def _unit_parameters(parameters: dict, unit: str) -> dict:
+    prefix = f"{unit}."
+    return {k[len(prefix):]: v for k, v in parameters.items() if k.startswith(prefix)}
+
+
+def _run_library(parameters: dict, stop_time: float, step: float) -> tuple[list, dict]:
+    """The co-simulation of ``parameters`` in the model library's compiled loop: the
+    communication points and the recorded outputs (public names), as the harness gives them."""
+    from drive_rattle.parameters import DrivelineParameters, MeshParameters
+    from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs, run_coupled
+
+    from .system import communication_points
+
+    unknown = sorted(k for k in parameters if k.split(".", 1)[0] not in (
+        "GearMeshRattle", "Driveline"))
+    if unknown:
+        raise ValueError(f"parameter(s) {', '.join(unknown)}: expected '<Unit>.<name>' of "
+                         "GearMeshRattle or Driveline")
+    mp = MeshParameters.from_public(_unit_parameters(parameters, "GearMeshRattle"))
+    dp = DrivelineParameters.from_public(_unit_parameters(parameters, "Driveline"))
+    points = communication_points(0.0, step, stop_time)
+    mesh_in, wheel = coupled_start_inputs(mp, dp)
+    with MeshUnit(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"],
+                  mesh_in["pinion.a"]) as mesh, \
+            DrivelineUnit(dp, wheel["wheel.phi"], wheel["wheel.w"]) as drive:
+        run = run_coupled(mesh, drive, round(step * 1e9), len(points) - 1, RECORDED)
+    return points, {name: run.columns[name] for name in RECORDED}
+
+
+def _run_fmus(parameters: dict, fmus, stop_time: float, step: float) -> tuple[list, dict]:
+    """The co-simulation of ``parameters`` by the fmpy harness on the FMUs ``fmus`` (a bundle
+    or a local folder)."""
+    from .harness import CoSimulation
+
+    folder = fmus.folder() if isinstance(fmus, FmuBundle) else Path(fmus)
+    with CoSimulation(folder / "GearMeshRattle.fmu", folder / "Driveline.fmu", parameters,
+                      step=step) as sim:
+        res = sim.run(stop_time, RECORDED)
+    return res.time, res.columns
+
+
+def run_case(case: Case, fmus: FmuBundle | str | Path | None, stop_time: float, step: float,
              transient: float = 0.0, window: float | None = None) -> dict:
     """One co-simulation (runs in a worker process): the case's parameters, then metrics
-    after ``transient`` seconds in windows of ``window`` seconds.  ``fmus`` is the FMUs'
-    bundle (or a local folder holding them).  Never raises: an error
-    becomes the row's ``error`` field."""
-    row = {"case_id": case.case_id, **case.parameters, "error": ""}
+    after ``transient`` seconds in windows of ``window`` seconds.  ``fmus``: None for the
+    model library's compiled loop (engine "library"), else the FMUs' bundle or a local
+    folder holding them (engine "fmu").  Never raises: an error becomes the row's ``error``
+    field."""
+    engine = "library" if fmus is None else "fmu"
+    row = {"case_id": case.case_id, **case.parameters, "error": "", "engine": engine}
     start = time.perf_counter()
     try:
         from drive_rattle.parameters import MeshParameters
-        from drive_rattle_cosim.harness import CoSimulation
 
-        folder = fmus.folder() if isinstance(fmus, FmuBundle) else Path(fmus)
-        with CoSimulation(folder / "GearMeshRattle.fmu", folder / "Driveline.fmu",
-                          case.parameters, step=step) as sim:
-            res = sim.run(stop_time, RECORDED)
-        mesh_params = {k.split(".", 1)[1]: v for k, v in case.parameters.items()
-                       if k.startswith("GearMeshRattle.")}
-        normal_mass = MeshParameters.from_public(mesh_params).derived()["normal_mass"]
-        signals = {k.split(".", 1)[1]: v for k, v in res.columns.items()}
-        row.update(rattle_metrics(res.time, signals, normal_mass, transient, window))
+        if fmus is None:
+            times, columns = _run_library(case.parameters, stop_time, step)
+        else:
+            times, columns = _run_fmus(case.parameters, fmus, stop_time, step)
+        mesh = MeshParameters.from_public(_unit_parameters(case.parameters, "GearMeshRattle"))
+        normal_mass = mesh.derived()["normal_mass"]
+        signals = {k.split(".", 1)[1]: np.asarray(v, dtype=float) for k, v in columns.items()}
+        row.update(rattle_metrics(times, signals, normal_mass, transient, window))
     except Exception as err:  # recorded, never stops the sweep
         row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")[:2000]
     row["wall_seconds"] = time.perf_counter() - start
@@ -238,12 +295,39 @@ def finished_case_ids(path: Path, retry_failed: bool = False) -> set[str]:
 
 
 class ResultWriter:
-    """Appends one CSV row per finished case, flushed at once (resume-safe)."""
+    """Appends one CSV row per finished case, flushed at once (resume-safe).  A lock file
+    beside the result (``<out>.lock``, holding the writer's process id) refuses a second
+    client writing the same file: their rows would repeat cases."""
 
     def __init__(self, path: Path, parameter_names: list[str]):
         self.path = Path(path)
         self.columns = ["case_id", *parameter_names, *METRICS, "error"]
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.lock = self.path.with_name(self.path.name + ".lock")
+        self._take_lock()
+        try:
+            self._open()
+        except BaseException:
+            self.lock.unlink(missing_ok=True)
+            raise
+
+    def _take_lock(self) -> None:
+        for _ in range(2):
+            try:
+                fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                owner = self.lock.read_text(encoding="utf-8").strip() if self.lock.exists() else ""
+                if owner.isdigit() and not _alive(int(owner)):
+                    self.lock.unlink(missing_ok=True)  # left by a client that died
+                    continue
+                raise ValueError(
+                    f"{self.path} is being written by another sweep (process {owner or '?'}, "
+                    f"lock {self.lock}); wait for it, or use another --out") from None
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(f"{os.getpid()}\n")
+            return
+
+    def _open(self) -> None:
         if self.path.exists() and self.path.stat().st_size > 0:
             with self.path.open(newline="", encoding="utf-8") as f:
                 header = next(csv.reader(f))
@@ -264,25 +348,47 @@ class ResultWriter:
 
     def close(self) -> None:
         self._file.close()
+        self.lock.unlink(missing_ok=True)
 
 
-def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
+def _alive(pid: int) -> bool:
+    """Whether a process of this machine with ``pid`` exists."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+class SweepInterruptedError(RuntimeError):
+    """The cluster lost what the cases needed (every worker died): the message says how to
+    resume."""
+
+
+def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
               stop_time: float = 0.3, step: float = 1e-4, workers: int = 2,
               scheduler: str | None = None, progress: bool = True,
               retry_failed: bool = False, stop_after: int | None = None,
-              transient: float = 0.0, window: float | None = None) -> dict:
+              transient: float = 0.0, window: float | None = None,
+              resume_hint: str = "run the same command again") -> dict:
     """Run the cases not yet in ``out`` on dask (a LocalCluster of ``workers`` processes, or
     the cluster at ``scheduler``); metrics after ``transient`` seconds in windows of
-    ``window`` seconds (``rattle_metrics``).  ``stop_after`` ends the sweep after that many
-    new cases (an interruption, for tests).  Returns counts of done, skipped and failed cases."""
+    ``window`` seconds (``rattle_metrics``).  ``fmu_dir`` None runs the model library's
+    compiled loop (engine "library"), else the FMUs of that folder in the fmpy harness
+    (engine "fmu").  ``stop_after`` ends the sweep after that many new cases (an
+    interruption, for tests).  Returns counts of done, skipped and failed cases;
+    :class:`SweepInterruptedError` when the cluster lost every worker (the finished rows are
+    kept)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     out = Path(out)
-    bundle = FmuBundle.from_dir(fmu_dir)
+    bundle = FmuBundle.from_dir(fmu_dir) if fmu_dir is not None else None
     names = sorted({n for c in cases for n in c.parameters})
+    writer = ResultWriter(out, names)
     done = finished_case_ids(out, retry_failed)
     todo = [c for c in cases if c.case_id not in done]
-    writer = ResultWriter(out, names)
     cluster = None
     counts = {"total": len(cases), "skipped": len(cases) - len(todo), "done": 0, "failed": 0}
     try:
@@ -293,8 +399,10 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
                                    dashboard_address=None)
             client = Client(cluster)
         with client:
-            # One copy of the FMUs per worker, not per task (and none read from a path).
-            [fmus] = client.scatter([bundle], broadcast=True) if todo else [None]
+            fmus = None
+            if bundle is not None and todo:
+                # One copy of the FMUs per worker, not per task (and none read from a path).
+                [fmus] = client.scatter([bundle], broadcast=True)
             futures = [client.submit(run_case, c, fmus, stop_time, step, transient, window,
                                      pure=False)
                        for c in todo]
@@ -304,7 +412,15 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path = ROOT / "dist",
 
                 stream = tqdm(stream, total=len(todo), unit="case", desc="sweep")
             for future in stream:
-                row = future.result()
+                try:
+                    row = future.result()
+                except Exception as err:  # the cluster, not the case: the case never ran
+                    for f in futures:
+                        f.cancel()
+                    raise SweepInterruptedError(
+                        f"the sweep lost its workers ({type(err).__name__}) after "
+                        f"{counts['done']} new cases; {out} keeps them: {resume_hint} to run "
+                        "the rest") from None
                 writer.write(row)
                 counts["done"] += 1
                 counts["failed"] += bool(row["error"])
@@ -324,7 +440,7 @@ def read_results(path: Path) -> list[dict]:
     rows = []
     with Path(path).open(newline="", encoding="utf-8") as f:
         for r in csv.DictReader(f):
-            rows.append({k: (v if k in ("case_id", "error") else
+            rows.append({k: (v if k in TEXT_COLUMNS else
                              (float(v) if v != "" else math.nan)) for k, v in r.items()})
     return rows
 
@@ -355,8 +471,13 @@ def main(argv=None) -> int:
                     help="start transient left out of the metrics [s]")
     ap.add_argument("--window", type=float, default=None,
                     help="window of the statistics [s] (default: all after the transient)")
+    ap.add_argument("--engine", choices=ENGINES, default="library",
+                    help="library: the model library's compiled loop (default; the FMUs' "
+                         "numbers at the model's cost); fmu: the FMUs of --fmu-dir in the "
+                         "fmpy harness")
     ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist",
-                    help="folder of the FMUs on this machine (they are sent to the workers)")
+                    help="folder of the FMUs on this machine, for --engine fmu (they are sent "
+                         "to the workers)")
     ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")
     ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
     ap.add_argument("--scheduler", default=None, help="address of an existing dask scheduler")
@@ -366,10 +487,14 @@ def main(argv=None) -> int:
     cases = (grid_design(params, args.grid) if args.grid
              else latin_hypercube_design(params, args.lhs, args.seed))
     try:
-        counts = run_sweep(cases, args.out, args.fmu_dir, args.stop_time, args.step,
-                           args.workers, args.scheduler, retry_failed=args.retry_failed,
-                           transient=args.transient, window=args.window)
-    except (FileNotFoundError, ValueError) as err:
+        counts = run_sweep(cases, args.out, args.fmu_dir if args.engine == "fmu" else None,
+                           args.stop_time, args.step, args.workers, args.scheduler,
+                           retry_failed=args.retry_failed, transient=args.transient,
+                           window=args.window,
+                           resume_hint="run `python -m drive_rattle_cosim.sweep "
+                                       + " ".join(argv if argv is not None else sys.argv[1:])
+                                       + "` again")
+    except (FileNotFoundError, ValueError, SweepInterruptedError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
     print(f"{counts['done']} cases run ({counts['failed']} failed), {counts['skipped']} "

@@ -419,26 +419,26 @@ char* rattle_canonical_path(const char* path, char* why, size_t why_size)
     char* out;
     FileInfo st;
     if (w == NULL) {
-        snprintf(why, why_size, "%s", errno_reason(ENOENT));
+        snprintf(why, why_size, "cannot be opened: %s", errno_reason(ENOENT));
         return NULL;
     }
     full = _wfullpath(NULL, w, 0);
     free(w);
     if (full == NULL) {
-        snprintf(why, why_size, "%s", errno_reason(errno));
+        snprintf(why, why_size, "cannot be opened: %s", errno_reason(errno));
         return NULL;
     }
     out = narrow(full);
     free(full);
     if (out == NULL || file_info(out, &st) != 0) {
-        snprintf(why, why_size, "%s", errno_reason(out == NULL ? ENOENT : errno));
+        snprintf(why, why_size, "cannot be opened: %s", errno_reason(out == NULL ? ENOENT : errno));
         free(out);
         return NULL;
     }
     return out;
 #else
     char* real = realpath(path, NULL);
-    if (real == NULL) snprintf(why, why_size, "%s", errno_reason(errno));
+    if (real == NULL) snprintf(why, why_size, "cannot be opened: %s", errno_reason(errno));
     return real;
 #endif
 }

@@ -542,6 +542,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
     char module[256];
     char shown[256];
     char marker_why[200];
+    char reason[128];
     int marker;
     struct stat st;
 
@@ -553,10 +554,10 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
     decoded = rattle_location_to_path(location, why, why_size);
     if (decoded == NULL) return NULL;
     rattle_printable(shown, sizeof shown, decoded);
-    real = realpath(decoded, NULL);
+    real = rattle_canonical_path(decoded, reason, sizeof reason);
     if (real == NULL || stat(real, &st) != 0 || !S_ISDIR(st.st_mode)) {
         snprintf(why, why_size, "names '%s', which %s; allowed: this FMU's resources folder",
-                 shown, real == NULL ? strerror(errno) : "is not a folder");
+                 shown, real == NULL ? reason : "is not a folder");
         free(decoded);
         free(real);
         return NULL;

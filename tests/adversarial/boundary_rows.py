@@ -127,8 +127,8 @@ def row_2(fmus, work):
         cases = {
             b"file://" + os.fsencode(model.root): "the folder the FMU was unpacked to",
             os.fsencode(model.root): "the folder the FMU was unpacked to",
-            os.fsencode(gone / "resources"): "No such file or directory",
-            b"file://" + os.fsencode(work / "missing" / "resources"): "No such file or directory",
+            os.fsencode(gone / "resources"): "cannot be opened: no such file or directory",
+            b"file://" + os.fsencode(work / "missing" / "resources"): "cannot be opened: no such file or directory",
             b"resources": "relative path",
             b"file:resources": "relative file URI",
             b"http://example.com/fmu/resources": "URI scheme 'http'",

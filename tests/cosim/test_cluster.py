@@ -40,6 +40,7 @@ def wait_for(condition, timeout: float, what: str) -> None:
         time.sleep(0.1)
 
 
+@pytest.mark.slow
 def test_sweep_on_a_cluster_survives_a_killed_worker_and_resumes(fmus, tmp_path):
     fmu_dir = fmus["GearMeshRattle"].parent
     cases = grid_design(RANGES, 3)  # 9 cases
@@ -60,7 +61,7 @@ def test_sweep_on_a_cluster_survives_a_killed_worker_and_resumes(fmus, tmp_path)
     for name, (lo, hi) in RANGES.items():
         sweep += ["--param", f"{name}={lo!r}:{hi!r}"]
     sweep += ["--grid", "3", "--stop-time", repr(STOP), "--step", repr(STEP),
-              "--fmu-dir", str(fmu_dir), "--out", str(out)]
+              "--engine", "fmu", "--fmu-dir", str(fmu_dir), "--out", str(out)]
     try:
         start([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                "--scheduler-file", str(scheduler_file)], folders["scheduler"])
@@ -122,3 +123,69 @@ def test_sweep_on_a_cluster_survives_a_killed_worker_and_resumes(fmus, tmp_path)
         expected = {c: ("" if reference.get(c) is None else str(reference.get(c)))
                     for c in columns}
         assert rows[case.case_id] == expected, case
+
+
+@pytest.mark.slow
+def test_losing_every_worker_ends_with_the_resume_command(fmus, tmp_path):
+    """With the FMUs shipped as data, losing every worker loses them too: the sweep ends with
+    one line saying how to resume (not a dask traceback), keeps its finished rows, and the
+    same command resumes it on a new worker."""
+    fmu_dir = fmus["GearMeshRattle"].parent
+    scheduler_file = tmp_path / "scheduler.json"
+    out = tmp_path / "sweep.csv"
+    processes = []
+
+    def start(args):
+        processes.append(subprocess.Popen(args, cwd=tmp_path, stdout=subprocess.DEVNULL,
+                                          stderr=subprocess.DEVNULL))
+        return processes[-1]
+
+    try:
+        start([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+               "--scheduler-file", str(scheduler_file)])
+        wait_for(scheduler_file.exists, 60, "the scheduler")
+        address = json.loads(scheduler_file.read_text())["address"]
+
+        def worker():
+            return start([DASK, "worker", address, "--no-nanny", "--nthreads", "1",
+                          "--no-dashboard", "--host", "127.0.0.1", "--local-directory",
+                          str(tmp_path)])
+
+        only = worker()
+        from distributed import Client
+
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(1, timeout=60)
+        sweep = [sys.executable, "-m", "drive_rattle_cosim.sweep"]
+        for name, (lo, hi) in RANGES.items():
+            sweep += ["--param", f"{name}={lo!r}:{hi!r}"]
+        sweep += ["--grid", "3", "--stop-time", "0.2", "--engine", "fmu", "--fmu-dir",
+                  str(fmu_dir), "--out", str(out), "--scheduler", address]
+        first = subprocess.Popen(sweep, cwd=tmp_path, stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True)
+        processes.append(first)
+        wait_for(lambda: len(rows_of(out)) >= 1, 120, "the first case")
+        only.send_signal(signal.SIGKILL)  # every worker dies, and the scattered FMUs with it
+        worker()  # a new one joins
+        _, err = first.communicate(timeout=180)
+        assert first.returncode == 1, err
+        lines = [line for line in err.splitlines() if line.strip()]
+        assert len(lines) == 1 and "lost its workers" in lines[0], err
+        assert "drive_rattle_cosim.sweep" in lines[0] and "again" in lines[0], lines[0]
+        kept = rows_of(out)
+        assert 1 <= len(kept) < 9
+        resumed = subprocess.run(sweep, cwd=tmp_path, capture_output=True, text=True,
+                                 timeout=300)
+        assert resumed.returncode == 0, resumed.stderr
+        assert f"{len(kept)} already done" in resumed.stdout
+        assert len(rows_of(out)) == 9
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                os.kill(process.pid, signal.SIGTERM)
+        for process in processes:
+            try:
+                process.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()

@@ -8,10 +8,12 @@ import pytest
 from drive_rattle_cosim.sweep import (
     BANDS,
     Case,
+    ResultWriter,
     grid_design,
     latin_hypercube_design,
     rattle_metrics,
     read_results,
+    run_case,
     run_sweep,
 )
 
@@ -66,11 +68,41 @@ def test_rattle_metrics_against_closed_forms():
     assert out[band] == pytest.approx(10 * math.log10(A * A / 2), abs=0.3)
 
 
-def test_sweep_on_two_workers_records_failures_and_resumes(fmus, tmp_path):
+def test_the_library_engine_gives_the_fmus_numbers(flavour_fmus):
+    """The model library's compiled loop and the FMUs of either flavour in the fmpy harness
+    give the same metrics, bit for bit (only the wall time and the engine's name differ)."""
+    case = Case.of({"GearMeshRattle.gear.backlash": 0.12e-3, "Driveline.vehicle.drag": 0.06})
+    library = run_case(case, None, 0.4, 1e-4, transient=0.1, window=0.1)
+    fmu = run_case(case, flavour_fmus["GearMeshRattle"].parent, 0.4, 1e-4, transient=0.1,
+                   window=0.1)
+    assert not library["error"] and not fmu["error"], (library["error"], fmu["error"])
+    assert (library["engine"], fmu["engine"]) == ("library", "fmu")
+    assert library["impacts_per_s_drive"] > 0  # a rattling case
+    for key in library:
+        if key not in ("wall_seconds", "engine"):
+            assert library[key] == fmu[key] or (library[key] != library[key]
+                                                and fmu[key] != fmu[key]), key
+
+
+def test_a_second_client_on_the_same_result_file_is_refused(tmp_path):
+    out = tmp_path / "sweep.csv"
+    first = ResultWriter(out, ["a.b"])
+    try:
+        with pytest.raises(ValueError, match="being written by another sweep"):
+            ResultWriter(out, ["a.b"])
+    finally:
+        first.close()
+    # a lock left by a client that died is taken over
+    (tmp_path / "sweep.csv.lock").write_text("999999999\n", encoding="utf-8")
+    ResultWriter(out, ["a.b"]).close()
+    assert not (tmp_path / "sweep.csv.lock").exists()
+
+
+def test_sweep_on_two_workers_records_failures_and_resumes(tmp_path):
     bad = Case.of({"GearMeshRattle.gear.backlash": -1.0, "Driveline.vehicle.drag": 0.2})
     cases = [*grid_design(RANGES, 2), bad]
     out = tmp_path / "sweep.csv"
-    fmu_dir = fmus["GearMeshRattle"].parent
+    fmu_dir = None  # the model library's compiled loop
     # Interrupted after two cases...
     first = run_sweep(cases, out, fmu_dir, stop_time=0.01, workers=2, progress=False,
                       stop_after=2)

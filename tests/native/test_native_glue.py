@@ -115,14 +115,17 @@ def test_step_refusals_and_the_first_step_warning(mesh):
 
 
 def test_parameters_fixed_after_initialization_inputs_not(mesh):
-    """The library decides what may be set when; the glue adds no rule: after fmi2Terminate a
-    parameter is refused, an input accepted (FMI 2.0 allows it)."""
+    """The library decides what may be set when; the glue adds no rule: after initialization
+    a parameter is refused, an input accepted; after fmi2Terminate both are refused (FMI 2.0's
+    co-simulation state table allows no fmi2Set* in the terminated state)."""
     inst = started(mesh)
     assert inst.set_named({"gear.backlash": 2e-4}) == ERROR
     assert last(inst)[2] == twin_error(
         "GearMeshRattle", ("initialize", 0.0), ("set", {"gear.backlash": 2e-4}))
-    assert inst.terminate() == OK
     assert inst.set_named({"pinion.w": 80.0}) == OK
+    assert inst.terminate() == OK
+    assert inst.set_named({"pinion.w": 80.0}) == ERROR
+    assert "mode is 'terminated'" in last(inst)[2]
     assert inst.set_named({"wheel.J": 1e-3}) == ERROR
     assert "mode is 'terminated'" in last(inst)[2]
     inst.free()
