@@ -124,11 +124,12 @@ def row_2(fmus, work):
         foreign = unpack(fmus[other], work / f"{other}-foreign")
         gone = unpack(fmu, work / f"{name}-deleted")
         subprocess.run(["rm", "-rf", str(gone)], check=True)
+        missing = "cannot be opened: no such file or directory"
         cases = {
             b"file://" + os.fsencode(model.root): "the folder the FMU was unpacked to",
             os.fsencode(model.root): "the folder the FMU was unpacked to",
-            os.fsencode(gone / "resources"): "cannot be opened: no such file or directory",
-            b"file://" + os.fsencode(work / "missing" / "resources"): "cannot be opened: no such file or directory",
+            os.fsencode(gone / "resources"): missing,
+            b"file://" + os.fsencode(work / "missing" / "resources"): missing,
             b"resources": "relative path",
             b"file:resources": "relative file URI",
             b"http://example.com/fmu/resources": "URI scheme 'http'",
