@@ -24,19 +24,19 @@ SLAVES = ("GearMeshRattle", "Driveline")
 #: The modules of the Python API: specs and the binding, no physics (the model is the C
 #: library).  A new module here is either physics, which belongs in fmu_src/rattle_model, or
 #: a face, which belongs in its own package; extend the list only for neither.
-API_MODULES = {"__init__", "interface", "library", "parameters", "units"}
+API_MODULES = {"__init__", "catalog", "interface", "library", "parameters", "units"}
 
 #: What each layer may import besides the standard library: the runtime ships in the FMUs
 #: (the FMI glue and the slaves also use pythonfmu, whose runtime is bundled); the studies run
-#: the FMUs; the build assembles the runtime, the studies' SSP writer and regression
-#: references, and the C sources.
+#: the FMUs (in fmpy and the other masters); the build assembles the runtime, the studies'
+#: SSP writer and regression references, and the C sources.
 ALLOWED = {
     "drive_rattle": {"drive_rattle"},
     "drive_rattle_fmi": {"drive_rattle", "drive_rattle_fmi", "pythonfmu"},
     "slaves": {"drive_rattle", "drive_rattle_fmi", "pythonfmu"},
     "drive_rattle_cosim": {"drive_rattle", "drive_rattle_cosim", "numpy", "scipy", "fmpy",
                            "tqdm", "dask", "distributed", "libcosimpy", "lxml", "gemseo_fmu",
-                           "matplotlib"},
+                           "fmu_manipulation_toolbox", "ecospy", "matplotlib"},
     "drive_rattle_build": {"drive_rattle", "drive_rattle_fmi", "drive_rattle_build",
                            "drive_rattle_cosim", "pythonfmu", "fmpy", "ziglang"},
 }
