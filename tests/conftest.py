@@ -1,9 +1,10 @@
 """Session fixtures and the test layers.
 
 Every test carries the marker of its layer, from its folder (registered in pyproject.toml;
-``pytest -m core`` runs one layer, ``pytest -m "not slow"`` leaves the long ones out):
+``pytest -m model`` runs one layer, ``pytest -m "not slow"`` leaves the long ones out):
 
-* ``core``: tests/core -- the physics core, its compiled twin and the package structure;
+* ``model``: tests/model -- the model library against closed forms, properties, the readable
+  equations of tests/oracle and the monolithic reference; the package structure;
 * ``analysis``: tests/analysis -- the statistics and spectral lines of the studies;
 * ``fmi``: tests/fmi -- the slave classes instantiated directly and the native shim;
 * ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native -- the built FMUs (both
@@ -23,7 +24,7 @@ from drive_rattle_build import build
 
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
-LAYERS = {"core": "core", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
+LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
           "adversarial": "fmu", "native": "fmu", "sanitize": "sanitize"}
 
 

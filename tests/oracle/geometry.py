@@ -34,7 +34,7 @@ DRIVE = 1
 COAST = -1
 
 #: Upper bound on the number of tooth pairs that can be in the zone of action at once.
-#: The FMU exposes this many `pair[k].W` slots; a geometry needing more is rejected.
+#: The mesh unit outputs this many `pair[k].W` slots; a geometry needing more is rejected.
 MAX_PAIR_SLOTS = 8
 
 #: Roll distance [m] under which a breakpoint counts as reached (far below any physical

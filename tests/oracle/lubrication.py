@@ -1,6 +1,6 @@
 """Film, regime of lubrication and flank friction (paper eq. 11-17, read as docs/model.md says).
 
-Plain functions of SI floats; the mesh model calls them per tooth pair.
+Plain functions of SI floats; the oracle's mesh model (mesh.py) calls them per tooth pair.
 """
 
 from __future__ import annotations
@@ -68,8 +68,7 @@ def friction_force(
 
 
 def unknown_form_error(form: int) -> ValueError:
-    """The refusal of a friction form that is not one of the FORM_ codes (the compiled kernel
-    reports it with the form's number)."""
+    """The refusal of a friction form that is not one of the FORM_ codes."""
     return ValueError(f"friction form {form!r} unknown; allowed: {FORM_LOAD_SHARING}, "
                       f"{FORM_APPARENT_AREA}, {FORM_AS_PRINTED}")
 

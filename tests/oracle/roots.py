@@ -1,8 +1,8 @@
-"""Bracketing root finding and exact quadratic roots for event location.
-
-The FMU's runtime needs nothing beyond the standard library, so the bracketing solver is
-Brent's method (zeroin: bisection safeguarding secant and inverse quadratic steps) written out
-here; tests hold it against ``scipy.optimize.brentq``.
+"""Bracketing root finding for the readable equations: Brent's method (zeroin: bisection
+safeguarding secant and inverse quadratic steps) written out, as the model library's roots.c
+has it; tests/model/test_oracle_itself.py holds it against ``scipy.optimize.brentq``.
+(The library's event location, quadratic crossings included, is the stepper's: it is tested
+through the located events, not copied here.)
 """
 
 from __future__ import annotations
@@ -28,9 +28,8 @@ def brent(
 ) -> float:
     """Root of ``f`` in ``[a, b]`` where ``f(a)`` and ``f(b)`` differ in sign (or one is 0).
 
-    Converges to within ``xtol + rtol*|x|`` (both named by every caller: no default hides a
-    tolerance the compiled kernel must repeat).  Raises :func:`bracket_error` if the interval
-    does not bracket a root.
+    Converges to within ``xtol + rtol*|x|`` (both named by every caller).  Raises
+    :func:`bracket_error` if the interval does not bracket a root.
     """
     fa = f(a) if fa is None else fa
     fb = f(b) if fb is None else fb
@@ -80,42 +79,6 @@ def brent(
 
 def bracket_error(a: float, fa: float, b: float, fb: float) -> ValueError:
     """The refusal of :func:`brent` for an interval ``[a, b]`` whose ends do not bracket a
-    root (the compiled kernel reports it with the same four numbers)."""
+    root."""
     return ValueError(f"brent: f({a!r}) = {fa!r} and f({b!r}) = {fb!r} do not bracket a root")
 
-
-def first_crossing(c0: float, c1: float, c2: float, t_max: float, rising: bool) -> float | None:
-    """Smallest ``t`` in ``[0, t_max]`` where ``q(t) = c0 + c1 t + c2 t^2`` crosses zero
-    upwards (``rising``) or downwards, or None.
-
-    Roots come from the cancellation-free form of the quadratic formula; a root is accepted
-    only where the slope ``c1 + 2 c2 t`` has the requested sign, which gives the event its
-    direction and rejects the root a state sits on right after the opposite event.  A state
-    exactly on the zero (``c0 == 0``) crosses at ``t = 0`` when it moves the requested way: its
-    slope has the requested sign, or the slope is zero and the curvature has it (exact touch).
-    """
-    sign = 1.0 if rising else -1.0
-    if c0 == 0.0 and (sign * c1 > 0.0 or (c1 == 0.0 and sign * c2 > 0.0)):
-        return 0.0
-    roots: list[float] = []
-    if c2 == 0.0:
-        if c1 != 0.0:
-            roots.append(-c0 / c1)
-    else:
-        disc = c1 * c1 - 4.0 * c2 * c0
-        if disc >= 0.0:
-            sq = math.sqrt(disc)
-            qq = -0.5 * (c1 + math.copysign(sq, c1))
-            if qq != 0.0:
-                roots.append(qq / c2)
-                roots.append(c0 / qq)
-            else:  # c1 == 0 and disc == 0: double root at 0
-                roots.append(0.0)
-    best = None
-    for t in roots:
-        if 0.0 < t <= t_max:
-            slope = c1 + 2.0 * c2 * t
-            right_way = (slope > 0.0) if rising else (slope < 0.0)
-            if right_way and (best is None or t < best):
-                best = t
-    return best

@@ -1,0 +1,177 @@
+"""Event location: onsets and releases are located, not stepped over; exact touches at a
+communication point are onsets."""
+
+import math
+from dataclasses import replace
+
+import pytest
+
+from drive_rattle import COAST, DRIVE, MeshParameters, MeshUnit
+
+from .helpers import approach_unit, free_parameters, rest_step, run_impact
+
+H = 1e-4
+
+
+def penetration(d: dict, flank: int, phi_p: float, phi_w: float) -> float:
+    """The flank's penetration [m] as the library computes it, from its own derived values."""
+    return flank * (d["arm_pinion"] * phi_p - d["arm_wheel"] * phi_w) - d["half_backlash"]
+
+
+def touching_angle(d: dict, flank: int, phi_p: float) -> float:
+    """A wheel angle at which ``flank`` has penetration exactly 0.0 against ``phi_p``."""
+    phi = (d["arm_pinion"] * phi_p - flank * d["half_backlash"]) / d["arm_wheel"]
+    for _ in range(64):
+        pen = penetration(d, flank, phi_p, phi)
+        if pen == 0.0:
+            return phi
+        # d(pen)/d(phi_w) = -flank arm_w: step the wheel angle by one ulp towards zero
+        phi = math.nextafter(phi, (flank if pen > 0.0 else -flank) * math.inf)
+    pytest.fail(f"no wheel angle with exactly zero penetration near {phi!r}")
+
+
+def test_onset_between_substeps_located_within_1ns():
+    v, gap = 3e-3, 41.3e-9
+    unit = approach_unit(v, DRIVE, gap=gap)
+    onset = rest_step(unit, H).events[0]  # ten substeps of 1e-5 s; the onset between two
+    assert onset.kind == "onset"
+    t_exact = gap / v
+    assert (t_exact * 1e5) % 1 > 0.1  # not on a substep boundary
+    assert abs(onset.time - t_exact) < 1e-9
+
+
+@pytest.mark.parametrize("a_p, tau", [(40.0, -0.05), (40.0, 0.05), (-40.0, -0.05)])
+def test_onset_with_load_and_pinion_acceleration_matches_the_quadratic(a_p, tau):
+    p = free_parameters(0.0, DRIVE, gap=50e-9)
+    d = p.derived()
+    unit = MeshUnit(p, 0.0, 0.0, tau)
+    report = unit.step(2e-4, 0.0, 0.0, a_p, tau)
+    # delta(t) = -gap + 1/2 (arm_p a_p - arm_w a_w) t^2 with a_w = -tau / J
+    acc = d["arm_pinion"] * a_p + d["arm_wheel"] * tau / p.J_wheel
+    t_exact = math.sqrt(2 * 50e-9 / acc) if acc > 0 else math.inf
+    if t_exact < 2e-4:
+        assert report.events[0].kind == "onset"
+        assert abs(report.events[0].time - t_exact) < 1e-9
+    else:  # moving apart, or not reaching the flank in the step
+        assert not report.events
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_release_is_at_zero_penetration(flank):
+    unit = approach_unit(4e-3, flank)
+    d = unit.describe()
+    for _ in range(400):
+        report = rest_step(unit, 1e-5)
+        if any(e.kind == "release" for e in report.events):
+            break
+    release = next(e for e in report.events if e.kind == "release")
+    out = unit.outputs()
+    assert out["mesh.delta"] == 0.0 and out["mesh.W"] == 0.0 and out["mesh.n_contact"] == 0
+    # The state at the step end is in free flight; back-propagate to the release time.
+    phi, w = unit.wheel()
+    phi_release = phi - w * (1e-5 - release.time)
+    assert abs(penetration(d, flank, 0.0, phi_release)) < 1e-15
+
+
+def test_time_grid_is_not_accumulated():
+    # Many steps with a step size that is not a binary fraction: the substep grid inside
+    # each step ends exactly at h, so nothing drifts.
+    unit = approach_unit(0.0, DRIVE, gap=1e-9)
+    h = 1e-4 / 3
+    for _ in range(3000):
+        rest_step(unit, h)
+    out = unit.outputs()
+    assert out["wheel.w"] == 0.0 and out["mesh.n_contact"] == 0
+    assert out["mesh.impacts_drive"] == out["mesh.impacts_coast"] == 0
+
+
+def test_flank_reached_exactly_by_the_pinion_at_a_communication_point():
+    # Free flight towards the drive flank; the next step's pinion angle puts the flank exactly
+    # at zero penetration at the step start (the pinion input may jump between steps).
+    p = MeshParameters(init_in_contact=False, w_start=-5.0)
+    d = p.derived()
+    unit = MeshUnit(p, 0.0, 0.0, 0.0)
+    rest_step(unit, H)
+    assert unit.outputs()["mesh.n_contact"] == 0
+    phi_w = unit.wheel()[0]
+    phi_p = (d["arm_wheel"] * phi_w + d["half_backlash"]) / d["arm_pinion"]
+    for _ in range(64):
+        pen = penetration(d, DRIVE, phi_p, phi_w)
+        if pen == 0.0:
+            break
+        phi_p = math.nextafter(phi_p, -math.inf if pen > 0.0 else math.inf)
+    assert penetration(d, DRIVE, phi_p, phi_w) == 0.0
+    report = unit.step(H, phi_p, 0.0, 0.0, 0.0)
+    assert report.events[0].kind == "onset" and report.events[0].time == 0.0
+
+
+def test_zero_load_start_with_an_accelerating_pinion_is_an_onset():
+    # wheel.tau_load = 0 starts the wheel touching the drive flank at the rigid speed; a pinion
+    # accelerating into it loads the flank from the first instant (no free flight into it).
+    p = MeshParameters(friction_enabled=False)
+    unit = MeshUnit(p, 0.0, 86.92, 0.0)
+    report = unit.step(1e-4, 0.0, 86.92, 200.0, 0.0)
+    assert report.events[0].kind == "onset" and report.events[0].time == 0.0
+    assert report.events[0].flank == DRIVE
+    out = unit.outputs()
+    assert out["mesh.W_peak"] > 0.0 and out["mesh.delta"] > 0.0
+    # The penetration reached is what the load needs, not a free flight of a whole step.
+    assert out["mesh.delta_peak"] < 0.05e-6
+
+
+def touching_unit(v: float, tau_load: float, flank: int = DRIVE, **changes) -> MeshUnit:
+    """A unit whose wheel is in free flight (no flank in contact) at initialization and exactly
+    touches ``flank`` at the start of the first step, approaching at v [m/s]: the wheel starts
+    at the touching angle against phi_p = 0 while the pinion is initialized 1 nm short of it
+    (the first step's pinion.phi = 0 closes the gap by a jump, as a master's input may)."""
+    p = MeshParameters(init_in_contact=False, **changes)
+    d = p.derived()
+    p = replace(p, phi_start=touching_angle(d, flank, 0.0), w_start=-flank * v / d["arm_wheel"])
+    unit = MeshUnit(p, -flank * 1e-9 / d["arm_pinion"], 0.0, tau_load)
+    assert unit.outputs()["mesh.n_contact"] == 0
+    return unit
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_exact_touch_at_a_communication_point_is_an_onset(flank):
+    # The flank reached exactly at a step boundary (penetration 0.0, approaching at 0.1 m/s)
+    # must start the contact at once, not be flown through for a step.  (A wheel started
+    # exactly touching and approaching starts in contact: no onset.)
+    v = 0.1
+    unit = touching_unit(v, 0.0, flank, friction_enabled=False, dissipation=0)
+    onset = next(e for e in rest_step(unit, H).events if e.kind in ("onset", "release"))
+    assert (onset.kind, onset.time, onset.flank) == ("onset", 0.0, flank)
+    assert onset.speed == pytest.approx(v, rel=1e-12)
+    assert unit.get(["mesh.W_peak"])["mesh.W_peak"] > 0.0
+    events, _, _ = run_impact(unit, h=H)
+    release = [e for _, e in events if e.kind == "release"]
+    assert -release[0].speed == pytest.approx(v, rel=1e-3)
+
+
+@pytest.mark.parametrize("a_p, tau_load", [(500.0, 0.0), (0.0, 0.3)])
+def test_exact_touch_at_rest_accelerated_into_contact(a_p, tau_load):
+    # Wheel and pinion at rest, exactly touching; the pinion's acceleration or the load drives
+    # the drive flank into contact: an onset at t = 0 at zero speed.
+    unit = touching_unit(0.0, tau_load)
+    report = unit.step(H, 0.0, 0.0, a_p, tau_load)
+    onsets = [e for e in report.events if e.kind == "onset"]
+    assert [(e.time, e.flank, e.speed) for e in onsets] == [(0.0, DRIVE, 0.0)]
+    for k in range(1, 20):
+        t = k * H
+        unit.step(H, 0.5 * a_p * t * t, a_p * t, a_p, tau_load)
+        assert unit.outputs()["mesh.delta"] > 0.0
+    assert unit.outputs()["mesh.impacts_drive"] == 1
+
+
+@pytest.mark.parametrize("v", [1e-4, 1e-5])
+def test_grazing_contact_from_exact_touch_is_one_onset_and_one_release(v):
+    # Exactly touching, approaching at v [m/s] while the load pulls the wheel back off the
+    # drive flank at ~30 m/s^2: the flank is left within the first 10 us substep, whether or
+    # not a sample of the substep penetrates (at 1e-4 m/s one does, at 1e-5 m/s none).
+    unit = touching_unit(v, -1.0)
+    kinds = []
+    for _ in range(3):
+        kinds += [e.kind for e in unit.step(H, 0.0, 0.0, 0.0, -1.0).events
+                  if e.kind in ("onset", "release")]
+    assert kinds == ["onset", "release"]
+    assert unit.outputs()["mesh.n_contact"] == 0

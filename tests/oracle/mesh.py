@@ -1,0 +1,207 @@
+"""Mesh loads: Hertzian normal force and flank friction of every tooth pair in contact, and
+the torques they put on the wheel and the pinion (paper eq. 1-2, 10-17 as read in
+docs/model.md).  The readable equations the model library's mesh.c is held against.
+
+The rigid-body approach along the tooth normal is common to all pairs of a flank:
+
+    x     = cos(beta_b) * (rb_p phi_p - rb_w phi_w)        (> 0 when the pinion leads)
+    delta = flank * x - backlash / 2                       (penetration; < 0 is a gap)
+
+Each pair in the zone of action touches at its own contact point with its own crown offset
+g_i (geometry.py), so its penetration is delta_i = delta - g_i, and it carries the Hertz force
+with Hunt-Crossley dissipation on its own penetration rate,
+
+    W_i = K_i delta_i^(3/2) (1 + d ddelta_i/dt),   W_i >= 0,
+
+K_i from the contact law at the pair's radii.  Torques (each gear positive in its own forward
+direction), with F_i the pair's friction force and sgn_i the sign of its sliding speed:
+
+    wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
+    pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
+
+The parameters are read by attribute (``drive_rattle.MeshParameters`` or any object with its
+field names); nothing here calls the model library.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from . import hertz, lubrication, roots
+from .geometry import DRIVE, HelicalPairGeometry
+
+DISSIPATION_NONE = 0
+DISSIPATION_RESTITUTION = 1
+DISSIPATION_FACTOR = 2
+
+
+@dataclass
+class PairLoad:
+    """Loads of one tooth pair (SI units), in the order of the library's per-pair rows."""
+
+    slot: int  # pair number modulo MAX_PAIR_SLOTS
+    s: float  # roll coordinate of the contact point [m]
+    offset: float  # crown offset of the contact point [m]
+    r_x: float  # equivalent radius across the contact line [m]
+    K: float  # stiffness non-linearity of the contact [N/m^1.5]
+    delta: float  # penetration of the pair, delta - offset [m]
+    W: float  # normal force [N]
+    F: float  # friction force magnitude [N]
+    sliding_speed: float  # v_s = w_p rho_p - w_w rho_w [m/s]
+    entrainment_speed: float  # u [m/s]
+    h: float  # film thickness [m]
+    film_parameter: float  # lambda [1]
+    dry_fraction: float  # psi [1]
+    delta_max_eq7: float  # energy-balance delta_max of eq. 7 at the last impact speed [m]
+
+
+@dataclass
+class MeshLoads:
+    """Mesh state on one flank (SI units)."""
+
+    flank: int
+    delta: float  # penetration of the flank's rigid-body approach (negative: clearance) [m]
+    tau_wheel: float  # torque of the mesh on the wheel [N.m]
+    tau_pinion: float  # torque of the mesh on the pinion [N.m]
+    W: float  # total normal force [N]
+    F: float  # net friction force, positive when it drives the wheel forward [N]
+    pairs: list[PairLoad] = field(default_factory=list)
+
+
+def damping_factor(params) -> float:
+    """Hunt-Crossley factor d [s/m] of the parameters' contact.dissipation model."""
+    if params.dissipation == DISSIPATION_RESTITUTION:
+        return hertz.hunt_crossley_factor(params.restitution, params.restitution_speed)
+    if params.dissipation == DISSIPATION_FACTOR:
+        return params.damping
+    return 0.0
+
+
+class MeshModel:
+    """Evaluates the mesh loads for given gear angles and speeds."""
+
+    def __init__(self, params):
+        self.params = params
+        self.geometry = g = HelicalPairGeometry(params)
+        self.E_star = hertz.effective_modulus(
+            params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
+        self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
+                                    g.radius_ratio_range())
+        self.damping = damping_factor(params)
+        # Arms of the normal force about each axis: cos(beta_b) * base radius.
+        self.arm_wheel = g.normal_factor * g.rb_wheel
+        self.arm_pinion = g.normal_factor * g.rb_pinion
+        # Effective mass of the wheel along the tooth normal (energy-consistent).
+        self.normal_mass = params.J_wheel / self.arm_wheel**2
+
+    # ------------------------------------------------------------------ kinematics
+    def penetration(self, flank: int, phi_p: float, phi_w: float) -> float:
+        """Normal penetration delta [m] of ``flank`` (negative: remaining clearance)."""
+        g = self.geometry
+        return flank * (self.arm_pinion * phi_p - self.arm_wheel * phi_w) - g.half_backlash
+
+    def wheel_angle(self, flank: int, phi_p: float, delta: float) -> float:
+        """The wheel angle [rad] at which ``flank`` has penetration ``delta`` against the
+        pinion at ``phi_p``."""
+        x = flank * (self.geometry.half_backlash + delta)
+        return (self.arm_pinion * phi_p - x) / self.arm_wheel
+
+    def approach_rate(self, flank: int, w_p: float, w_w: float) -> float:
+        """d(delta)/dt [m/s] of ``flank``."""
+        return flank * (self.arm_pinion * w_p - self.arm_wheel * w_w)
+
+    def pair_rate(self, flank: int, w_p: float, dg: float) -> float:
+        """Rate [m/s] at which a pair's crown offset grows (dg/ds_n times the roll speed of
+        its face centre, flank rb_p w_p)."""
+        return dg * (flank * self.geometry.rb_pinion * w_p)
+
+    # ------------------------------------------------------------------ loads
+    def stiffness_sum(self, flank: int, phi_p: float) -> float:
+        """sum K_i [N/m^1.5] over the pairs in the zone of action of ``flank``."""
+        return sum(self.law.coefficients(self.geometry.normal_radii(s)[2]).K
+                   for _, s, _, _ in self.geometry.pairs(flank, phi_p))
+
+    def static_force(self, flank: int, phi_p: float, delta: float) -> float:
+        """Total normal force [N] of ``flank`` at penetration ``delta`` without dissipation:
+        sum_i K_i (delta - g_i)^(3/2) over the pairs that touch."""
+        total = 0.0
+        for _slot, s, g, _dg in self.geometry.pairs(flank, phi_p):
+            d = delta - g
+            if d > 0.0:
+                K = self.law.coefficients(self.geometry.normal_radii(s)[2]).K
+                total += K * d**1.5
+        return total
+
+    def torques(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
+                v_impact: float) -> tuple[float, float, float]:
+        """``(tau_wheel, tau_pinion, W)`` on ``flank``."""
+        loads = self.loads(flank, phi_p, w_p, phi_w, w_w, v_impact)
+        return loads.tau_wheel, loads.tau_pinion, loads.W
+
+    def loads(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
+              v_impact: float) -> MeshLoads:
+        """Mesh loads on ``flank`` with the per-pair breakdown (every pair in the zone of
+        action, the ones that do not touch with their penetration and zero loads)."""
+        p = self.params
+        g = self.geometry
+        delta = self.penetration(flank, phi_p, phi_w)
+        out = MeshLoads(flank, delta, 0.0, 0.0, 0.0, 0.0)
+        if delta <= 0.0:
+            return out
+        delta_dot = self.approach_rate(flank, w_p, w_w)
+        for slot, s, offset, dg in g.pairs(flank, phi_p):
+            pen = delta - offset
+            r_x = g.normal_radii(s)[2]
+            K, _R, ka, kz = self.law.coefficients(r_x)
+            if pen <= 0.0:
+                out.pairs.append(PairLoad(slot, s, offset, r_x, K, pen,
+                                          0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+                continue
+            W = K * pen**1.5
+            if self.damping > 0.0:
+                W *= 1.0 + self.damping * (delta_dot - self.pair_rate(flank, w_p, dg))
+                W = max(W, 0.0)  # the flanks never pull on each other
+            out.tau_wheel += flank * W * self.arm_wheel
+            out.tau_pinion -= flank * W * self.arm_pinion
+            out.W += W
+            rho_p, rho_w = s, g.line_length - s
+            v_s = lubrication.sliding_speed(w_p, rho_p, w_w, rho_w)
+            u = lubrication.entrainment_speed(w_p, rho_p, w_w, rho_w)
+            F = h = lam = psi = d_max = 0.0
+            if W > 0.0:
+                A_e = lubrication.asperity_area(W, self.E_star, p.gamma, p.sigma)
+                A = kz * W ** (2.0 / 3.0)
+                d_max = hertz.film_delta_max(v_impact, K, r_x, ka, p.density)
+                h = lubrication.film_thickness(-pen, d_max)
+                lam = h / p.sigma
+                psi = lubrication.dry_fraction(lam)
+                if p.friction_enabled:
+                    U = u if p.shear_speed == 0 else v_s
+                    F = lubrication.friction_force(p.friction_form, psi, A_e, A, p.tau_s,
+                                                   p.eta, U, h)
+                    sgn = math.copysign(1.0, v_s) if v_s != 0.0 else 0.0
+                    out.tau_wheel += sgn * F * rho_w
+                    out.tau_pinion -= sgn * F * rho_p
+                    out.F += sgn * F
+            out.pairs.append(PairLoad(slot, s, offset, r_x, K, pen, W, F, v_s, u, h, lam, psi,
+                                      d_max))
+        return out
+
+    # ------------------------------------------------------------------ static start
+    def equilibrium_penetration(self, phi_p: float, w_p: float, tau_load: float) -> float:
+        """The penetration [m] of the loaded flank (drive for tau_load > 0) at which the mesh
+        torque on the wheel turning at the rigid ratio balances ``tau_load`` [N.m]."""
+        if tau_load == 0.0:
+            return 0.0
+        flank = DRIVE if tau_load > 0.0 else -DRIVE
+        w_w = w_p * self.geometry.ratio
+
+        def residual(delta):
+            phi_w = self.wheel_angle(flank, phi_p, delta)
+            return self.loads(flank, phi_p, w_p, phi_w, w_w, 0.0).tau_wheel - tau_load
+
+        hi = 1e-9
+        while (residual(hi) > 0.0) != (flank == DRIVE):
+            hi *= 2.0
+        return roots.brent(residual, 0.0, hi, xtol=1e-20, rtol=roots.BRENT_RTOL)
