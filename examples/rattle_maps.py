@@ -5,12 +5,14 @@ scenario over two parameter planes, as PNG heat maps --
 * order-2 amplitude x engine speed --
 
 each a grid sweep on dask (LocalCluster) with results written case by case, so that an
-interrupted run resumes where it stopped.  Every case runs a start transient (left out) and
+interrupted run resumes where it stopped.  The cases run on the model library's compiled loop
+(the FMUs' numbers bit for bit, tests/cosim/test_sweep.py); ``--fmu-dir`` runs them on built
+FMUs in the fmpy harness instead.  Every case runs a start transient (left out) and
 then several equal windows; a map shows the mean over the windows, hatched where the
 window-to-window scatter exceeds a stated fraction of the value, next to a map of that scatter.
 
     python examples/rattle_maps.py [--points 5] [--transient 1] [--window 1] [--windows 3]
-                                   [--workers 2] [--out out/rattle_maps]
+                                   [--workers 2] [--out out/rattle_maps] [--fmu-dir dist]
 """
 
 from __future__ import annotations
@@ -23,10 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from drive_rattle_build import build_fmus
+from drive_rattle_build.library import build_in_place
 from drive_rattle_cosim.sweep import grid_design, read_results, run_sweep
 
-ROOT = Path(__file__).resolve().parents[1]
 RPM = 2 * math.pi / 60
 
 #: (file stem, x parameter, x range, x display factor and label, y ...)
@@ -56,8 +57,7 @@ def run(points: int = 5, transient: float = 1.0, window: float = 1.0, windows: i
                          "window > 0, transient >= 0")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    if fmu_dir is None:
-        fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
+    build_in_place()  # the library of this checkout's sources (the workers load it)
     stop_time = transient + windows * window
     settings = {"transient [s]": transient, "window [s]": window, "windows": windows}
     files, counts = [], {}
@@ -189,7 +189,8 @@ def main(argv=None) -> int:
     ap.add_argument("--windows", type=int, default=3, help="windows per case")
     ap.add_argument("--workers", type=int, default=2, help="dask worker processes")
     ap.add_argument("--out", default="out/rattle_maps")
-    ap.add_argument("--fmu-dir", default=None, help="folder with built FMUs (default: build)")
+    ap.add_argument("--fmu-dir", default=None, help="run the cases on the FMUs of this folder in the fmpy harness (default: "
+                         "the model library's compiled loop)")
     args = ap.parse_args(argv)
     result = run(args.points, args.transient, args.window, args.windows, args.workers,
                  args.out, args.fmu_dir)

@@ -28,6 +28,14 @@ LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", 
           "adversarial": "fmu", "native": "fmu", "sanitize": "sanitize"}
 
 
+def pytest_configure(config):
+    """The model library built from this checkout's sources before anything is collected (a
+    fresh clone has none; the tests, the oracle's start and the studies load it)."""
+    from drive_rattle_build.library import build_in_place
+
+    build_in_place()
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
