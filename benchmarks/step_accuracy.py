@@ -3,11 +3,11 @@
     python benchmarks/step_accuracy.py [--stop-time 2] [--steps 1e-5 2e-5 ... 1e-2]
 
 Runs the default system with the in-process twin of the co-simulation
-(``drive_rattle_cosim.system.simulate``, the compiled kernel; the FMUs in any Jacobi master compute
-the same numbers) at each communication step, three times with the phase of engine order 1
-moved by 0, 1e-6 and 2e-6 rad: rattle is chaotic, so the spread of these three runs is the
-scatter a statistic has at a step anyway.  Prints, per step, the mean and the range of the rattle
-statistics over the three runs, or the message of the refused step.
+(``drive_rattle_cosim.system.simulate``: the model library's compiled loop; the FMUs in any
+Jacobi master compute the same numbers) at each communication step, three times with the
+phase of engine order 1 moved by 0, 1e-6 and 2e-6 rad: rattle is chaotic, so the spread of these
+three runs is the scatter a statistic has at a step anyway.  Prints, per step, the mean and the
+range of the rattle statistics over the three runs, or the message of the refused step.
 """
 
 from __future__ import annotations
@@ -15,10 +15,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from drive_rattle.driveline import DrivelineParameters
-from drive_rattle.kernel import new_stepper
-from drive_rattle.mesh import MeshModel
-from drive_rattle.parameters import MeshParameters
+from drive_rattle.catalog import UNITS
+from drive_rattle.parameters import DrivelineParameters, MeshParameters
+from drive_rattle.units import ModelError, describe
 from drive_rattle_cosim.sweep import rattle_metrics
 from drive_rattle_cosim.system import simulate
 
@@ -33,14 +32,14 @@ DEFAULT_STEPS = (1e-5, 2e-5, 5e-5, 1e-4, 2e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-
 
 def measure(step: float, stop_time: float) -> dict:
     """``{metric: (mean, lo, hi)}`` over the phase variants, or ``{"refused": message}``."""
-    normal_mass = MeshModel(MeshParameters()).normal_mass
+    normal_mass = describe(UNITS["GearMeshRattle"].kind, {})["normal_mass"]
     runs = []
     for phase in PHASES:
         dp = DrivelineParameters(phase_1=phase)
         try:
-            rec = simulate(driveline_params=dp, stop_time=stop_time, step=step,
-                           stepper=new_stepper, signals=SIGNALS)
-        except ValueError as err:
+            rec = simulate(MeshParameters(), dp, stop_time=stop_time, step=step,
+                           signals=SIGNALS)
+        except (ValueError, ModelError) as err:
             return {"refused": str(err)}
         runs.append(rattle_metrics(rec.time, rec.signals, normal_mass))
     return {k: (sum(r[k] for r in runs) / len(runs), min(r[k] for r in runs),
