@@ -189,8 +189,9 @@ def main(argv=None) -> int:
     ap.add_argument("--windows", type=int, default=3, help="windows per case")
     ap.add_argument("--workers", type=int, default=2, help="dask worker processes")
     ap.add_argument("--out", default="out/rattle_maps")
-    ap.add_argument("--fmu-dir", default=None, help="run the cases on the FMUs of this folder in the fmpy harness (default: "
-                         "the model library's compiled loop)")
+    ap.add_argument("--fmu-dir", default=None,
+                    help="run the cases on the FMUs of this folder in the fmpy harness "
+                         "(default: the model library's compiled loop)")
     args = ap.parse_args(argv)
     result = run(args.points, args.transient, args.window, args.windows, args.workers,
                  args.out, args.fmu_dir)

@@ -333,26 +333,50 @@ def coupled_start_inputs(mesh_parameters=None, driveline_parameters=None,
         return dict(zip(m_names, m_in, strict=True)), dict(zip(d_names, d_in, strict=True))
 
 
-@dataclass
 class CoupledRun:
     """A coupled run of :func:`run_coupled`: the communication points [s], one column per
     recorded variable (``"<Unit>.<name>"``, Integer outputs as float) and the mesh's contact
-    onsets (time [s], normal approach speed [m/s], flank)."""
+    onsets (time [s], normal approach speed [m/s], flank).
 
-    time: list[float]
-    columns: dict[str, list[float]]
-    onset_times: list[float]
-    onset_speeds: list[float]
-    onset_flanks: list[int]
+    The library writes every column contiguously into one buffer; ``columns`` and ``time``
+    become Python lists on first use, and :meth:`column_buffer` hands a column over without
+    a copy (``numpy.asarray(run.column_buffer(name))``) for studies of long runs."""
+
+    def __init__(self, start_ns: int, step_ns: int, steps: int, names: list[str], buffer,
+                 onsets: list[float]):
+        self._start_ns, self._step_ns, self.steps = start_ns, step_ns, steps
+        self._index = {name: i for i, name in enumerate(names)}
+        self._values = memoryview(buffer).cast("B").cast("d")
+        self._columns: dict[str, list[float]] | None = None
+        self.onset_times = onsets[0::3]
+        self.onset_speeds = onsets[1::3]
+        self.onset_flanks = [int(f) for f in onsets[2::3]]
+
+    def column_buffer(self, name: str) -> memoryview:
+        """The column of ``name`` as a read-only buffer of doubles (no copy)."""
+        i, n = self._index[name], self.steps + 1
+        return self._values[i * n:(i + 1) * n].toreadonly()
+
+    @property
+    def columns(self) -> dict[str, list[float]]:
+        if self._columns is None:
+            self._columns = {name: self.column_buffer(name).tolist() for name in self._index}
+        return self._columns
+
+    @property
+    def time(self) -> list[float]:
+        """The communication points t_k = (t0_ns + k step_ns) / 1e9 [s]."""
+        return [(self._start_ns + k * self._step_ns) / 1e9 for k in range(self.steps + 1)]
 
 
 def run_coupled(mesh: Unit, driveline: Unit, step_ns: int, steps: int,
-                record: Iterable[str] | None = None, onset_capacity: int = 1_000_000
+                record: Iterable[str] | None = None, onset_capacity: int | None = None
                 ) -> CoupledRun:
     """Couple two initialized units for ``steps`` steps of ``step_ns`` nanoseconds from their
     current time, in one call of the library (``rm_run_coupled``): the co-simulation's
     numbers, bit for bit, at the cost of the model alone.  ``record`` names the variables
-    recorded at every point, ``"<Unit>.<name>"`` (default: every output of both units)."""
+    recorded at every point, ``"<Unit>.<name>"`` (default: every output of both units);
+    ``onset_capacity`` the most onsets kept (default: four per step)."""
     units = {_unit_name(MESH): mesh, _unit_name(DRIVELINE): driveline}
     if record is None:
         record = [f"{name}.{n}" for name, u in units.items()
@@ -371,6 +395,8 @@ def run_coupled(mesh: Unit, driveline: Unit, step_ns: int, steps: int,
     start_ns = round(start * 1e9)
     n = len(record)
     buffer = (ctypes.c_double * (n * (steps + 1)))()
+    if onset_capacity is None:  # chatter can put several onsets into a step; rarely more
+        onset_capacity = 4 * int(steps) + 1024
     onsets = (ctypes.c_double * (3 * onset_capacity))()
     count = ctypes.c_size_t()
     status = mesh._lib.rm_run_coupled(
@@ -381,8 +407,5 @@ def run_coupled(mesh: Unit, driveline: Unit, step_ns: int, steps: int,
     if count.value > onset_capacity:
         raise ModelError(f"{count.value} onsets, more than the {onset_capacity} kept: raise "
                          "onset_capacity")
-    values = memoryview(buffer).cast("B").cast("d").tolist()
-    columns = {name: values[i::n] for i, name in enumerate(record)}
-    times = [(start_ns + k * int(step_ns)) / 1e9 for k in range(steps + 1)]
-    flat = onsets[:3 * count.value]
-    return CoupledRun(times, columns, flat[0::3], flat[1::3], [int(f) for f in flat[2::3]])
+    return CoupledRun(start_ns, int(step_ns), int(steps), record, buffer,
+                      onsets[:3 * count.value])

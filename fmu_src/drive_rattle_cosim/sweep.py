@@ -237,13 +237,16 @@ def _run_library(parameters: dict, stop_time: float, step: float) -> tuple[list,
                          "GearMeshRattle or Driveline")
     mp = MeshParameters.from_public(_unit_parameters(parameters, "GearMeshRattle"))
     dp = DrivelineParameters.from_public(_unit_parameters(parameters, "Driveline"))
-    points = communication_points(0.0, step, stop_time)
+    steps = len(communication_points(0.0, step, stop_time)) - 1
+    step_ns = round(step * 1e9)
+    # the points as the harness computes them, (k step_ns) / 1e9 (exact integers below 2**53)
+    points = np.arange(steps + 1, dtype=np.int64) * step_ns / 1e9
     mesh_in, wheel = coupled_start_inputs(mp, dp)
     with MeshUnit(mp, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"],
                   mesh_in["pinion.a"]) as mesh, \
             DrivelineUnit(dp, wheel["wheel.phi"], wheel["wheel.w"]) as drive:
-        run = run_coupled(mesh, drive, round(step * 1e9), len(points) - 1, RECORDED)
-    return points, {name: run.columns[name] for name in RECORDED}
+        run = run_coupled(mesh, drive, step_ns, steps, RECORDED)
+    return points, {name: np.asarray(run.column_buffer(name)) for name in RECORDED}
 
 
 def _run_fmus(parameters: dict, fmus, stop_time: float, step: float) -> tuple[list, dict]:

@@ -182,7 +182,7 @@ RM_API int rm_coupled_start(RmUnit* mesh, RmUnit* driveline, double start_time,
  * `steps` steps, through the same calls the FMUs make: both units initialized (phase
  * STEPPING) at start_ns / 1e9.  At every point k (steps + 1 of them) the n_record variables
  * record_vr[i] of unit record_unit[i] (RM_MESH or RM_DRIVELINE; Real or Integer) are written
- * to record[k n_record + i] before the step; every contact onset of the mesh as (time, speed,
+ * to record[i (steps + 1) + k] before the step (a column per variable); every contact onset of the mesh as (time, speed,
  * flank) to onsets (at most onset_capacity kept, *n_onsets counts all).  RM_ERROR with the
  * refusing unit's message in rm_message(mesh) (the units then stay as that call left them). */
 RM_API int rm_run_coupled(RmUnit* mesh, RmUnit* driveline, int64_t start_ns, int64_t step_ns,

@@ -58,7 +58,7 @@ int rm_run_coupled(RmUnit* mesh, RmUnit* drive, int64_t start_ns, int64_t step_n
         double t = (double)(start_ns + k * step_ns) / 1e9;
         for (size_t i = 0; i < n_record; i++) {
             RmUnit* u = record_unit[i] == RM_MESH ? mesh : drive;
-            double* slot = &record[(size_t)k * n_record + i];
+            double* slot = &record[i * ((size_t)steps + 1) + (size_t)k]; /* by column */
             if (u->variables[record_vr[i]].type == RM_REAL) {
                 if (rm_get_real(u, &record_vr[i], 1, slot) != RM_OK)
                     return failed(mesh, u, "getReal", t);

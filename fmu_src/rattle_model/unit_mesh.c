@@ -21,10 +21,12 @@
 
 /* Output groups: when an output is read after a step, only its group is computed -- the
  * wheel's angle and speed (read by the partner every step), the copies of the state and the
- * last step, and the rest, which need the mesh loads (and give every output). */
+ * last step, the mesh loads, and the film (h, lambda, psi: apart, the film of the nearer
+ * flank needs its eq. 7 energy balance, as costly as the loads; it gives every output). */
 #define GROUP_QUICK 1u
 #define GROUP_STATE 2u
 #define GROUP_LOADS 4u
+#define GROUP_FILM 8u
 
 typedef struct {
     RmMesh mesh;
@@ -241,12 +243,16 @@ static unsigned group_of(unsigned vr)
     case RM_MESH_MESH_TRANSMISSION_ERROR:
     case RM_MESH_MESH_IMPACT_ENERGY:
     case RM_MESH_MESH_RATTLE_INDEX: return GROUP_STATE;
+    case RM_MESH_MESH_H:
+    case RM_MESH_MESH_LAMBDA:
+    case RM_MESH_MESH_PSI: return GROUP_FILM;
     default: return GROUP_LOADS;
     }
 }
 
-/* Every output, from the loads of the flank in contact (or the nearer one when apart). */
-static int all_outputs(const MeshModel* m, RmValue* out, RmText* err)
+/* Every output, from the loads of the flank in contact (or the nearer one when apart); the
+ * film apart only when film_asked (else h, lambda and psi are left as they are). */
+static int all_outputs(const MeshModel* m, RmValue* out, int film_asked, RmText* err)
 {
     const RmMesh* M = &m->mesh;
     const RmWheel* st = &m->wheel;
@@ -254,6 +260,7 @@ static int all_outputs(const MeshModel* m, RmValue* out, RmText* err)
     double phi_p = last->pinion_phi, w_p = last->pinion_w;
     RmPairCache cache;
     RmFail f;
+    const volatile int with_film = film_asked; /* read after the setjmp below */
     rm_pair_cache_init(&cache);
     if (setjmp(f.jb) != 0) {
         rm_refusal_text(err, f.code, f.values);
@@ -267,13 +274,14 @@ static int all_outputs(const MeshModel* m, RmValue* out, RmText* err)
     double v_imp = flank == RM_DRIVE ? st->v_drive : st->v_coast;
     RmLoads L;
     rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, st->phi, st->w, v_imp, NULL, 1, &L, NULL, 0);
-    double h, lam, psi;
+    double h = 0.0, lam = 0.0, psi = 0.0;
+    int film = L.n_loaded > 0 || with_film;
     if (L.n_loaded > 0) { /* the film at the most loaded pair */
         h = L.top_h;
         lam = L.top_lam;
         psi = L.top_psi;
     }
-    else { /* apart: the clearance of the nearer flank plus its eq. 7 delta_max */
+    else if (with_film) { /* apart: the clearance of the nearer flank plus its eq. 7 delta_max */
         double d_max = rm_energy_balance_delta_max(M, &f, &cache, flank, phi_p, v_imp);
         h = -L.delta + d_max;
         if (!(h > 0.0)) h = 0.0;
@@ -292,9 +300,11 @@ static int all_outputs(const MeshModel* m, RmValue* out, RmText* err)
     out[RM_MESH_MESH_DELTA].r = L.n_loaded > 0 ? L.delta : 0.0;
     out[RM_MESH_MESH_DELTA_PEAK].r = last->delta_peak;
     out[RM_MESH_MESH_V_IMPACT].r = st->v_last;
-    out[RM_MESH_MESH_H].r = h;
-    out[RM_MESH_MESH_LAMBDA].r = lam;
-    out[RM_MESH_MESH_PSI].r = psi;
+    if (film) {
+        out[RM_MESH_MESH_H].r = h;
+        out[RM_MESH_MESH_LAMBDA].r = lam;
+        out[RM_MESH_MESH_PSI].r = psi;
+    }
     out[RM_MESH_MESH_N_CONTACT].i = L.n_loaded;
     out[RM_MESH_MESH_IMPACTS_DRIVE].i = st->n_drive;
     out[RM_MESH_MESH_IMPACTS_COAST].i = st->n_coast;
@@ -316,7 +326,8 @@ static int outputs(RmUnit* u, void* model, unsigned groups, RmValue* out, RmText
     const MeshModel* m = model;
     const RmWheel* st = &m->wheel;
     (void)u;
-    if (groups & GROUP_LOADS) return all_outputs(m, out, err);
+    if (groups & (GROUP_LOADS | GROUP_FILM))
+        return all_outputs(m, out, (groups & GROUP_FILM) != 0, err);
     if (groups & GROUP_QUICK) {
         out[RM_MESH_WHEEL_PHI].r = st->phi;
         out[RM_MESH_WHEEL_W].r = st->w;
@@ -465,8 +476,8 @@ const RmUnitClass RM_MESH_CLASS = {
     free_cache,
     step,
     outputs,
-    GROUP_QUICK | GROUP_STATE | GROUP_LOADS,
-    GROUP_LOADS,
+    GROUP_QUICK | GROUP_STATE | GROUP_LOADS | GROUP_FILM,
+    GROUP_FILM,
     0,
     group_of,
     save,
