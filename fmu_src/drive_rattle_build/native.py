@@ -50,8 +50,8 @@ from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
 from .shim import fmi2_headers
 
 #: The FMI 2.0 face, compiled with the model library into every native FMU.
-GLUE_SOURCES = ("fmi2_functions.c", "rattle_fmi_common.c")
-GLUE_HEADERS = ("rattle_fmi_common.h",)
+GLUE_SOURCES = ("fmi2_functions.c", "rattle_fmi_common.c", "rattle_fmi2_common.c")
+GLUE_HEADERS = ("rattle_fmi_common.h", "rattle_fmi2_common.h")
 #: The generated header of each FMU: its unit kind, model identifier and GUID.
 CONFIG_HEADER = "rattle_fmu_config.h"
 #: The FMI 2.0 headers, as the standard ships them (fmpy bundles them).
