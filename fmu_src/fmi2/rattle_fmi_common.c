@@ -56,6 +56,13 @@ void rattle_state_tag(RattleStateTag* tag, const char* guid)
 
 void rattle_state_untag(RattleStateTag* tag) { memset(tag->magic, 0, sizeof tag->magic); }
 
+int rattle_state_misaddressed(const void* address)
+{
+    /* no more bytes than a pointer variable has */
+    size_t n = sizeof(void*) < 8 ? sizeof(void*) : 8;
+    return address != NULL && memcmp(address, STATE_MAGIC, n) == 0;
+}
+
 int rattle_state_check(const void* state, const char* guid, const char* makers, char* why,
                        size_t why_size)
 {

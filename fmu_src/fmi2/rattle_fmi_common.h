@@ -44,6 +44,16 @@ typedef struct {
 RATTLE_INTERNAL void rattle_state_tag(RattleStateTag* tag, const char* guid);
 /* Clears the tag of a state about to be freed (a dangling pointer then fails the check). */
 RATTLE_INTERNAL void rattle_state_untag(RattleStateTag* tag);
+/* 1 when `address`, which the host passed as the address of its FMU-state variable
+ * (fmi2FMUstate*, fmi3FMUState*), points at a state of these FMUs itself: the host passed the
+ * state where FMI asks for its address (fmusim of Reference-FMUs 0.0.39 does, when it frees
+ * the state of a state file).  Reading there is safe either way (the host's pointer variable
+ * or the state), and the tag's first bytes are never those of a pointer on x86-64 (not a
+ * canonical address); `address` NULL gives 0. */
+RATTLE_INTERNAL int rattle_state_misaddressed(const void* address);
+#define RATTLE_STATE_MISADDRESSED                                                              \
+    "points to an FMU state, not to the host's variable that holds one (FMI asks for its "     \
+    "address, &state)"
 /* 1 when `state` (an FMU state pointer from the host) carries the tag of the FMU `guid` (""
  * when the FMU has none); else 0 with the refusal in why.  `makers` names the calls that make
  * states ("fmi2GetFMUstate or fmi2DeSerializeFMUstate"). */

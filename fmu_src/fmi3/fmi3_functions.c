@@ -783,6 +783,8 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState)
     int status;
     if (inst == NULL) return fmi3Error;
     if (FMUState == NULL) return refuse(inst, function, "the FMUState pointer is NULL");
+    if (rattle_state_misaddressed(FMUState))
+        return refuse(inst, function, "FMUState " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*FMUState != NULL && (reuse = own_state(inst, *FMUState, function)) == NULL)
         return fmi3Error;
     status = rm_save(inst->unit, NULL, 0, &size);
@@ -812,7 +814,11 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState)
     Instance* inst = instance;
     State* st;
     if (inst == NULL) return fmi3Error;
-    if (FMUState == NULL || *FMUState == NULL) return fmi3OK; /* FMI 3.0: nothing to free */
+    if (FMUState == NULL) return fmi3OK; /* FMI 3.0: nothing to free */
+    if (rattle_state_misaddressed(FMUState))
+        return refuse(inst, "fmi3FreeFMUState", "FMUState " RATTLE_STATE_MISADDRESSED
+                      "; nothing freed");
+    if (*FMUState == NULL) return fmi3OK;
     if ((st = own_state(inst, *FMUState, "fmi3FreeFMUState")) == NULL) return fmi3Error;
     delete_state(st);
     *FMUState = NULL;
@@ -863,6 +869,8 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
     if (serializedState == NULL) return refuse(inst, function, "the buffer is NULL");
     if (!rattle_state_open(serializedState, size, RATTLE_GUID, &n, why, sizeof why))
         return refuse(inst, function, "%s", why);
+    if (rattle_state_misaddressed(FMUState))
+        return refuse(inst, function, "FMUState " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*FMUState != NULL && (reuse = own_state(inst, *FMUState, function)) == NULL)
         return fmi3Error;
     /* the record's bytes as they are: rm_restore checks them when the state is set */

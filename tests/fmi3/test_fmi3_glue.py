@@ -420,6 +420,15 @@ def test_state_handles_reused_and_foreign_pointers_refused(mesh):
     assert mesh.lib.fmi3GetFMUState(inst.c, None) == ERROR
     assert last(inst)[2] == "fmi3GetFMUState: the FMUState pointer is NULL"
     assert mesh.lib.fmi3SetFMUState(inst.c, None) == ERROR
+    # the state passed where its address belongs (fmusim 0.0.39 frees its state files' states
+    # so): refused with a message, not dereferenced
+    wrong = ctypes.cast(state, ctypes.POINTER(ctypes.c_void_p))
+    for call in ("fmi3FreeFMUState", "fmi3GetFMUState"):
+        assert getattr(mesh.lib, call)(inst.c, wrong) == ERROR
+        assert last(inst)[2].startswith(f"{call}: FMUState points to an FMU state, not to the "
+                                        "host's variable that holds one (FMI asks for its "
+                                        "address, &state); nothing ")
+    assert inst.set_state(state) == OK  # nothing freed
     assert inst.free_state(state) == OK and not state
     assert mesh.lib.fmi3FreeFMUState(inst.c, ctypes.POINTER(ctypes.c_void_p)()) == OK
     _, _other = inst.get_state()
