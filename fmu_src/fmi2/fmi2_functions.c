@@ -395,6 +395,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
     int status;
     if (inst == NULL) return fmi2Error;
     if (state == NULL) return refuse(inst, function, "the FMUstate pointer is NULL");
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
     status = rm_save(inst->unit, NULL, 0, &size);
     if (status != RM_OK) return done(inst, status);
@@ -423,7 +425,11 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
     Instance* inst = c;
     State* st;
     if (inst == NULL) return fmi2Error;
-    if (state == NULL || *state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, "fmi2FreeFMUstate", "FMUstate " RATTLE_STATE_MISADDRESSED
+                      "; nothing freed");
+    if (*state == NULL) return fmi2OK;
     if ((st = own_state(inst, *state, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
     delete_state(st);
     *state = NULL;
@@ -475,6 +481,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     if (serializedState == NULL) return refuse(inst, function, "the buffer is NULL");
     if (!rattle_state_open(in, size, RATTLE_GUID, &n, why, sizeof why))
         return refuse(inst, function, "%s", why);
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
     /* the record's bytes as they are: rm_restore checks them when the state is set */
     record = malloc(n > 0 ? (size_t)n : 1);
