@@ -516,11 +516,11 @@ def report(results: list[PointResult], settings: dict) -> str:
     lines = ["# Multistability of the rattle: load × backlash × starts", "",
              "Settings: " + ", ".join(f"{k} = {v}" for k, v in settings.items()), "",
              "| load [M*] | load [N·m] | backlash [mm] | verdict | attractors: drive / coast "
-             "onsets [1/s], δmax [µm] (starts) |", "|---|---|---|---|---|"]
+             "onsets [1/s], δmax [µm], pairs (starts) |", "|---|---|---|---|---|"]
     for p in results:
         parts = [f"{a.mean['drive_rate']:.4g} / {a.mean['coast_rate']:.4g}, "
-                 f"{a.mean['delta_max'] * 1e6:.4g} ({', '.join(a.starts)})"
-                 for a in p.attractors]
+                 f"{a.mean['delta_max'] * 1e6:.4g}, {a.mean['pairs']:.3g} "
+                 f"({', '.join(a.starts)})" for a in p.attractors]
         if p.unsettled:
             parts.append(f"unsettled: {', '.join(p.unsettled)}")
         lines.append(f"| {p.load_fraction:g} | {p.load:.4g} | {p.backlash * 1e3:g} | "
