@@ -104,7 +104,8 @@ def raw_function(slave: FMU2Slave, name: str):
 
 
 class _Raw:
-    """getX/setX of a fixed list of value references on preallocated ctypes arrays."""
+    """The prepared arguments of getX/setX for a fixed list of value references: the raw
+    functions, the component, the reference array and a preallocated value array."""
 
     _CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
 
@@ -116,22 +117,6 @@ class _Raw:
         self._get = raw_function(unit.slave, f"fmi2Get{fmi_type}")
         self._set = raw_function(unit.slave, f"fmi2Set{fmi_type}")
         self.component = unit.slave.component
-
-    def fetch(self):
-        """Read into the value array (returned)."""
-        status = self._get(self.component, self.vrs, self.n, self.values)
-        if status > 1:
-            self.unit.fail(f"get{self.fmi_type}", status)
-        return self.values
-
-    def get(self) -> list:
-        values = self.fetch()
-        return [bool(v) for v in values] if self.fmi_type == "Boolean" else values[:]
-
-    def put(self, values) -> None:
-        status = self._set(self.component, self.vrs, self.n, values)
-        if status > 1:
-            self.unit.fail(f"set{self.fmi_type}", status)
 
 
 class Unit:
@@ -330,31 +315,51 @@ class CoSimulation:
             from tqdm import tqdm
 
             steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5)
-        # Hot loop on the FMUs' raw ctypes functions with preallocated arrays: fmpy's
-        # convenience wrappers cost several microseconds per call.
-        raw_rec = [(_Raw(u, fmi_type, vrs), names) for u, fmi_type, vrs, names in rec]
-        raw_plan = [(_Raw(src, "Real", outs), _Raw(dst, "Real", ins))
-                    for src, outs, dst, ins in self._plan]
-        steppers = [(u, raw_function(u.slave, "fmi2DoStep"), u.slave.component)
+        # Hot loop on the FMUs' raw ctypes functions with preallocated arrays (fmpy's
+        # convenience wrappers cost several microseconds per call), the arguments prepared
+        # once, a row per recorded type and point (turned into columns at the end).
+        raw_rec = [_Raw(u, fmi_type, vrs) for u, fmi_type, vrs, _ in rec]
+        recorders = [(r._get, r.component, r.vrs, r.n, r.values, r) for r in raw_rec]
+        rows: list[list] = [[] for _ in raw_rec]
+        exchanges = []
+        for src, outs, dst, ins in self._plan:
+            a, b = _Raw(src, "Real", outs), _Raw(dst, "Real", ins)
+            exchanges.append((a._get, a.component, a.vrs, a.n, a.values, a,
+                              b._set, b.component, b.vrs, b.n, b))
+        steppers = [(raw_function(u.slave, "fmi2DoStep"), u.slave.component, u)
                     for u in self.units.values()]
-        columns = result.columns
         last = len(points) - 1
-        for k in steps:
-            t = points[k]
-            result.time.append(t)
-            for raw, names in raw_rec:
-                for name, value in zip(names, raw.get(), strict=True):
-                    columns[name].append(value)
-            if k == last:
-                break
-            for src, dst in raw_plan:
-                dst.put(src.fetch())
-            h = sizes[k]
-            for u, do_step, component in steppers:
-                status = do_step(component, t, h, 1)
-                if status > 1:
-                    u.fail(f"doStep at t = {t!r} s", status)
-            self.time = points[k + 1]
+        done = 0
+        try:
+            for k in steps:
+                for (get, component, vrs, n, values, raw), out in zip(recorders, rows,
+                                                                       strict=True):
+                    status = get(component, vrs, n, values)
+                    if status > 1:
+                        raw.unit.fail(f"get{raw.fmi_type}", status)
+                    out.append(values[:])
+                if k == last:
+                    break
+                for get, c_src, v_src, n_src, values, a, put, c_dst, v_dst, n_dst, b in exchanges:
+                    status = get(c_src, v_src, n_src, values)
+                    if status > 1:
+                        a.unit.fail("getReal", status)
+                    status = put(c_dst, v_dst, n_dst, values)
+                    if status > 1:
+                        b.unit.fail("setReal", status)
+                t, h = points[k], sizes[k]
+                for do_step, component, u in steppers:
+                    status = do_step(component, t, h, 1)
+                    if status > 1:
+                        u.fail(f"doStep at t = {t!r} s", status)
+                done = k + 1
+        finally:
+            self.time = points[done]
+        result.time = list(points[:done + 1])
+        for (_, fmi_type, _, names), out in zip(rec, rows, strict=True):
+            for name, column in zip(names, zip(*out, strict=True), strict=True):
+                result.columns[name] = ([bool(v) for v in column] if fmi_type == "Boolean"
+                                        else list(column))
         return result
 
 
