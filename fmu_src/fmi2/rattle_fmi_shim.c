@@ -1132,6 +1132,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
     fmi2Status st;
     if (s == NULL) return REFUSED(c);
     if (state == NULL) return refuse(s, "fmi2GetFMUstate", "the FMUstate pointer is NULL");
+    if (rattle_state_misaddressed(state))
+        return refuse(s, "fmi2GetFMUstate", "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(s, *state, "fmi2GetFMUstate")) == NULL)
         return fmi2Error;
     st = after_call(s, inner_api.fmi2GetFMUstate(s->inner, &fresh));
@@ -1157,7 +1159,11 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
     Shim* s = usable(c, "fmi2FreeFMUstate");
     ShimState* st;
     if (s == NULL) return REFUSED(c);
-    if (state == NULL || *state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (rattle_state_misaddressed(state))
+        return refuse(s, "fmi2FreeFMUstate", "FMUstate " RATTLE_STATE_MISADDRESSED
+                      "; nothing freed");
+    if (*state == NULL) return fmi2OK;
     if ((st = own_state(s, *state, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
     delete_state(s, st);
     *state = NULL;
@@ -1227,6 +1233,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     if (serializedState == NULL && size > 0) return refuse(s, function, "the buffer is NULL");
     if (!rattle_state_open(in, size, RATTLE_GUID, &n, why, sizeof why))
         return refuse(s, function, "%s", why);
+    if (rattle_state_misaddressed(state))
+        return refuse(s, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(s, *state, function)) == NULL) return fmi2Error;
     st = after_call(s, inner_api.fmi2DeSerializeFMUstate(
                            s->inner, serializedState + RATTLE_STATE_HEADER, (size_t)n, &fresh));

@@ -124,6 +124,17 @@ def _drive(unzipdir: str, scenario: str, logging_on: bool) -> dict:
         s.freeFMUstate(restored)
         record("terminate", s.fmi2Terminate, s.component)
         s.freeInstance()
+    elif scenario == "misaddressed_state":
+        from ctypes import POINTER, c_void_p, cast
+
+        s = open_slave(0)
+        initialize(s)
+        state = s.getFMUstate()
+        wrong = cast(state, POINTER(c_void_p))  # the state where its address belongs
+        record("getMisaddressed", s.fmi2GetFMUstate, s.component, wrong)
+        record("freeMisaddressed", s.fmi2FreeFMUstate, s.component, wrong)
+        s.freeFMUstate(state)
+        s.freeInstance()
     elif scenario == "exit_error":
         s = open_slave(1)
         initialize(s)
@@ -286,6 +297,17 @@ def test_normal_run_passes_through(fmus, tmp_path):
     assert r["label"] == ["probe label"]
     assert r["version"] == "2.0"
     assert r["log"] == []
+
+
+def test_a_state_passed_where_its_address_belongs_is_refused(fmus, tmp_path):
+    """fmusim 0.0.39 passes the state itself to fmi2FreeFMUstate (FMI asks for its address):
+    refused with a message, never dereferenced (it crashed the FMU)."""
+    r = run(fmus["shim"], tmp_path / "fmu", "misaddressed_state")
+    assert statuses(r)["getMisaddressed"] == statuses(r)["freeMisaddressed"] == ERROR
+    messages = [m for _, _, m in r["log"]]
+    assert [m.split(":")[0] for m in messages] == ["fmi2GetFMUstate", "fmi2FreeFMUstate"]
+    assert all("points to an FMU state, not to the host's variable that holds one" in m
+               for m in messages)
 
 
 def test_error_at_exit_initialization_is_returned_and_logged_without_debug_logging(fmus, tmp_path):
