@@ -460,8 +460,15 @@ static double contact_substep(Run* r, double t)
                               &dt))
             t_end = t + dt;
     }
+    /* unmodified flanks: a pair's load jumps where it enters or leaves the zone of action, so
+     * the pairs in the zone are those of the substep's middle for all its evaluations, the
+     * ends included (a substep never contains a breakpoint) */
+    int hold_pairs = M->g.layout != RM_LAYOUT_CROWNED;
+    if (hold_pairs)
+        r->pairs.member = rm_flank_roll(&M->g, flank, run_phi_p(r, t + 0.5 * (t_end - t)));
     double h = resolved_substep(r, t, t_end - t);
     t_end = t + h;
+    if (hold_pairs) r->pairs.member = rm_flank_roll(&M->g, flank, run_phi_p(r, t + 0.5 * h));
     friction_directions(r, t);
     double delta_a = rm_penetration(M, flank, run_phi_p(r, t), st->phi);
     int flipped[RM_MAX_PAIR_SLOTS] = {0};
@@ -528,6 +535,7 @@ static double contact_substep(Run* r, double t)
     else
         delta_b = rm_penetration(M, flank, run_phi_p(r, t_end), phi_b);
     track_peak(r, t, h, flank, delta_a, st->w, delta_b, w_b);
+    r->pairs.member = NAN;
     st->phi = phi_b;
     st->w = w_b;
     r->int_tau_pinion += q;
