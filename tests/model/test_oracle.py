@@ -57,12 +57,14 @@ def oracle_derived(m: MeshModel) -> dict[str, float]:
     out.update(E_star=m.E_star, arm_wheel=m.arm_wheel, arm_pinion=m.arm_pinion,
                normal_mass=m.normal_mass, damping=m.damping,
                penetration_limit=0.05 * m.params.m_n,
-               law_terms=float(len(m.law.kappa)))
+               law_terms=float(len(m.law.kappa)), r_y_eq6_pitch=g.radius_y_eq6(g.s_pitch),
+               palmgren_constant=m.approach.palmgren,
+               asperity_pressure=m.approach.asperity_pressure)
     return out
 
 
 def close(a: float, b: float, rel: float = REL, abs_: float = 0.0) -> bool:
-    return abs(a - b) <= max(rel * abs(b), abs_)
+    return a == b or abs(a - b) <= max(rel * abs(b), abs_)
 
 
 # ------------------------------------------------------------------ geometry
