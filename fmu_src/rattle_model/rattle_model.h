@@ -200,7 +200,7 @@ RM_API int rm_describe(RmUnit* u, const char** names, double* values, size_t cap
 /* The model's laws at given arguments, for the tests that hold them against closed forms and
  * the readable equations (tests/oracle).  The unit's parameters are checked first. */
 /* Contact law at the contact radius r_x: K [N/m^1.5], R [m], ka, kz (a = ka W^(1/3),
- * A = kz W^(2/3)). */
+ * A = kz W^(2/3)); crowned flanks (contact.geometry = 0) only, whose pairs share r_y. */
 RM_API int rm_probe_contact_law(RmUnit* u, double r_x, double* out4);
 /* The exact elliptical contact for the radius ratio rho >= 1: q, kappa, alpha, zeta. */
 RM_API int rm_probe_exact_ellipse(RmUnit* u, double rho, double* out4);

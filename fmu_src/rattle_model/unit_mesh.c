@@ -530,6 +530,16 @@ int rm_probe_contact_law(RmUnit* u, double r_x, double* out4)
 {
     const RmMesh* M;
     if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
+    if (M->g.layout != RM_LAYOUT_CROWNED) {
+        RmText t;
+        rm_text_init(&t);
+        rm_printf(&t, "probe: the contact law at r_x with the crown's r_y belongs to "
+                      "contact.geometry = 0; with contact.geometry = %d each pair has its own "
+                      "law: use rm_probe_pair_laws", M->g.layout);
+        rm_report(u, RM_ERROR, rm_text_str(&t));
+        rm_text_free(&t);
+        return RM_ERROR;
+    }
     RmFail f;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
     rm_contact_law_at(&M->law, &f, r_x, &out4[0], &out4[1], &out4[2], &out4[3]);
