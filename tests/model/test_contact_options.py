@@ -203,7 +203,9 @@ def test_rough_law_tends_to_the_smooth_law_far_above_the_roughness(changes):
     W_rough, W_smooth, _ = rough_and_smooth(changes, pens)
     deficit = 1.0 - W_rough / W_smooth
     assert np.all(deficit > 0.0) and np.all(np.diff(deficit) < 0.0)
-    assert deficit[-1] < 2e-3  # 40 mm: 0.1 % (0.2 % for the stiffer line law)
+    # measured: 10-18 % at 100 sigma, 1.5-3 % at 1e3 sigma, below 0.1 % at 1e5 sigma (40 mm:
+    # the mathematical limit, far beyond any tooth)
+    assert deficit[-1] < 1e-3
 
 
 @pytest.mark.parametrize("changes", [{}, PAPER, LINE], ids=["crowned", "paper", "line"])
