@@ -353,7 +353,7 @@ double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka, d
     return fabs(v) * rm_sqrt_checked(f, 5.0 * C / (4.0 * K));
 }
 
-/* ------------------------------------------------------------------ the pair's load-approach law */
+/* ---------------------------------------------------------- the pair's load-approach law */
 /* Palmgren's line contact of steel (A. Palmgren, Ball and Roller Bearing Engineering, 3rd ed.,
  * 1959; quoted in T. A. Harris, Rolling Bearing Analysis): delta = 3.84e-5 mm (Q / N)^0.9
  * (l / mm)^-0.8, the approach of a roller of effective length l and a raceway under the load
@@ -392,8 +392,9 @@ void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star,
                      * sqrt(sigma / gamma);
     a->asperity_pressure = K_prime * E_star * GT_FIT_COEFFICIENT;
     a->rough_exponent = line ? 1.0 / (n + 0.5) : 1.0 / (n + 1.0);
-    /* B(1/2, n + 1) = Gamma(1/2) Gamma(n + 1) / Gamma(n + 3/2) */
-    a->line_beta = exp(lgamma(0.5) + lgamma(n + 1.0) - lgamma(n + 1.5));
+    /* B(1/2, n + 1) = Gamma(1/2) Gamma(n + 1) / Gamma(n + 3/2) (tgamma: lgamma would write
+     * the global signgam) */
+    a->line_beta = tgamma(0.5) * tgamma(n + 1.0) / tgamma(n + 1.5);
 }
 
 /* K = E* (L^0.8 / C_P)^(10/9) of Palmgren's law W = K delta^(10/9). */

@@ -33,7 +33,6 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
         if (!rm_contact_law_build(RM_LAW_EQUIVALENT_SPHERE, m->E_star, m->g.r_y, 0.0, 0.0,
                                   &m->law, err))
             return 0;
-        m->law.law = p->hertz_law;
     }
     else {
         rm_radius_ratio_range(&m->g, m->g.r_y, &x_lo, &x_hi);

@@ -65,7 +65,7 @@ class ApproachLaw:
         #: q of the layer's approach sigma (W/W_r)^q
         self.rough_exponent = 1.0 / (n + 0.5) if line else 1.0 / (n + 1.0)
         #: B(1/2, n + 1)
-        self.line_beta = math.exp(math.lgamma(0.5) + math.lgamma(n + 1.0) - math.lgamma(n + 1.5))
+        self.line_beta = math.gamma(0.5) * math.gamma(n + 1.0) / math.gamma(n + 1.5)
 
     # ------------------------------------------------------------------ coefficients
     def line_coefficient(self, length: float) -> float:
