@@ -212,6 +212,7 @@ double rm_radius_y_eq6(const RmGeometry* g, double s)
 {
     double R_p = point_radius(g->rb_pinion, s);
     double R_w = point_radius(g->rb_wheel, g->line_length - s);
+    if (R_w == R_p) return INFINITY; /* equal radii (reported by rm_describe, refused in use) */
     return R_p * R_w / (R_w - R_p);
 }
 
