@@ -175,6 +175,22 @@ HERTZ_LAWS = {
     0: "exact elliptical Hertz contact (Johnson 1985, complete elliptic integrals)",
     1: "equivalent sphere of eq. 2, K = 4/3 E* (r_x r_y)^(1/4)",
 }
+#: contact.geometry codes (docs/model.md section 2)
+CONTACT_GEOMETRIES = {
+    0: "crowned point contacts: each pair touches at the lowest point of its engaged contact "
+       "line with its own crown offset (contact.crowning)",
+    1: "the paper's: every pair in the zone of action an equivalent ellipsoid at the shared "
+       "rigid approach (no crown), r_x and r_y (eq. 6) at the centre of its engaged contact "
+       "line, K by contact.hertz_law",
+    2: "unmodified flanks in line contact: every pair in the zone loaded along its engaged "
+       "contact line, Palmgren's line-contact law",
+}
+#: contact.roughness codes (docs/model.md section 3)
+ROUGHNESS_MODELS = {
+    0: "smooth flanks",
+    1: "Greenwood-Tripp asperity layer (surface.sigma, surface.gamma, "
+       "surface.asperity_density) in series with the smooth law",
+}
 #: contact.dissipation codes
 DISSIPATION_MODELS = {
     0: "none (the paper's equations: friction is the only loss)",
@@ -251,12 +267,28 @@ class MeshParameters(ParameterSet):
         "at the face ends relative to the face centre; every tooth pair touches at the lowest "
         "point of its engaged contact line with its own crown-drop offset, and the crown gives "
         "the flank radius along the contact line (eq. 6 read as crowning: "
-        "r_y = b^2 / (8 C_b cos^2 beta_b))",
+        "r_y = b^2 / (8 C_b cos^2 beta_b)); used by contact.geometry = 0 (and as r_y of the "
+        "asperity layer of contact.roughness = 1 there)",
         minimum=1e-6, maximum=1e-3, display_unit="um")
     hertz_law: int = declare(
-        "contact.hertz_law", 0, "1", "load-approach law of each elliptical point contact: "
+        "contact.hertz_law", 0, "1", "load-approach law of each elliptical point contact "
+        "(contact.geometry 0 and 1): "
         + "; ".join(f"{k} = {v}" for k, v in HERTZ_LAWS.items()),
         minimum=0, maximum=1, choices=HERTZ_LAWS)
+    contact_geometry: int = declare(
+        "contact.geometry", 0, "1", "which tooth pairs carry load and how (docs/model.md "
+        "section 2): " + "; ".join(f"{k} = {v}" for k, v in CONTACT_GEOMETRIES.items()),
+        minimum=0, maximum=2, choices=CONTACT_GEOMETRIES)
+    roughness: int = declare(
+        "contact.roughness", 0, "1", "load-approach law below a few surface.sigma (docs/model.md "
+        "section 3): " + "; ".join(f"{k} = {v}" for k, v in ROUGHNESS_MODELS.items()),
+        minimum=0, maximum=1, choices=ROUGHNESS_MODELS)
+    asperity_density: float = declare(
+        "surface.asperity_density", 1e9, "1/m2",
+        "areal density of asperity summits of the flanks (Greenwood-Tripp, contact.roughness = "
+        "1); default 1e9 m^-2 gives the roughness parameter density*gamma*sigma = 0.04 with the "
+        "default surfaces (0.03-0.05 measured by Greenwood and Williamson 1966)",
+        minimum=1e6, maximum=1e14)
     dissipation: int = declare(
         "contact.dissipation", 1, "1", "contact dissipation: "
         + "; ".join(f"{k} = {v}" for k, v in DISSIPATION_MODELS.items()),

@@ -28,6 +28,7 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "Pa.s": {"kg": 1, "m": -1, "s": -1},
     "kg.m2": {"kg": 1, "m": 2},
     "kg/m3": {"kg": 1, "m": -3},
+    "1/m2": {"m": -2},
 }
 
 #: unit -> {display unit: factor}

@@ -1,9 +1,10 @@
 /*
- * contact.c - Hertzian point contact of two crowned flanks and its dissipation (paper eq. 1,
- * 2, 7, 8; Johnson, Contact Mechanics, 1985, section 4.2; Hunt and Crossley 1975).
+ * contact.c - the load-approach laws of a tooth pair and the contact's dissipation (paper
+ * eq. 1, 2, 7, 8; Johnson, Contact Mechanics, 1985, sections 4.2, 13.4; Palmgren 1959;
+ * Greenwood and Tripp 1970; Hunt and Crossley 1975).
  *
- * Two load-approach laws of the form W = K delta^(3/2) for the contact of radii r_x (across
- * the contact line) and r_y (along it):
+ * Two Hertz point-contact laws of the form W = K delta^(3/2) for the contact of radii r_x
+ * (across the contact line) and r_y (along it):
  *  - law 0, exact elliptical Hertz contact: the ellipse's axis ratio q = b/a from the
  *    curvature ratio through complete elliptic integrals, and K, the semi-major axis a and the
  *    area pi a b from q.  It depends on the radii only through rho = R/r >= 1, so a pair's
@@ -11,6 +12,14 @@
  *    between the nodes), evaluated with Clenshaw's recurrence;
  *  - law 1, the paper's equivalent sphere (eq. 2), K = 4/3 E* (r_x r_y)^(1/4), with Johnson's
  *    approximate ellipse sqrt(ab) = (3 W sqrt(r_x r_y) / (4 E*))^(1/3), a/b = (R/r)^(2/3).
+ * Palmgren's empirical line-contact law for unmodified flanks, delta = C_P (W/E*)^0.9 L^-0.8
+ * (L the engaged contact line's length; Palmgren, Ball and Roller Bearing Engineering, 1959),
+ * i.e. W = K delta^(10/9) with K = E* (L^0.8 / C_P)^(10/9).
+ * Roughness: the Greenwood-Tripp asperity layer (its pressure K' E* F_5/2(h/sigma) with the
+ * fit F_5/2 = c (4 - h/sigma)^n) integrated over the pair's rigid nominal gap -- an ellipsoid
+ * (r_x, r_y) or a cylinder (r_x, length L) -- gives W = W_r (delta_a/sigma)^(1/q) from first
+ * asperity contact; it is taken in series with the smooth law (the same load on both):
+ * delta = (W/K)^(1/p) + sigma (W/W_r)^q, solved for W by Newton's method.
  * Dissipation: Hunt-Crossley, W = K delta^(3/2) (1 + d d(delta)/dt), with d set exactly from a
  * coefficient of restitution (docs/model.md section 3.3).
  */
@@ -293,7 +302,12 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
 void rm_contact_law_at(const RmContactLaw* c, RmFail* f, double r_x, double* K, double* R,
                        double* ka, double* kz)
 {
-    double r_y = c->r_y;
+    rm_contact_law_at_radii(c, f, r_x, c->r_y, K, R, ka, kz);
+}
+
+void rm_contact_law_at_radii(const RmContactLaw* c, RmFail* f, double r_x, double r_y,
+                             double* K, double* R, double* ka, double* kz)
+{
     double E = c->E_star;
     if (c->law == RM_LAW_EXACT) {
         double rho;
@@ -339,6 +353,183 @@ double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka, d
     return fabs(v) * rm_sqrt_checked(f, 5.0 * C / (4.0 * K));
 }
 
+/* ---------------------------------------------------------- the pair's load-approach law */
+/* Palmgren's line contact of steel (A. Palmgren, Ball and Roller Bearing Engineering, 3rd ed.,
+ * 1959; quoted in T. A. Harris, Rolling Bearing Analysis): delta = 3.84e-5 mm (Q / N)^0.9
+ * (l / mm)^-0.8, the approach of a roller of effective length l and a raceway under the load
+ * Q.  Made dimensionless with the contact modulus of bearing steel (taken as E = 207 GPa,
+ * nu = 0.3) and scaled with (W/E*)^0.9 for other moduli, as dimensions require:
+ * delta = C_P (W/E*)^0.9 L^-0.8, C_P = 3.84e-8 m (1e-3 m)^0.8 E*_steel^0.9. */
+#define PALMGREN_APPROACH 3.84e-8  /* m, at Q = 1 N and l = 1 mm */
+#define PALMGREN_LENGTH 1e-3       /* m */
+#define PALMGREN_LOAD_EXPONENT 0.9
+#define PALMGREN_LENGTH_EXPONENT 0.8
+#define PALMGREN_STEEL_MODULUS (207e9 / (1.0 - 0.3 * 0.3) * 0.5) /* E* of steel on steel [Pa] */
+/* Greenwood and Tripp (1970), in the form Gohar and Rahnejat (Fundamentals of Tribology,
+ * 2008) and the paper's group use: asperity pressure p = K' E* F_5/2(h/sigma),
+ * K' = (16 sqrt(2) / 15) pi (eta gamma sigma)^2 sqrt(sigma / gamma), with the fit
+ * F_5/2(lambda) = 4.4086e-5 (4 - lambda)^6.804 for lambda < 4 (0 beyond: first asperity
+ * contact at four sigma). */
+#define GT_FIT_COEFFICIENT 4.4086e-5
+#define GT_FIT_EXPONENT 6.804
+/* Newton's method on the series law (it converges from above, monotonically): the iteration
+ * cap (never reached: a few iterations reach rounding). */
+#define SERIES_MAX_ITERATIONS 100
+
+void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star, double sigma,
+                           double gamma, double asperity_density)
+{
+    double n = GT_FIT_EXPONENT;
+    a->line = line;
+    a->rough = rough;
+    a->E_star = E_star;
+    a->sigma = sigma;
+    a->exponent = line ? 1.0 / PALMGREN_LOAD_EXPONENT : 1.5;
+    a->palmgren = PALMGREN_APPROACH * rm_pow(PALMGREN_LENGTH, PALMGREN_LENGTH_EXPONENT)
+                  * rm_pow(PALMGREN_STEEL_MODULUS, PALMGREN_LOAD_EXPONENT);
+    double roughness = asperity_density * gamma * sigma;
+    double K_prime = (16.0 * sqrt(2.0) / 15.0) * RM_PI * roughness * roughness
+                     * sqrt(sigma / gamma);
+    a->asperity_pressure = K_prime * E_star * GT_FIT_COEFFICIENT;
+    a->rough_exponent = line ? 1.0 / (n + 0.5) : 1.0 / (n + 1.0);
+    /* B(1/2, n + 1) = Gamma(1/2) Gamma(n + 1) / Gamma(n + 3/2) (tgamma: lgamma would write
+     * the global signgam) */
+    a->line_beta = tgamma(0.5) * tgamma(n + 1.0) / tgamma(n + 1.5);
+}
+
+/* K = E* (L^0.8 / C_P)^(10/9) of Palmgren's law W = K delta^(10/9). */
+double rm_line_coefficient(const RmApproachLaw* a, RmFail* f, double length)
+{
+    double base = rm_pow_checked(f, length, PALMGREN_LENGTH_EXPONENT) / a->palmgren;
+    return a->E_star * rm_pow_checked(f, base, a->exponent);
+}
+
+/* The line contact's area 2 b L, b = sqrt(4 W r_x / (pi L E*)) its Hertz half-width (Johnson
+ * eq. 4.43): A = kz sqrt(W), kz = 4 sqrt(r_x L / (pi E*)). */
+double rm_line_area_coefficient(const RmApproachLaw* a, RmFail* f, double r_x, double length)
+{
+    return 4.0 * rm_sqrt_checked(f, r_x * length / (RM_PI * a->E_star));
+}
+
+/* W_r of W = W_r (delta_a / sigma)^(1/q): the asperity pressure P_a ((delta_a - u)/sigma)^n
+ * at nominal gap u above the first contact, integrated over the pair's rigid gap,
+ *   ellipsoid: dA = 2 pi sqrt(r_x r_y) du, W = 2 pi sqrt(r_x r_y) P_a sigma / (n + 1) t^(n+1);
+ *   cylinder:  dA = L sqrt(r_x / (2u)) du,  W = L sqrt(2 r_x sigma) P_a B(1/2, n+1) t^(n+1/2);
+ * t = delta_a / sigma. */
+double rm_asperity_scale(const RmApproachLaw* a, RmFail* f, double r_x, double r_y,
+                         double length)
+{
+    double P = a->asperity_pressure;
+    if (a->line)
+        return length * rm_sqrt_checked(f, 2.0 * r_x * a->sigma) * P * a->line_beta;
+    return 2.0 * RM_PI * rm_sqrt_checked(f, r_x * r_y) * P * a->sigma / (GT_FIT_EXPONENT + 1.0);
+}
+
+/* The series law: W from delta = (W/K)^(1/p) + sigma (W/W_r)^q by Newton's method on
+ * y = ln W, where the approach is a sum of exponentials (convex, increasing): from the smaller
+ * of the two one-sided loads (each above the solution) the iterates fall monotonically to
+ * it.  *bulk and *layer get the two approaches at the solution. */
+static double series_load(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen,
+                          double* bulk, double* layer)
+{
+    double p = a->exponent, q = a->rough_exponent, sigma = a->sigma;
+    double ln_K = rm_log_checked(f, K), ln_r = rm_log_checked(f, W_r);
+    double ln_pen = rm_log_checked(f, pen);
+    double y = rm_min(ln_K + p * ln_pen, ln_r + (ln_pen - rm_log_checked(f, sigma)) / q);
+    double b = rm_exp_checked(f, (y - ln_K) / p), l = sigma * rm_exp_checked(f, q * (y - ln_r));
+    for (int it = 0; it < SERIES_MAX_ITERATIONS; it++) {
+        double excess = b + l - pen;
+        if (!(excess > 0.0)) break;
+        double y_new = y - excess / (b / p + q * l);
+        if (!(y_new < y)) break;
+        y = y_new;
+        b = rm_exp_checked(f, (y - ln_K) / p);
+        l = sigma * rm_exp_checked(f, q * (y - ln_r));
+    }
+    *bulk = b;
+    *layer = l;
+    return rm_exp_checked(f, y);
+}
+
+/* W = K pen^p of the smooth law (Hertz written as K pen sqrt(pen)). */
+static double smooth_load(const RmApproachLaw* a, RmFail* f, double K, double pen)
+{
+    if (a->line) return K * rm_pow_checked(f, pen, a->exponent);
+    return K * (pen * rm_sqrt_checked(f, pen));
+}
+
+double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen)
+{
+    if (!(K > 0.0)) return 0.0; /* a line of zero length */
+    if (!a->rough) return smooth_load(a, f, K, pen);
+    double bulk, layer;
+    return series_load(a, f, K, W_r, pen, &bulk, &layer);
+}
+
+/* dW/d(pen): p W / pen for the smooth law (Hertz: 1.5 K sqrt(pen)); for the series law the
+ * inverse of the compliances' sum, W / (bulk/p + q layer). */
+void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen,
+                       double d, double* k, double* c)
+{
+    if (!(K > 0.0)) {
+        *k = *c = 0.0;
+        return;
+    }
+    if (!a->rough && !a->line) {
+        double root = rm_sqrt_checked(f, pen);
+        *k = 1.5 * K * root;
+        *c = K * d * (pen * root);
+        return;
+    }
+    double W, compliance;
+    if (a->rough) {
+        double bulk, layer;
+        W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+        compliance = bulk / a->exponent + a->rough_exponent * layer;
+    }
+    else {
+        W = smooth_load(a, f, K, pen);
+        compliance = pen / a->exponent;
+    }
+    *k = W / compliance;
+    *c = d * W;
+}
+
+/* integral_0^pen W: W pen / (p + 1) for the smooth law; for the series law, with
+ * integral_0^W delta dW' = W bulk p/(p+1) + W layer/(q+1),
+ * W (bulk + layer) minus that = W bulk / (p + 1) + W layer q / (q + 1). */
+double rm_approach_energy(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen)
+{
+    if (!(K > 0.0)) return 0.0;
+    double p = a->exponent;
+    if (!a->rough) return smooth_load(a, f, K, pen) * pen / (p + 1.0);
+    double bulk, layer;
+    double W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+    double q = a->rough_exponent;
+    return W * bulk / (p + 1.0) + W * layer * q / (q + 1.0);
+}
+
+double rm_approach_area(const RmApproachLaw* a, RmFail* f, double kz, double W)
+{
+    if (a->line) return kz * rm_sqrt_checked(f, W);
+    return kz * rm_pow_checked(f, W, 2.0 / 3.0);
+}
+
+/* eq. 7 with the pair's smooth law: the ellipsoid's (rm_film_delta_max), or for the line
+ * contact the equivalent solid of mass m = rho pi r_x^2 L (its length the contact line's, as
+ * eq. 8 takes the footprint's) on W = K delta^(10/9):
+ * 1/2 m v^2 = 9/19 K delta^(19/9), delta_max = (19 m v^2 / (18 K))^(9/19). */
+double rm_approach_film_delta_max(const RmApproachLaw* a, RmFail* f, double v, double K,
+                                  double r_x, double ka, double length, double density)
+{
+    if (!a->line) return rm_film_delta_max(f, v, K, r_x, ka, density);
+    if (!(K > 0.0)) return 0.0;
+    double p = a->exponent;
+    double m = density * RM_PI * r_x * r_x * length;
+    return rm_pow_checked(f, (p + 1.0) * m * v * v / (2.0 * K), 1.0 / (p + 1.0));
+}
+
+/* ------------------------------------------------------------------ Hunt-Crossley */
 /* G(alpha, e) = alpha - ln(1 + alpha) + alpha e + ln(1 - alpha e): zero on the restitution
  * curve.  With the speed u = d(delta)/dt as variable, m u du = -K delta^n (1 + d u) d delta
  * separates: u/d - ln(1 + d u)/d^2 changes by -(K/m) integral delta^n d delta, which is zero

@@ -11,10 +11,16 @@
  *  - flank +1 is the drive flank (pinion leads), -1 the coast flank;
  *  - a helical pair touches along a contact line spanning w = b tan(beta_b) of roll; it is in
  *    the zone of action while that span overlaps the path of contact [s_start, s_end];
- *  - the flanks are lead-crowned (contact.crowning C_b, along the normal): a pair touches at
- *    the lowest point of its engaged contact line -- its face centre s_n while that lies in
- *    the path, else the end of the path nearest to it, with the crown offset
- *    g = C_b (d / (w/2))^2 at roll distance d from the face centre.
+ *  - contact.geometry 0 (crowned, RM_LAYOUT_CROWNED): the flanks are lead-crowned
+ *    (contact.crowning C_b, along the normal): a pair touches at the lowest point of its
+ *    engaged contact line -- its face centre s_n while that lies in the path, else the end of
+ *    the path nearest to it, with the crown offset g = C_b (d / (w/2))^2 at roll distance d
+ *    from the face centre;
+ *  - contact.geometry 1 and 2 (RM_LAYOUT_PAPER, RM_LAYOUT_LINE): unmodified flanks, every pair
+ *    in the zone touches at the shared rigid approach (no offset), represented by the centre
+ *    of its engaged contact line [max(s_n - w/2, s_start), min(s_n + w/2, s_end)] and that
+ *    line's length (a roll distance d along the line is d / sin(beta_b) of line; a spur pair's
+ *    line is the face width b).
  */
 #include "rm_private.h"
 
@@ -29,6 +35,10 @@ static double floored_mod(double v, double w)
         mod = copysign(0.0, w);
     return mod;
 }
+
+/* The radius of a gear at the point of roll length rho from its base circle (eq. 4 as
+ * printed: the radius of the point). */
+static double point_radius(double r_base, double rho) { return sqrt(r_base * r_base + rho * rho); }
 
 int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
 {
@@ -76,6 +86,8 @@ int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
     g->sin_alpha_t = sin(g->alpha_t);
     g->sin_beta_b = sin(g->beta_b);
     g->half_backlash = 0.5 * p->backlash;
+    g->layout = p->layout;
+    g->face_width = b;
     /* roll coordinate of pair 0 at phi_p = 0: the flank a quarter base pitch ahead of the
      * pitch point, both flanks */
     g->flank_phase = g->s_pitch + 0.25 * g->base_pitch;
@@ -122,6 +134,24 @@ int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
         rm_puts(err, " deg; allowed: eps_alpha >= 1");
         return 0;
     }
+    if (g->layout == RM_LAYOUT_PAPER) {
+        /* eq. 6 needs the wheel's radius at the contact point to exceed the pinion's; their
+         * difference falls along the path (R_p grows with s, R_w shrinks), least at s_end */
+        double R_p = point_radius(g->rb_pinion, g->s_end);
+        double R_w = point_radius(g->rb_wheel, g->line_length - g->s_end);
+        if (!(R_w > R_p)) {
+            rm_printf(err, "parameter 'contact.geometry' = %d (the paper's eq. 6, r_y = R_p R_w "
+                           "/ (R_w - R_p)) needs the wheel's radius at every contact point larger "
+                           "than the pinion's; with gear.z_pinion = %d, gear.z_wheel = %d it is ",
+                      p->layout, zs[0], zs[1]);
+            rm_put_g(err, R_w * 1e3, 6);
+            rm_puts(err, " mm against ");
+            rm_put_g(err, R_p * 1e3, 6);
+            rm_puts(err, " mm at the pinion tip; allowed: contact.geometry = 0 or 2, or a wheel "
+                         "with more teeth");
+            return 0;
+        }
+    }
     double max_pairs = floor(g->eps_gamma) + 1.0;
     if (max_pairs > RM_MAX_PAIR_SLOTS) {
         double b_max = (RM_MAX_PAIR_SLOTS - g->eps_alpha) * RM_PI * m_n / rm_max(sin(beta), 1e-300);
@@ -138,9 +168,15 @@ int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
 
     /* roll coordinates (mod the base pitch) of a pair's face centre where the pair enters or
      * leaves the zone (s_start - w/2, s_end + w/2) or its contact point starts or stops
-     * following the face centre (s_start, s_end): distinct values, sorted */
+     * following the face centre (s_start, s_end; crowned), or an end of its engaged line
+     * starts or stops following the path's end (s_start + w/2, s_end - w/2; unmodified
+     * flanks): distinct values, sorted */
     double half = 0.5 * g->line_span;
     double raw[4] = {g->s_start - half, g->s_start, g->s_end, g->s_end + half};
+    if (g->layout != RM_LAYOUT_CROWNED) {
+        raw[1] = g->s_start + half;
+        raw[2] = g->s_end - half;
+    }
     int n = 0;
     for (int k = 0; k < 4; k++) {
         int seen = 0;
@@ -169,10 +205,47 @@ double rm_radius_x(const RmGeometry* g, double s)
     return rp * rw / (rp + rw);
 }
 
+/* eq. 6 read with the gears' radii at the contact point (eq. 4's sqrt(R_b^2 + rho^2)): the
+ * wheel's radius counted concave, 1/r_y = 1/R_p - 1/R_w.  The printed R_p - R_w in the
+ * denominator would make r_y negative for a wheel larger than the pinion. */
+double rm_radius_y_eq6(const RmGeometry* g, double s)
+{
+    double R_p = point_radius(g->rb_pinion, s);
+    double R_w = point_radius(g->rb_wheel, g->line_length - s);
+    if (R_w == R_p) return INFINITY; /* equal radii (reported by rm_describe, refused in use) */
+    return R_p * R_w / (R_w - R_p);
+}
+
+/* Samples of ln(r_y(s) / r_x(s)) along the path for RM_LAYOUT_PAPER, and the relative margin
+ * the range is widened by: the function is smooth (its second derivative bounds the error
+ * between samples far below the margin). */
+#define EQ6_RANGE_SAMPLES 256
+#define EQ6_RANGE_MARGIN 0.01
+
 /* Bounds of ln(R/r), R and r the larger and smaller of r_x and r_y, over the contact points
  * the path of contact allows. */
-void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi)
+void rm_radius_ratio_range(const RmGeometry* g, double r_y_law, double* lo, double* hi)
 {
+    if (g->layout == RM_LAYOUT_PAPER) {
+        double v_lo = 0.0, v_hi = 0.0, prev = 0.0;
+        int crosses = 0;
+        for (int k = 0; k <= EQ6_RANGE_SAMPLES; k++) {
+            double s = g->s_start + (g->s_end - g->s_start) * (double)k / EQ6_RANGE_SAMPLES;
+            double v = log(rm_radius_y_eq6(g, s) / rm_radius_x(g, s));
+            if (k == 0 || v < v_lo) v_lo = v;
+            if (k == 0 || v > v_hi) v_hi = v;
+            if (k > 0 && (v > 0.0) != (prev > 0.0)) crosses = 1;
+            prev = v;
+        }
+        double margin = EQ6_RANGE_MARGIN * (v_hi - v_lo);
+        v_lo -= margin;
+        v_hi += margin;
+        /* |ln(rho)|: through zero when the ratio crosses 1 */
+        double a = fabs(v_lo), b = fabs(v_hi);
+        *lo = (crosses || (v_lo <= 0.0 && 0.0 <= v_hi)) ? 0.0 : rm_min(a, b);
+        *hi = rm_max(a, b);
+        return;
+    }
     double samples[3] = {g->s_start, g->s_end, 0.0};
     int n = 2;
     double mid = 0.5 * g->line_length; /* r_x(s) = s (L - s) / (L cos beta_b) peaks there */
@@ -184,9 +257,9 @@ void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi)
         if (r_x[k] < r_lo) r_lo = r_x[k];
         if (r_x[k] > r_hi) r_hi = r_x[k];
     }
-    double cand[3] = {fabs(log(g->r_y / r_lo)), fabs(log(g->r_y / r_hi)), 0.0};
+    double cand[3] = {fabs(log(r_y_law / r_lo)), fabs(log(r_y_law / r_hi)), 0.0};
     int m = 2;
-    if (r_lo <= g->r_y && g->r_y <= r_hi) cand[m++] = 0.0;
+    if (r_lo <= r_y_law && r_y_law <= r_hi) cand[m++] = 0.0;
     double c_lo = cand[0], c_hi = cand[0];
     for (int k = 1; k < m; k++) {
         if (cand[k] < c_lo) c_lo = cand[k];
@@ -196,7 +269,8 @@ void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi)
     *hi = c_hi;
 }
 
-static void pair_set_add(RmFail* f, RmPairSet* ps, double n, double s, double g, double dg)
+static void pair_set_add(RmFail* f, RmPairSet* ps, double n, double s, double g, double dg,
+                         double length)
 {
     if (ps->n == RM_MAX_PAIRS) rm_fail(f, RM_FAIL_TOO_MANY_PAIRS, RM_MAX_PAIRS, 0.0, 0.0, 0.0);
     int i = ps->n++;
@@ -205,15 +279,48 @@ static void pair_set_add(RmFail* f, RmPairSet* ps, double n, double s, double g,
     ps->s[i] = s;
     ps->offset[i] = g;
     ps->dg[i] = dg;
+    ps->length[i] = length;
     ps->coefficients_ok[i] = 0;
     ps->d_max_ok[i] = 0;
+}
+
+/* The pairs of the unmodified flanks (RM_LAYOUT_PAPER, RM_LAYOUT_LINE) at roll coordinate u,
+ * those in the zone at `member`: per pair the centre of its engaged contact line and the
+ * line's length (zero where the positions at u put the line outside the path: a pair the
+ * stepper holds in the zone over a substep that ends where it enters or leaves). */
+static void unmodified_pairs(const RmGeometry* g, RmFail* f, double u, double member,
+                             RmPairSet* ps)
+{
+    double pb = g->base_pitch;
+    double half = 0.5 * g->line_span;
+    double s0 = g->s_start, s1 = g->s_end;
+    double n_lo = rm_floor_checked(f, (member - s1 - half) / pb) + 1.0;
+    double n_hi = rm_ceil_checked(f, (member - s0 + half) / pb) - 1.0;
+    if (!(fabs(n_lo) < RM_PAIR_NUMBER_LIMIT && fabs(n_hi) < RM_PAIR_NUMBER_LIMIT))
+        rm_fail(f, RM_FAIL_PAIR_RANGE, member, n_lo, 0.0, 0.0);
+    for (double n = n_lo; n <= n_hi; n += 1.0) {
+        double c = member - n * pb; /* the face centre at `member`: in the zone? */
+        int inside = half > 0.0 ? (c + half > s0 && c - half < s1) : (s0 < c && c < s1);
+        if (!inside) continue;
+        double s = u - n * pb; /* the face centre at u */
+        double a = rm_max(s - half, s0), b = rm_min(s + half, s1);
+        double length;
+        if (half > 0.0)
+            length = b > a ? (b - a) / g->sin_beta_b : 0.0;
+        else
+            length = s0 < s && s < s1 ? g->face_width : 0.0;
+        /* the centre of the engaged line, kept inside the path */
+        double mid = rm_min(rm_max(0.5 * (a + b), s0), s1);
+        pair_set_add(f, ps, n, mid, 0.0, 0.0, length);
+    }
 }
 
 /* The pairs at roll coordinate u of pair 0's face centre: pair n sits at s_n = u - n p_bt.
  * Per pair: its slot (pair number mod RM_MAX_PAIR_SLOTS, so a slot follows one pair through
  * its passage), the roll coordinate s of its contact point, the crown offset g there (the
- * pair touches when the flank's penetration exceeds it) and dg = dg/ds_n. */
-void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, RmPairSet* ps)
+ * pair touches when the flank's penetration exceeds it), dg = dg/ds_n, and the length of its
+ * engaged contact line (unmodified flanks; 0 for crowned ones). */
+void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, double member, RmPairSet* ps)
 {
     double pb = g->base_pitch;
     double half = 0.5 * g->line_span;
@@ -224,27 +331,32 @@ void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, RmPairSet* ps)
     if (!(fabs(n_lo) < RM_PAIR_NUMBER_LIMIT && fabs(n_hi) < RM_PAIR_NUMBER_LIMIT))
         rm_fail(f, RM_FAIL_PAIR_RANGE, u, n_lo, 0.0, 0.0);
     ps->u = u;
+    ps->member = member;
     ps->n = 0;
     ps->d_max_v = 0.0;
+    if (g->layout != RM_LAYOUT_CROWNED) {
+        unmodified_pairs(g, f, u, member, ps);
+        return;
+    }
     for (double n = n_lo; n <= n_hi; n += 1.0) {
         double s = u - n * pb; /* roll coordinate of the pair's face centre */
         if (half > 0.0) {
             if (s + half > s0 && s - half < s1) {
                 if (s < s0) {
                     double d = s0 - s;
-                    pair_set_add(f, ps, n, s0, k * d * d, -2.0 * k * d);
+                    pair_set_add(f, ps, n, s0, k * d * d, -2.0 * k * d, 0.0);
                 }
                 else if (s > s1) {
                     double d = s - s1;
-                    pair_set_add(f, ps, n, s1, k * d * d, 2.0 * k * d);
+                    pair_set_add(f, ps, n, s1, k * d * d, 2.0 * k * d, 0.0);
                 }
                 else {
-                    pair_set_add(f, ps, n, s, 0.0, 0.0);
+                    pair_set_add(f, ps, n, s, 0.0, 0.0, 0.0);
                 }
             }
         }
         else if (s0 < s && s < s1) {
-            pair_set_add(f, ps, n, s, 0.0, 0.0);
+            pair_set_add(f, ps, n, s, 0.0, 0.0, 0.0);
         }
     }
 }

@@ -6,11 +6,12 @@
  * The rigid-body approach along the tooth normal is common to the pairs of a flank:
  *     x     = cos(beta_b) (rb_p phi_p - rb_w phi_w)        (> 0 when the pinion leads)
  *     delta = flank x - backlash / 2                       (penetration; < 0 is a gap)
- * Each pair touches at its own point with its own crown offset g_i (geometry.c), so its
- * penetration is delta_i = delta - g_i, and it carries the Hertz force with Hunt-Crossley
- * dissipation on its own penetration rate,
- *     W_i = K_i delta_i^(3/2) (1 + d d(delta_i)/dt),   W_i >= 0,
- * K_i from the contact law at the pair's radii.  Torques (each gear positive forward), F_i the
+ * Each pair touches at its own point with its own crown offset g_i (geometry.c; zero on
+ * unmodified flanks), so its penetration is delta_i = delta - g_i, and it carries the load of
+ * its load-approach law (contact.c) with Hunt-Crossley dissipation on its own penetration rate,
+ *     W_i = W(delta_i) (1 + d d(delta_i)/dt),   W_i >= 0,
+ * W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
+ * radii.  Torques (each gear positive forward), F_i the
  * pair's friction force and sgn_i the sign of its sliding speed:
  *     wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
  *     pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
@@ -28,9 +29,18 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
     if (!rm_geometry(&p->gear, &m->g, err)) return 0;
     m->E_star = rm_effective_modulus(p->E_pinion, p->nu_pinion, p->E_wheel, p->nu_wheel);
     double x_lo, x_hi;
-    rm_radius_ratio_range(&m->g, &x_lo, &x_hi);
-    if (!rm_contact_law_build(p->hertz_law, m->E_star, m->g.r_y, x_lo, x_hi, &m->law, err))
-        return 0;
+    if (m->g.layout == RM_LAYOUT_LINE) { /* Palmgren's law: no elliptical contact to tabulate */
+        if (!rm_contact_law_build(RM_LAW_EQUIVALENT_SPHERE, m->E_star, m->g.r_y, 0.0, 0.0,
+                                  &m->law, err))
+            return 0;
+    }
+    else {
+        rm_radius_ratio_range(&m->g, m->g.r_y, &x_lo, &x_hi);
+        if (!rm_contact_law_build(p->hertz_law, m->E_star, m->g.r_y, x_lo, x_hi, &m->law, err))
+            return 0;
+    }
+    rm_approach_law_build(&m->approach, m->g.layout == RM_LAYOUT_LINE, p->roughness != 0,
+                          m->E_star, p->sigma, p->gamma, p->asperity_density);
     m->damping = 0.0;
     if (p->dissipation == RM_DISSIPATION_RESTITUTION) {
         if (!rm_hunt_crossley_factor(p->restitution, p->restitution_speed, &m->damping, err))
@@ -53,27 +63,54 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
  * substep for the right-hand side, the substep length and the friction directions, so a step
  * keeps a few pair sets: each value is computed by the same expression as without the cache,
  * only fewer times. */
-void rm_pair_cache_init(RmPairCache* c) { c->n_used = c->next = 0; }
+void rm_pair_cache_init(RmPairCache* c)
+{
+    c->n_used = c->next = 0;
+    c->member = NAN;
+}
 
 RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u)
 {
+    double member = isnan(c->member) || M->g.layout == RM_LAYOUT_CROWNED ? u : c->member;
     for (int i = 0; i < c->n_used; i++)
-        if (c->set[i].u == u) return &c->set[i];
+        if (c->set[i].u == u && c->set[i].member == member) return &c->set[i];
     RmPairSet* ps = &c->set[c->next];
     c->next = (c->next + 1) % RM_PAIR_CACHE;
     if (c->n_used < RM_PAIR_CACHE) c->n_used++;
     ps->u = NAN; /* invalid while being built (a failing build longjmps out) */
-    rm_pair_set_build(&M->g, f, u, ps);
+    rm_pair_set_build(&M->g, f, u, member, ps);
     return ps;
 }
 
-/* The normal radius r_x and the contact law's coefficients of pair i. */
+/* The radii and the load-approach law's coefficients of pair i: r_x at its contact point, r_y
+ * (the crown's, eq. 6's, or none for a line), K of its smooth law, the ellipse's ka and the
+ * area coefficient kz, and the asperity layer's load scale W_r (rough flanks). */
 void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i)
 {
     if (ps->coefficients_ok[i]) return;
     double R;
-    ps->r_x[i] = rm_radius_x(&M->g, ps->s[i]);
-    rm_contact_law_at(&M->law, f, ps->r_x[i], &ps->K[i], &R, &ps->ka[i], &ps->kz[i]);
+    const RmApproachLaw* a = &M->approach;
+    double r_x = rm_radius_x(&M->g, ps->s[i]);
+    ps->r_x[i] = r_x;
+    if (M->g.layout == RM_LAYOUT_LINE) {
+        double L = ps->length[i];
+        ps->r_y[i] = 0.0;
+        ps->K[i] = L > 0.0 ? rm_line_coefficient(a, f, L) : 0.0;
+        ps->ka[i] = 0.0;
+        ps->kz[i] = rm_line_area_coefficient(a, f, r_x, L);
+    }
+    else if (M->g.layout == RM_LAYOUT_PAPER) {
+        ps->r_y[i] = rm_radius_y_eq6(&M->g, ps->s[i]);
+        rm_contact_law_at_radii(&M->law, f, r_x, ps->r_y[i], &ps->K[i], &R, &ps->ka[i],
+                                &ps->kz[i]);
+    }
+    else {
+        ps->r_y[i] = M->law.r_y;
+        rm_contact_law_at(&M->law, f, r_x, &ps->K[i], &R, &ps->ka[i], &ps->kz[i]);
+    }
+    ps->W_r[i] = a->rough && ps->K[i] > 0.0
+                     ? rm_asperity_scale(a, f, r_x, ps->r_y[i], ps->length[i])
+                     : 0.0;
     ps->coefficients_ok[i] = 1;
 }
 
@@ -85,7 +122,8 @@ static inline double pair_d_max(const RmMesh* M, RmFail* f, RmPairSet* ps, int i
         ps->d_max_v = v;
     }
     if (!ps->d_max_ok[i] || v != v) {
-        ps->d_max[i] = rm_film_delta_max(f, v, ps->K[i], ps->r_x[i], ps->ka[i], M->p.density);
+        ps->d_max[i] = rm_approach_film_delta_max(&M->approach, f, v, ps->K[i], ps->r_x[i],
+                                                  ps->ka[i], ps->length[i], M->p.density);
         ps->d_max_ok[i] = 1;
     }
     return ps->d_max[i];
@@ -142,7 +180,7 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
         }
         rm_pair_coefficients(M, f, ps, i);
         double K = ps->K[i];
-        W = K * (pen * rm_sqrt_checked(f, pen));
+        W = rm_approach_force(&M->approach, f, K, ps->W_r[i], pen);
         if (damping > 0.0) {
             W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0; /* the flanks never pull on each other */
@@ -155,7 +193,7 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
         u = 0.5 * (w_p * rho_p + w_w * rho_w); /* entrainment (mean rolling) speed, eq. 16-17 */
         if ((p->friction_enabled || detail) && W > 0.0) {
             double A_e = 3.2 * W / E_star * M->sqrt_gamma_sigma; /* eq. 13 */
-            double A = ps->kz[i] * rm_pow_checked(f, W, 2.0 / 3.0);
+            double A = rm_approach_area(&M->approach, f, ps->kz[i], W);
             d_max = pair_d_max(M, f, ps, i, v_impact);
             h = -pen + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, never negative */
             if (!(h > 0.0)) h = 0.0;
@@ -209,7 +247,7 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
 }
 
 /* The total normal force of `flank` at penetration delta without dissipation:
- * sum_i K_i (delta - g_i)^(3/2) over the pairs that touch. */
+ * sum_i W_i(delta - g_i) over the pairs that touch. */
 double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
                        double delta)
 {
@@ -219,7 +257,7 @@ double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank
         double d = delta - ps->offset[i];
         if (d > 0.0) {
             rm_pair_coefficients(M, f, ps, i);
-            total += ps->K[i] * (d * rm_sqrt_checked(f, d));
+            total += rm_approach_force(&M->approach, f, ps->K[i], ps->W_r[i], d);
         }
     }
     return total;
@@ -238,11 +276,11 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
         double pen = delta - ps->offset[i];
         if (pen > 0.0) {
             rm_pair_coefficients(M, f, ps, i);
-            double K = ps->K[i];
-            double root = rm_sqrt_checked(f, pen);
+            double k_i, c_i;
+            rm_approach_rates(&M->approach, f, ps->K[i], ps->W_r[i], pen, d, &k_i, &c_i);
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
-            if (factor > 0.0) k_sum += 1.5 * K * root * factor;
-            c_sum += K * d * (pen * root);
+            if (factor > 0.0) k_sum += k_i * factor;
+            c_sum += c_i;
         }
     }
     *k = k_sum;
@@ -257,7 +295,8 @@ double rm_energy_balance_delta_max(const RmMesh* M, RmFail* f, RmPairCache* cach
     double out = 0.0;
     for (int i = 0; i < ps->n; i++) {
         rm_pair_coefficients(M, f, ps, i);
-        double d = rm_film_delta_max(f, v_impact, ps->K[i], ps->r_x[i], ps->ka[i], M->p.density);
+        double d = rm_approach_film_delta_max(&M->approach, f, v_impact, ps->K[i], ps->r_x[i],
+                                              ps->ka[i], ps->length[i], M->p.density);
         if (d > out) out = d;
     }
     return out;

@@ -210,7 +210,7 @@ RM_API int rm_describe(RmUnit* u, const char** names, double* values, size_t cap
 /* The model's laws at given arguments, for the tests that hold them against closed forms and
  * the readable equations (tests/oracle).  The unit's parameters are checked first. */
 /* Contact law at the contact radius r_x: K [N/m^1.5], R [m], ka, kz (a = ka W^(1/3),
- * A = kz W^(2/3)). */
+ * A = kz W^(2/3)); crowned flanks (contact.geometry = 0) only, whose pairs share r_y. */
 RM_API int rm_probe_contact_law(RmUnit* u, double r_x, double* out4);
 /* The exact elliptical contact for the radius ratio rho >= 1: q, kappa, alpha, zeta. */
 RM_API int rm_probe_exact_ellipse(RmUnit* u, double rho, double* out4);
@@ -227,6 +227,17 @@ RM_API int rm_probe_pairs(RmUnit* u, int flank, double phi_p, double* out, size_
 RM_API int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double phi_w,
                           double w_w, double v_impact, double* totals, double* pairs,
                           size_t capacity, size_t* count);
+/* The load-approach law's coefficients of the pairs in the zone of action on `flank` at pinion
+ * angle phi_p: per pair (slot, s, length of the engaged contact line, r_x, r_y, K, ka, kz, W_r)
+ * into out (9 doubles each, at most `capacity` pairs); *count their number. */
+RM_API int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out,
+                              size_t capacity, size_t* count);
+/* The pair's load-approach law of the unit's parameters (contact.geometry: point or line;
+ * contact.roughness) for the coefficients K, W_r, kz at the approach pen > 0: the load W [N],
+ * the stiffness dW/d(pen) [N/m], the elastic energy integral_0^pen W [J], the area at W
+ * [m^2]. */
+RM_API int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen,
+                             double* out4);
 
 #ifdef __cplusplus
 }

@@ -5,7 +5,9 @@
  *   refusals.c      the wording of every refusal the physics reports as a code
  *   roots.c         Brent's method, exact quadratic crossings
  *   geometry.c      the helical involute pair and its tooth pairs (paper eq. 3-6)
- *   contact.c       Hertz point contact: exact ellipse and eq. 2, eq. 7-8, Hunt-Crossley
+ *   contact.c       the load-approach laws of a tooth pair: Hertz point contact (exact
+ *                   ellipse, eq. 2), Palmgren's line contact, the Greenwood-Tripp asperity
+ *                   layer in series; eq. 7-8, Hunt-Crossley
  *   friction.c      film, regime and flank friction (eq. 11-17)
  *   mesh.c          the mesh model: loads and torques of every pair (eq. 1-2, 10-17)
  *   stepper.c       the wheel's equation of motion (eq. 10) over one communication step
@@ -189,9 +191,14 @@ RM_INTERNAL int rm_first_crossing(double c0, double c1, double c2, double t_max,
 #define RM_MAX_PAIRS 16
 #define RM_PAIR_NUMBER_LIMIT 4503599627370496.0 /* 2^52 */
 
+/* contact.geometry: which pairs carry load and where (docs/model.md section 2). */
+#define RM_LAYOUT_CROWNED 0 /* each pair at the lowest point of its line, crown offset */
+#define RM_LAYOUT_PAPER 1   /* every pair in the zone, no offset, ellipsoid at eq. 6's r_y */
+#define RM_LAYOUT_LINE 2    /* every pair in the zone along its engaged contact line */
+
 /* The parameters the geometry reads. */
 typedef struct {
-    int z_pinion, z_wheel;
+    int z_pinion, z_wheel, layout;
     double m_n, alpha_n, beta, addendum, b, backlash, crowning;
 } RmGearParams;
 
@@ -199,7 +206,8 @@ typedef struct {
     double ratio, alpha_t, beta_b, m_t, r_pinion, r_wheel, centre_distance, rb_pinion,
         rb_wheel, ra_pinion, ra_wheel, line_length, s_start, s_end, s_pitch, base_pitch,
         eps_alpha, eps_beta, eps_gamma, line_span, crowning, crown_factor, r_y, normal_factor,
-        cos_alpha_t, sin_alpha_t, sin_beta_b, half_backlash, flank_phase;
+        cos_alpha_t, sin_alpha_t, sin_beta_b, half_backlash, flank_phase, face_width;
+    int layout;
     int n_bp;
     double bp[4]; /* roll breakpoints modulo the base pitch, sorted */
 } RmGeometry;
@@ -209,29 +217,40 @@ typedef struct {
 RM_INTERNAL int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err);
 /* r_x = r_p r_w / (r_p + r_w) of the normal-plane radii at roll coordinate s (eq. 3-5). */
 RM_INTERNAL double rm_radius_x(const RmGeometry* g, double s);
-RM_INTERNAL void rm_radius_ratio_range(const RmGeometry* g, double* lo, double* hi);
+/* r_y of eq. 6 at roll coordinate s: the gears' radii at the contact point, the wheel's
+ * taken as concave, R_p R_w / (R_w - R_p) (docs/model.md section 2). */
+RM_INTERNAL double rm_radius_y_eq6(const RmGeometry* g, double s);
+/* Bounds of |ln(r_y / r_x)| over the contact points of the path of contact, r_y the contact
+ * law's (RM_LAYOUT_CROWNED) or eq. 6's (RM_LAYOUT_PAPER). */
+RM_INTERNAL void rm_radius_ratio_range(const RmGeometry* g, double r_y, double* lo, double* hi);
 
 static inline double rm_flank_roll(const RmGeometry* g, int flank, double phi_p)
 {
     return g->flank_phase + (double)flank * g->rb_pinion * phi_p;
 }
 
-/* The tooth pairs in the zone of action at roll coordinate u, with the contact law's
- * coefficients at each pair's radius (filled on first use by mesh.c) and, per impact speed,
- * the eq. 7 delta_max. */
+/* The tooth pairs in the zone of action at roll coordinate u, with the load-approach law's
+ * coefficients at each pair's contact (filled on first use by mesh.c) and, per impact speed,
+ * the eq. 7 delta_max.  `member` is the roll coordinate at which the pairs in the zone were
+ * decided (u, or for the layouts without crown offsets the middle of the stepper's substep,
+ * whose force jumps when a pair enters or leaves). */
 typedef struct {
-    double u;
+    double u, member;
     int n;
     int64_t slot[RM_MAX_PAIRS];
-    double s[RM_MAX_PAIRS], offset[RM_MAX_PAIRS], dg[RM_MAX_PAIRS];
+    double s[RM_MAX_PAIRS], offset[RM_MAX_PAIRS], dg[RM_MAX_PAIRS], length[RM_MAX_PAIRS];
     int coefficients_ok[RM_MAX_PAIRS];
-    double r_x[RM_MAX_PAIRS], K[RM_MAX_PAIRS], ka[RM_MAX_PAIRS], kz[RM_MAX_PAIRS];
+    double r_x[RM_MAX_PAIRS], r_y[RM_MAX_PAIRS], K[RM_MAX_PAIRS], ka[RM_MAX_PAIRS],
+        kz[RM_MAX_PAIRS], W_r[RM_MAX_PAIRS];
     double d_max_v;
     int d_max_ok[RM_MAX_PAIRS];
     double d_max[RM_MAX_PAIRS];
 } RmPairSet;
 
-RM_INTERNAL void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, RmPairSet* ps);
+/* The pairs at roll coordinate u (positions), in the zone of action at roll coordinate
+ * `member` (RM_LAYOUT_PAPER and RM_LAYOUT_LINE; the crowned layout decides at u). */
+RM_INTERNAL void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, double member,
+                                   RmPairSet* ps);
 /* The first roll breakpoint between u_a and u_b in the direction of travel: 1 and *out. */
 RM_INTERNAL int rm_next_breakpoint(const RmGeometry* g, RmFail* f, double u_a, double u_b,
                                    double* out);
@@ -259,9 +278,55 @@ RM_INTERNAL int rm_contact_law_build(int law, double E_star, double r_y, double 
                                      double x_hi, RmContactLaw* c, RmText* err);
 RM_INTERNAL void rm_contact_law_at(const RmContactLaw* c, RmFail* f, double r_x, double* K,
                                    double* R, double* ka, double* kz);
+/* The same at the radii (r_x, r_y) of a pair whose r_y is its own (eq. 6). */
+RM_INTERNAL void rm_contact_law_at_radii(const RmContactLaw* c, RmFail* f, double r_x,
+                                         double r_y, double* K, double* R, double* ka,
+                                         double* kz);
 RM_INTERNAL double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka,
                                      double density);
 RM_INTERNAL int rm_hunt_crossley_restitution(double alpha, double* e, RmText* err);
+
+/* The load-approach law of one tooth pair: the smooth bulk law W = K pen^p -- Hertz point
+ * contact (p = 3/2, K from the contact law) or Palmgren's line contact (p = 10/9, K from the
+ * engaged contact line's length) -- optionally in series with the Greenwood-Tripp asperity
+ * layer, whose approach is sigma (W / W_r)^q (W_r the pair's asperity load scale). */
+typedef struct {
+    int line, rough;
+    double E_star, sigma;
+    double exponent;          /* p of the bulk law */
+    double palmgren;          /* Palmgren's constant made dimensionless, C_P */
+    double asperity_pressure; /* K' E* c of the Greenwood-Tripp fit [Pa] */
+    double rough_exponent;    /* q of the asperity layer */
+    double line_beta;         /* B(1/2, n + 1) of the rough line contact */
+} RmApproachLaw;
+
+RM_INTERNAL void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star,
+                                       double sigma, double gamma, double asperity_density);
+/* K of a line contact of length L (W = K pen^(10/9)) and its area coefficient
+ * (A = kz W^(1/2)) at the radius r_x. */
+RM_INTERNAL double rm_line_coefficient(const RmApproachLaw* a, RmFail* f, double length);
+RM_INTERNAL double rm_line_area_coefficient(const RmApproachLaw* a, RmFail* f, double r_x,
+                                            double length);
+/* W_r of the asperity layer of a point contact (radii r_x, r_y) or a line contact (r_x,
+ * length). */
+RM_INTERNAL double rm_asperity_scale(const RmApproachLaw* a, RmFail* f, double r_x, double r_y,
+                                     double length);
+/* The elastic load W [N] of a pair at approach pen > 0. */
+RM_INTERNAL double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r,
+                                     double pen);
+/* Its stiffness dW/d(pen) [N/m] and, for the Hunt-Crossley factor d, its damping
+ * d W [N.s/m]. */
+RM_INTERNAL void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r,
+                                   double pen, double d, double* k, double* c);
+/* The elastic energy integral_0^pen W [J]. */
+RM_INTERNAL double rm_approach_energy(const RmApproachLaw* a, RmFail* f, double K, double W_r,
+                                      double pen);
+/* The apparent contact area [m^2] at load W: kz W^(2/3) (point) or kz W^(1/2) (line). */
+RM_INTERNAL double rm_approach_area(const RmApproachLaw* a, RmFail* f, double kz, double W);
+/* eq. 7's delta_max of the pair's smooth law for the impact speed v (the film estimate). */
+RM_INTERNAL double rm_approach_film_delta_max(const RmApproachLaw* a, RmFail* f, double v,
+                                              double K, double r_x, double ka, double length,
+                                              double density);
 RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* err);
 
 /* ------------------------------------------------------------------ friction.c */
@@ -285,8 +350,8 @@ RM_INTERNAL double rm_friction_force(int form, double psi, double A_e, double A,
 typedef struct {
     RmGearParams gear;
     double E_pinion, nu_pinion, E_wheel, nu_wheel, density, J_wheel;
-    int hertz_law, dissipation;
-    double restitution, restitution_speed, damping;
+    int hertz_law, dissipation, roughness;
+    double restitution, restitution_speed, damping, asperity_density;
     int friction_enabled, friction_form, shear_speed;
     double tau_s, eta, sigma, gamma, rattle_time, h_max, h_comm_max;
 } RmMeshParams;
@@ -296,6 +361,7 @@ typedef struct {
     RmMeshParams p;
     RmGeometry g;
     RmContactLaw law;
+    RmApproachLaw approach;
     double E_star, arm_wheel, arm_pinion, normal_mass, damping;
     double pen_limit;        /* largest penetration a step may reach [m] */
     double sqrt_gamma_sigma; /* sqrt(gamma / sigma) of eq. 13 */
@@ -321,12 +387,13 @@ static inline double rm_sliding_speed(const RmMesh* M, double s, double w_p, dou
 #define RM_PAIR_CACHE 6
 typedef struct {
     int n_used, next;
+    double member; /* the roll coordinate deciding the pairs in the zone (NAN: each u) */
     RmPairSet set[RM_PAIR_CACHE];
 } RmPairCache;
 
 RM_INTERNAL void rm_pair_cache_init(RmPairCache* c);
 /* The pair set at roll coordinate u, from the cache or built into it (valid until the next
- * call). */
+ * call); in the zone at c->member when that is set, else at u. */
 RM_INTERNAL RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u);
 RM_INTERNAL void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i);
 
@@ -343,6 +410,8 @@ typedef struct {
 /* Per-pair detail of the loads (probes): slot, s, offset, r_x, K, delta, W, F, v_s, u, h,
  * lambda, psi, delta_max. */
 #define RM_PAIR_DETAIL 14
+/* Per-pair law detail (rm_probe_pair_laws): slot, s, length, r_x, r_y, K, ka, kz, W_r. */
+#define RM_PAIR_LAW_DETAIL 9
 
 RM_INTERNAL void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                double phi_p, double w_p, double phi_w, double w_w,

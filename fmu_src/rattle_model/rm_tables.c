@@ -4,8 +4,10 @@
 
 static const int MESH_CHOICES_15[] = {0, 1};
 static const int MESH_CHOICES_16[] = {0, 1, 2};
-static const int MESH_CHOICES_21[] = {0, 1, 2};
-static const int MESH_CHOICES_22[] = {0, 1};
+static const int MESH_CHOICES_17[] = {0, 1};
+static const int MESH_CHOICES_19[] = {0, 1, 2};
+static const int MESH_CHOICES_24[] = {0, 1, 2};
+static const int MESH_CHOICES_25[] = {0, 1};
 const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"gear.z_pinion", RM_INTEGER, RM_PARAMETER, "1", 20.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
     {"gear.z_wheel", RM_INTEGER, RM_PARAMETER, "1", 39.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
@@ -23,13 +25,16 @@ const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"wheel.J", RM_REAL, RM_PARAMETER, "kg.m2", 0.0013, NULL, 1, 1, 0, 0, 1e-07, 1000.0, 0, NULL, "[1e-07, 1000] kg.m2"},
     {"contact.crowning", RM_REAL, RM_PARAMETER, "m", 1e-05, NULL, 1, 1, 0, 0, 1e-06, 0.001, 0, NULL, "[1e-06, 0.001] m"},
     {"contact.hertz_law", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_15, "one of 0 (exact elliptical Hertz contact (Johnson 1985, complete elliptic integrals)), 1 (equivalent sphere of eq. 2, K = 4/3 E* (r_x r_y)^(1/4))"},
-    {"contact.dissipation", RM_INTEGER, RM_PARAMETER, "1", 1.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_16, "one of 0 (none (the paper's equations: friction is the only loss)), 1 (Hunt-Crossley, factor from contact.restitution at contact.restitution_speed), 2 (Hunt-Crossley, factor contact.damping)"},
+    {"contact.geometry", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_16, "one of 0 (crowned point contacts: each pair touches at the lowest point of its engaged contact line with its own crown offset (contact.crowning)), 1 (the paper's: every pair in the zone of action an equivalent ellipsoid at the shared rigid approach (no crown), r_x and r_y (eq. 6) at the centre of its engaged contact line, K by contact.hertz_law), 2 (unmodified flanks in line contact: every pair in the zone loaded along its engaged contact line, Palmgren's line-contact law)"},
+    {"contact.roughness", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_17, "one of 0 (smooth flanks), 1 (Greenwood-Tripp asperity layer (surface.sigma, surface.gamma, surface.asperity_density) in series with the smooth law)"},
+    {"surface.asperity_density", RM_REAL, RM_PARAMETER, "1/m2", 1000000000.0, NULL, 1, 1, 0, 0, 1000000.0, 100000000000000.0, 0, NULL, "[1e+06, 1e+14] 1/m2"},
+    {"contact.dissipation", RM_INTEGER, RM_PARAMETER, "1", 1.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_19, "one of 0 (none (the paper's equations: friction is the only loss)), 1 (Hunt-Crossley, factor from contact.restitution at contact.restitution_speed), 2 (Hunt-Crossley, factor contact.damping)"},
     {"contact.restitution", RM_REAL, RM_PARAMETER, "1", 0.8, NULL, 1, 1, 0, 0, 0.01, 1.0, 0, NULL, "[0.01, 1]"},
     {"contact.restitution_speed", RM_REAL, RM_PARAMETER, "m/s", 0.004, NULL, 1, 1, 0, 0, 1e-05, 10.0, 0, NULL, "[1e-05, 10] m/s"},
     {"contact.damping", RM_REAL, RM_PARAMETER, "s/m", 0.0, NULL, 1, 1, 0, 0, 0.0, 1000.0, 0, NULL, "[0, 1000] s/m"},
     {"friction.enabled", RM_BOOLEAN, RM_PARAMETER, "", 1.0, NULL, 0, 0, 0, 0, 0.0, 0.0, 0, NULL, "true or false"},
-    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_21, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
-    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_22, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
+    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_24, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
+    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_25, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
     {"friction.tau_s", RM_REAL, RM_PARAMETER, "Pa", 228000000.0, NULL, 1, 1, 0, 0, 0.0, 10000000000.0, 0, NULL, "[0, 1e+10] Pa"},
     {"lubricant.eta", RM_REAL, RM_PARAMETER, "Pa.s", 0.05, NULL, 1, 1, 0, 0, 1e-05, 1000.0, 0, NULL, "[1e-05, 1000] Pa.s"},
     {"surface.sigma", RM_REAL, RM_PARAMETER, "m", 4e-07, NULL, 1, 1, 0, 0, 1e-09, 0.001, 0, NULL, "[1e-09, 0.001] m"},

@@ -56,6 +56,7 @@ int rm_mesh_params(const RmValue* values, RmMeshParams* p)
     p->gear.b = R(RM_MESH_GEAR_B);
     p->gear.backlash = R(RM_MESH_GEAR_BACKLASH);
     p->gear.crowning = R(RM_MESH_CONTACT_CROWNING);
+    p->gear.layout = (int)I(RM_MESH_CONTACT_GEOMETRY);
     p->E_pinion = R(RM_MESH_MATERIAL_E_PINION);
     p->nu_pinion = R(RM_MESH_MATERIAL_NU_PINION);
     p->E_wheel = R(RM_MESH_MATERIAL_E_WHEEL);
@@ -63,6 +64,8 @@ int rm_mesh_params(const RmValue* values, RmMeshParams* p)
     p->density = R(RM_MESH_MATERIAL_RHO);
     p->J_wheel = R(RM_MESH_WHEEL_J);
     p->hertz_law = (int)I(RM_MESH_CONTACT_HERTZ_LAW);
+    p->roughness = (int)I(RM_MESH_CONTACT_ROUGHNESS);
+    p->asperity_density = R(RM_MESH_SURFACE_ASPERITY_DENSITY);
     p->dissipation = (int)I(RM_MESH_CONTACT_DISSIPATION);
     p->restitution = R(RM_MESH_CONTACT_RESTITUTION);
     p->restitution_speed = R(RM_MESH_CONTACT_RESTITUTION_SPEED);
@@ -449,13 +452,16 @@ static int describe(RmUnit* u, const char** names, double* values, size_t capaci
                        "s_start", "s_end", "s_pitch", "base_pitch", "eps_alpha", "eps_beta",
                        "eps_gamma", "max_pairs", "r_y", "crown_factor", "half_backlash",
                        "normal_factor", "E_star", "arm_wheel", "arm_pinion", "normal_mass",
-                       "damping", "penetration_limit", "law_terms"};
+                       "damping", "penetration_limit", "law_terms", "r_y_eq6_pitch",
+                       "palmgren_constant", "asperity_pressure"};
     double v[] = {g->ratio, g->alpha_t, g->beta_b, g->centre_distance, g->r_pinion, g->r_wheel,
                   g->rb_pinion, g->rb_wheel, g->ra_pinion, g->ra_wheel, g->line_length,
                   g->s_start, g->s_end, g->s_pitch, g->base_pitch, g->eps_alpha, g->eps_beta,
                   g->eps_gamma, floor(g->eps_gamma) + 1.0, g->r_y, g->crown_factor,
                   g->half_backlash, g->normal_factor, M->E_star, M->arm_wheel, M->arm_pinion,
-                  M->normal_mass, M->damping, M->pen_limit, (double)M->law.terms};
+                  M->normal_mass, M->damping, M->pen_limit, (double)M->law.terms,
+                  rm_radius_y_eq6(g, g->s_pitch), M->approach.palmgren,
+                  M->approach.asperity_pressure};
     size_t total = sizeof v / sizeof v[0];
     for (size_t k = 0; k < total && k < capacity; k++) {
         names[k] = n[k];
@@ -524,6 +530,16 @@ int rm_probe_contact_law(RmUnit* u, double r_x, double* out4)
 {
     const RmMesh* M;
     if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
+    if (M->g.layout != RM_LAYOUT_CROWNED) {
+        RmText t;
+        rm_text_init(&t);
+        rm_printf(&t, "probe: the contact law at r_x with the crown's r_y belongs to "
+                      "contact.geometry = 0; with contact.geometry = %d each pair has its own "
+                      "law: use rm_probe_pair_laws", M->g.layout);
+        rm_report(u, RM_ERROR, rm_text_str(&t));
+        rm_text_free(&t);
+        return RM_ERROR;
+    }
     RmFail f;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
     rm_contact_law_at(&M->law, &f, r_x, &out4[0], &out4[1], &out4[2], &out4[3]);
@@ -589,7 +605,8 @@ int rm_probe_pairs(RmUnit* u, int flank, double phi_p, double* out, size_t capac
     RmFail f;
     RmPairSet ps;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
-    rm_pair_set_build(&M->g, &f, rm_flank_roll(&M->g, flank, phi_p), &ps);
+    double u_roll = rm_flank_roll(&M->g, flank, phi_p);
+    rm_pair_set_build(&M->g, &f, u_roll, u_roll, &ps);
     *count = (size_t)ps.n;
     for (int i = 0; i < ps.n && (size_t)i < capacity; i++) {
         out[4 * i] = (double)ps.slot[i];
@@ -619,5 +636,57 @@ int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double phi_w,
     totals[3] = L.W;
     totals[4] = L.F;
     *count = (size_t)L.n_pairs;
+    return RM_OK;
+}
+
+int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out, size_t capacity,
+                       size_t* count)
+{
+    const RmMesh* M;
+    if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
+    RmFail f;
+    RmPairSet ps;
+    if (setjmp(f.jb) != 0) return probe_failed(u, &f);
+    double u_roll = rm_flank_roll(&M->g, flank, phi_p);
+    rm_pair_set_build(&M->g, &f, u_roll, u_roll, &ps);
+    *count = (size_t)ps.n;
+    for (int i = 0; i < ps.n && (size_t)i < capacity; i++) {
+        rm_pair_coefficients(M, &f, &ps, i);
+        double row[RM_PAIR_LAW_DETAIL] = {(double)ps.slot[i], ps.s[i], ps.length[i], ps.r_x[i],
+                                          ps.r_y[i], ps.K[i], ps.ka[i], ps.kz[i], ps.W_r[i]};
+        for (int k = 0; k < RM_PAIR_LAW_DETAIL; k++) out[RM_PAIR_LAW_DETAIL * i + k] = row[k];
+    }
+    return RM_OK;
+}
+
+int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen, double* out4)
+{
+    const RmMesh* M;
+    if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
+    RmFail f;
+    if (setjmp(f.jb) != 0) return probe_failed(u, &f);
+    if (!(pen > 0.0 && K > 0.0 && W_r >= 0.0 && kz >= 0.0 && (W_r > 0.0 || !M->approach.rough))) {
+        RmText t;
+        rm_text_init(&t);
+        rm_puts(&t, "probe: the load-approach law needs pen > 0, K > 0, kz >= 0 and W_r > 0 with "
+                    "contact.roughness = 1 (W_r >= 0 without); got pen = ");
+        rm_put_number(&t, pen);
+        rm_puts(&t, ", K = ");
+        rm_put_number(&t, K);
+        rm_puts(&t, ", W_r = ");
+        rm_put_number(&t, W_r);
+        rm_puts(&t, ", kz = ");
+        rm_put_number(&t, kz);
+        rm_report(u, RM_ERROR, rm_text_str(&t));
+        rm_text_free(&t);
+        return RM_ERROR;
+    }
+    const RmApproachLaw* a = &M->approach;
+    double k, c;
+    out4[0] = rm_approach_force(a, &f, K, W_r, pen);
+    rm_approach_rates(a, &f, K, W_r, pen, 1.0, &k, &c);
+    out4[1] = k;
+    out4[2] = rm_approach_energy(a, &f, K, W_r, pen);
+    out4[3] = rm_approach_area(a, &f, kz, out4[0]);
     return RM_OK;
 }

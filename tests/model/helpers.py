@@ -15,6 +15,8 @@ from drive_rattle.library import MESH
 PAIR_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_speed",
                "entrainment_speed", "h", "film_parameter", "dry_fraction", "delta_max_eq7")
 TOTAL_FIELDS = ("delta", "tau_wheel", "tau_pinion", "W", "F")
+#: Doubles per pair row of rm_probe_pair_laws, in its order (rattle_model.h).
+PAIR_LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r")
 MAX_PAIRS = 16
 
 
@@ -69,6 +71,27 @@ class Probe:
         assert n.value <= MAX_PAIRS
         return [(int(out[4 * i]), out[4 * i + 1], out[4 * i + 2], out[4 * i + 3])
                 for i in range(n.value)]
+
+    def pair_laws(self, flank: int, phi_p: float) -> list[dict]:
+        """rm_probe_pair_laws: one dict per pair in the zone (PAIR_LAW_FIELDS)."""
+        width = len(PAIR_LAW_FIELDS)
+        out = (ctypes.c_double * (width * MAX_PAIRS))()
+        n = ctypes.c_size_t()
+        self.unit.call("rm_probe_pair_laws", int(flank), float(phi_p), out, MAX_PAIRS,
+                       ctypes.byref(n))
+        assert n.value <= MAX_PAIRS
+        rows = [dict(zip(PAIR_LAW_FIELDS, out[width * i: width * (i + 1)], strict=True))
+                for i in range(n.value)]
+        for r in rows:
+            r["slot"] = int(r["slot"])
+        return rows
+
+    def approach(self, K: float, W_r: float, kz: float, pen: float
+                 ) -> tuple[float, float, float, float]:
+        """rm_probe_approach: (W, dW/d(pen), energy, area) of the parameters' law."""
+        out = (ctypes.c_double * 4)()
+        self.unit.call("rm_probe_approach", float(K), float(W_r), float(kz), float(pen), out)
+        return tuple(out)
 
     def loads(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
               v_impact: float) -> Loads:

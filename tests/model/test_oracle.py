@@ -2,7 +2,9 @@
 derived geometry and masses (rm_describe), the pairs in the zone of action (rm_probe_pairs),
 the contact law and the exact ellipse (rm_probe_contact_law, rm_probe_exact_ellipse),
 Hunt-Crossley (rm_probe_restitution, rm_probe_damping_factor), the mesh loads with their
-per-pair detail at random states (rm_probe_loads), and the friction forms' limits.
+per-pair detail at random states (rm_probe_loads), the friction forms' limits, and the contact
+options (contact.geometry, contact.roughness): each pair's law coefficients
+(rm_probe_pair_laws) and the load-approach laws themselves (rm_probe_approach).
 
 The tolerances are those of two implementations of the same formulas in a different order of
 operations (relative 1e-12 on a quantity, 1e-12 of the sum of magnitudes on a signed sum);
@@ -19,10 +21,11 @@ from scipy import integrate
 from drive_rattle import COAST, DRIVE, MeshParameters, ModelError
 from drive_rattle.parameters import DEG
 from tests.oracle import hertz, lubrication
+from tests.oracle.approach import ApproachLaw
 from tests.oracle.geometry import MAX_PAIR_SLOTS
 from tests.oracle.mesh import MeshModel
 
-from .helpers import PAIR_FIELDS, Probe
+from .helpers import PAIR_FIELDS, PAIR_LAW_FIELDS, Probe
 
 REL = 1e-12
 PARAMETER_SETS = [
@@ -33,6 +36,15 @@ PARAMETER_SETS = [
     {"z_pinion": 30, "z_wheel": 45, "beta": 0.5, "backlash": 0.0},
     {"z_pinion": 18, "z_wheel": 80, "m_n": 5e-3, "alpha_n": 25 * DEG, "addendum": 1.2,
      "dissipation": 2, "damping": 300.0},
+    # the contact options of issue 19
+    {"contact_geometry": 1},
+    {"contact_geometry": 1, "hertz_law": 1, "beta": 0.0},
+    {"contact_geometry": 2},
+    {"contact_geometry": 2, "beta": 0.0, "b": 2e-3},
+    {"roughness": 1},
+    {"contact_geometry": 1, "roughness": 1, "sigma": 1e-7},
+    {"contact_geometry": 2, "roughness": 1, "z_pinion": 30, "z_wheel": 45, "beta": 0.5,
+     "asperity_density": 3e10},
 ]
 
 
@@ -57,12 +69,14 @@ def oracle_derived(m: MeshModel) -> dict[str, float]:
     out.update(E_star=m.E_star, arm_wheel=m.arm_wheel, arm_pinion=m.arm_pinion,
                normal_mass=m.normal_mass, damping=m.damping,
                penetration_limit=0.05 * m.params.m_n,
-               law_terms=float(len(m.law.kappa)))
+               law_terms=float(len(m.law.kappa)), r_y_eq6_pitch=g.radius_y_eq6(g.s_pitch),
+               palmgren_constant=m.approach.palmgren,
+               asperity_pressure=m.approach.asperity_pressure)
     return out
 
 
 def close(a: float, b: float, rel: float = REL, abs_: float = 0.0) -> bool:
-    return abs(a - b) <= max(rel * abs(b), abs_)
+    return a == b or abs(a - b) <= max(rel * abs(b), abs_)
 
 
 # ------------------------------------------------------------------ geometry
@@ -80,10 +94,11 @@ geometry = st.fixed_dictionaries({
     "beta": st.one_of(st.just(0.0), st.floats(0.0, 45 * DEG)),
     "addendum": st.floats(0.5, 1.5), "b": st.floats(1e-3, 0.1),
     "backlash": st.floats(0.0, 5e-3), "crowning": st.floats(1e-6, 1e-3),
-    "hertz_law": st.integers(0, 1)})
+    "hertz_law": st.integers(0, 1), "contact_geometry": st.integers(0, 2)})
 #: The reason of a refused geometry: a phrase of the oracle's message and of the library's.
 REASONS = ("undercuts", "tip interference", "transverse contact ratio", "pair slots",
-           "cannot be tabulated", "too large for an elliptical contact")
+           "cannot be tabulated", "too large for an elliptical contact",
+           "needs the wheel's radius at every contact point")
 
 
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -166,6 +181,10 @@ def test_drive_contacts_travel_towards_the_pinion_tip_coast_towards_its_root():
 def test_contact_law_equals_the_oracle_along_the_path_of_contact(pair):
     probe, m = pair
     g = m.geometry
+    if g.layout != 0:  # a law per pair (test_pair_laws_equal_the_oracle)
+        with pytest.raises(ModelError, match="rm_probe_pair_laws"):
+            probe.contact_law(g.normal_radii(g.s_pitch)[2])
+        return
     for s in np.linspace(g.s_start, g.s_end, 41):
         r_x = g.normal_radii(s)[2]
         got, want = probe.contact_law(r_x), m.law.coefficients(r_x)
@@ -236,6 +255,77 @@ def test_equivalent_sphere_law_is_eq2_with_johnsons_ellipse():
         assert math.sqrt(a * b) == pytest.approx(
             (3 * W * math.sqrt(r_x * r_y) / (4 * E)) ** (1 / 3), rel=1e-14)
         assert a / b == pytest.approx((r_y / r_x) ** (2 / 3), rel=1e-14)
+
+
+# ------------------------------------------------------------------ contact options
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_pair_laws_equal_the_oracle(pair, flank):
+    # Every pair's contact point, engaged line, radii and law coefficients (rm_probe_pair_laws)
+    # against the oracle's, at random pinion angles.
+    probe, m = pair
+    rng = np.random.default_rng(11)
+    for phi in np.concatenate([rng.uniform(-3.0, 3.0, 150), rng.uniform(-1e3, 1e3, 50)]):
+        got, want = probe.pair_laws(flank, phi), m.pair_laws(flank, phi)
+        assert [r["slot"] for r in got] == [w.slot for w in want], phi
+        for row, oracle in zip(got, want, strict=True):
+            for name in PAIR_LAW_FIELDS[1:]:
+                value, expected = row[name], getattr(oracle, name)
+                # (roll coordinates and lengths: absolute, as the pairs' test)
+                abs_ = 1e-15 if name in ("s", "length") else 1e-300
+                assert close(value, expected, abs_=abs_), (name, phi, value, expected)
+
+
+APPROACH_LAWS = {
+    "Hertz": {},
+    "Hertz, rough": {"roughness": 1},
+    "paper, rough, fine surface": {"contact_geometry": 1, "roughness": 1, "sigma": 2e-8},
+    "Palmgren": {"contact_geometry": 2},
+    "Palmgren, rough": {"contact_geometry": 2, "roughness": 1},
+    "Palmgren, rough, spur": {"contact_geometry": 2, "roughness": 1, "beta": 0.0,
+                              "asperity_density": 1e11},
+}
+
+
+@pytest.mark.parametrize("changes", APPROACH_LAWS.values(), ids=APPROACH_LAWS)
+def test_approach_laws_equal_the_oracle(changes):
+    # rm_probe_approach: load, stiffness, elastic energy and area of the parameters' law at the
+    # coefficients of each pair in the zone, from 1 pm to 0.1 mm of approach (far below and far
+    # above the roughness).
+    p = MeshParameters(**changes)
+    probe, a = Probe(p), MeshModel(p).approach
+    rows = [r for r in probe.pair_laws(DRIVE, 0.1) if r["K"] > 0.0]
+    assert rows
+    for row in rows:
+        K, W_r, kz = row["K"], row["W_r"], row["kz"]
+        for pen in np.geomspace(1e-12, 1e-4, 41):
+            W = a.force(K, W_r, pen)
+            want = (W, a.stiffness(K, W_r, pen), a.energy(K, W_r, pen), a.area(kz, W))
+            got = probe.approach(K, W_r, kz, pen)
+            for name, g, w in zip(("W", "stiffness", "energy", "area"), got, want,
+                                  strict=True):
+                assert close(g, w), (changes, pen, name, g, w)
+
+
+def test_approach_law_oracle_is_the_parameters_law():
+    # The oracle's law object is built from the parameters as the library's (describe).
+    for changes in APPROACH_LAWS.values():
+        p = MeshParameters(**changes)
+        d = p.derived()
+        a = ApproachLaw(p.contact_geometry == 2, p.roughness, d["E_star"], p.sigma, p.gamma,
+                        p.asperity_density)
+        assert close(d["palmgren_constant"], a.palmgren)
+        assert close(d["asperity_pressure"], a.asperity_pressure)
+
+
+@pytest.mark.parametrize("args, fragment", [
+    ((1.0, 1.0, 1.0, 0.0), "pen > 0"),
+    ((0.0, 1.0, 1.0, 1e-6), "K > 0"),
+    ((1.0, math.nan, 1.0, 1e-6), "W_r"),
+])
+def test_bad_approach_probe_arguments_are_refused(args, fragment):
+    with pytest.raises(ModelError) as err:
+        Probe(MeshParameters(roughness=1)).approach(*args)
+    assert fragment in str(err.value) and str(err.value).startswith("probe: ")
 
 
 # ------------------------------------------------------------------ Hunt-Crossley
@@ -321,6 +411,9 @@ parameters = st.fixed_dictionaries({
     "backlash": st.floats(0.0, 2e-4),
     "sigma": st.floats(2e-8, 2e-6),
     "b": st.floats(5e-3, 40e-3),
+    "contact_geometry": st.integers(0, 2),
+    "roughness": st.integers(0, 1),
+    "asperity_density": st.floats(1e8, 1e11),
 })
 states = st.tuples(st.sampled_from([DRIVE, COAST]), st.floats(-50.0, 50.0),
                    st.floats(-300.0, 300.0), st.floats(-1e-7, 5e-6), st.floats(-2.0, 2.0),

@@ -26,7 +26,7 @@ from drive_rattle.parameters import DEG
 from tests.oracle import hertz, roots
 from tests.oracle.mesh import MeshModel
 
-from .helpers import approach_unit, free_parameters, pinion_with_order, run_impact
+from .helpers import approach_unit, free_parameters, pinion_with_order, restitution, run_impact
 
 H = 1e-4
 
@@ -34,17 +34,16 @@ H = 1e-4
 # ------------------------------------------------------------------ energy
 class ImpactEnergy:
     """The wheel's energy on the tooth normal against a pinion at rest (oracle): the kinetic
-    energy 1/2 m (d delta/dt)^2 plus the elastic energy sum_i 2/5 K_i (delta - g_i)^(5/2) of
-    the pairs of ``flank``."""
+    energy 1/2 m (d delta/dt)^2 plus the elastic energy sum_i integral_0^(delta - g_i) W_i of
+    the pairs of ``flank`` (2/5 K_i (delta - g_i)^(5/2) for smooth Hertz; any of the
+    load-approach laws of contact.geometry and contact.roughness)."""
 
     def __init__(self, p: MeshParameters, flank: int):
-        m = MeshModel(p)
-        self.mass, self.arm = m.normal_mass, m.arm_wheel
-        self.pairs = [(m.law.coefficients(m.geometry.normal_radii(s)[2]).K, g)
-                      for _, s, g, _ in m.geometry.pairs(flank, 0.0)]
+        self.model = m = MeshModel(p)
+        self.mass, self.arm, self.flank = m.normal_mass, m.arm_wheel, flank
 
     def elastic(self, delta: float) -> float:
-        return sum(0.4 * K * (delta - g) ** 2.5 for K, g in self.pairs if delta > g)
+        return self.model.elastic_energy(self.flank, 0.0, delta)
 
     def of(self, delta: float, w_w: float) -> float:
         return 0.5 * self.mass * (self.arm * w_w) ** 2 + self.elastic(delta)
@@ -73,6 +72,10 @@ impacts = st.fixed_dictionaries({
     "crowning": st.floats(1e-6, 1e-4),
     "J_wheel": st.floats(1e-4, 1e-2),
     "sigma": st.floats(2e-8, 2e-6),
+    # the contact options of issue 19: the paper's and the line law, rough flanks
+    "contact_geometry": st.integers(0, 2),
+    "roughness": st.integers(0, 1),
+    "asperity_density": st.floats(1e8, 1e11),
 })
 
 
@@ -105,13 +108,44 @@ def test_no_impact_creates_energy_or_penetrates_beyond_its_energy(changes, log_v
     assert d_peak <= energy.deepest(e0) * (1 + 1e-4)
     assert energy.of(out["mesh.delta"], out["wheel.w"]) <= e0 * (1 + 2e-4)
     release = [e for _, e in events if e.kind == "release"]
+    d = p.derived()["damping"]
+    e_closed = hertz.hunt_crossley_restitution(d * v)
+    if not release and p.roughness and d_peak > 0.01 * e_closed * v:
+        # a near-plastic impact on the soft asperity layer (W ~ delta^7.8 at first contact):
+        # creeping out of the peak penetration at no more than the rebound speed e v takes
+        # longer than 10 ms, and under the layer's weak force more than the 30 ms run; the
+        # energy bounds above hold meanwhile
+        event("rough, near-plastic: no release within 30 ms")
+        return
     assert release, "no release within 30 ms"
     e = -release[0].speed / v
     assert 0.0 <= e <= 1.0 + 1e-4
-    d = p.derived()["damping"]
-    assert e <= hertz.hunt_crossley_restitution(d * v) + 1e-4
+    assert e <= e_closed + 1e-4
     if p.dissipation == 0 and not p.friction_enabled:
         assert e == pytest.approx(1.0, abs=1e-4)
+
+
+CONTACT_OPTIONS = {
+    "paper, exact law": {"contact_geometry": 1},
+    "paper, eq. 2": {"contact_geometry": 1, "hertz_law": 1},
+    "line": {"contact_geometry": 2},
+    "rough": {"roughness": 1},
+    "paper, rough": {"contact_geometry": 1, "roughness": 1},
+    "line, rough, spur": {"contact_geometry": 2, "roughness": 1, "beta": 0.0},
+}
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+@pytest.mark.parametrize("v", [1e-4, 4e-3, 0.1, 1.0])
+@pytest.mark.parametrize("changes", CONTACT_OPTIONS.values(), ids=CONTACT_OPTIONS)
+def test_no_impact_creates_energy_under_the_contact_options(changes, v, flank):
+    # Each contact option at impact speeds from 0.1 mm/s to 1 m/s: undamped without friction
+    # the rebound equals the approach, with friction it falls below, with Hunt-Crossley
+    # (100 s/m) it stays within its closed form -- each within the integration's 1e-4.
+    assert restitution(v, flank, dissipation=0, **changes) == pytest.approx(1.0, abs=1e-4)
+    assert restitution(v, flank, dissipation=0, friction_enabled=True, **changes) <= 1.0 + 1e-4
+    e = restitution(v, flank, dissipation=2, damping=100.0, **changes)
+    assert e <= hertz.hunt_crossley_restitution(100.0 * v) + 1e-4
 
 
 @pytest.mark.xfail(strict=True, reason="model: a wheel held in the flank by friction "
@@ -183,6 +217,8 @@ random_parameters = st.fixed_dictionaries({
     "backlash": st.one_of(st.just(0.0), st.floats(1e-6, 2e-4)),
     "h_max": st.floats(2e-6, 5e-5),
     "sigma": st.floats(2e-8, 2e-6),
+    "contact_geometry": st.integers(0, 2),
+    "roughness": st.integers(0, 1),
     "init_in_contact": st.booleans(),
     "w_start": st.floats(-50.0, 50.0),
 })

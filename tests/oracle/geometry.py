@@ -23,15 +23,30 @@ Conventions (docs/model.md, section 2):
   of the path nearest to it, where the crown leaves the offset ``g = C_b (d / (w/2))^2`` (d the
   roll distance from the face centre).  Since eps_alpha >= 1, at least one pair always has its
   face centre in the path, so the flank's first contact is always at zero offset.
+* ``contact.geometry`` 1 (the paper's) and 2 (line contact) take the flanks unmodified: every
+  pair in the zone of action touches at the shared rigid approach (no offset) and stands for
+  its engaged contact line ``[max(s_n - w/2, s_start), min(s_n + w/2, s_end)]``: its contact
+  point is the line's centre, its length the line's (a roll distance d along the line is
+  ``d / sin(beta_b)`` of line; a spur pair's line is the face width).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Protocol
 
 DRIVE = 1
 COAST = -1
+
+#: contact.geometry codes
+LAYOUT_CROWNED = 0
+LAYOUT_PAPER = 1
+LAYOUT_LINE = 2
+#: Samples of ln(r_y/r_x) along the path for the paper's eq. 6, and the relative margin the
+#: range is widened by (the contact law is tabulated over it).
+EQ6_RANGE_SAMPLES = 256
+EQ6_RANGE_MARGIN = 0.01
 
 #: Upper bound on the number of tooth pairs that can be in the zone of action at once.
 #: The mesh unit outputs this many `pair[k].W` slots; a geometry needing more is rejected.
@@ -55,6 +70,7 @@ class PairDimensions(Protocol):
     b: float
     backlash: float
     crowning: float
+    contact_geometry: int
 
 
 class HelicalPairGeometry:
@@ -112,6 +128,8 @@ class HelicalPairGeometry:
         self.sin_alpha_t = math.sin(self.alpha_t)
         self.sin_beta_b = math.sin(self.beta_b)
         self.half_backlash = 0.5 * p.backlash
+        self.layout = getattr(p, "contact_geometry", LAYOUT_CROWNED)
+        self.face_width = p.b
         # Roll coordinate of the reference pair at phi_p = 0 (tooth centreline on the line of
         # centres: the flank is a quarter base pitch ahead of the pitch point), both flanks.
         self.flank_phase = self.s_pitch + 0.25 * self.base_pitch
@@ -143,6 +161,17 @@ class HelicalPairGeometry:
                 f"gear.z_pinion = {p.z_pinion}, gear.z_wheel = {p.z_wheel}, gear.h_a = "
                 f"{p.addendum:.4g}, gear.alpha_n = {math.degrees(p.alpha_n):.4g} deg, gear.beta = "
                 f"{math.degrees(p.beta):.4g} deg; allowed: eps_alpha >= 1")
+        if self.layout == LAYOUT_PAPER:
+            R_p = math.sqrt(self.rb_pinion**2 + self.s_end**2)
+            R_w = math.sqrt(self.rb_wheel**2 + (self.line_length - self.s_end) ** 2)
+            if not R_w > R_p:
+                raise ValueError(
+                    f"parameter 'contact.geometry' = {self.layout} (the paper's eq. 6, r_y = "
+                    "R_p R_w / (R_w - R_p)) needs the wheel's radius at every contact point "
+                    f"larger than the pinion's; with gear.z_pinion = {p.z_pinion}, "
+                    f"gear.z_wheel = {p.z_wheel} it is {R_w * 1e3:.6g} mm against "
+                    f"{R_p * 1e3:.6g} mm at the pinion tip; allowed: contact.geometry = 0 or 2, "
+                    "or a wheel with more teeth")
         if self.max_pairs > MAX_PAIR_SLOTS:
             b_max = (MAX_PAIR_SLOTS - self.eps_alpha) * math.pi * p.m_n / max(
                 math.sin(p.beta), 1e-300)
@@ -184,6 +213,8 @@ class HelicalPairGeometry:
         k = self.crown_factor
         n_lo = math.floor((u - s1 - half) / pb) + 1
         n_hi = math.ceil((u - s0 + half) / pb) - 1
+        if self.layout != LAYOUT_CROWNED:
+            return [(slot, s, 0.0, 0.0) for slot, s, _ in self.lines_at_roll(u)]
         out = []
         for n in range(n_lo, n_hi + 1):
             s = u - n * pb  # roll coordinate of the pair's face centre
@@ -201,13 +232,46 @@ class HelicalPairGeometry:
                 out.append((n % MAX_PAIR_SLOTS, s, 0.0, 0.0))
         return out
 
+    def lines(self, flank: int, phi_p: float) -> list[tuple[int, float, float]]:
+        """Unmodified flanks: ``(slot, s, length)`` of every pair in the zone of action, its
+        contact point ``s`` the centre of its engaged contact line, ``length`` [m] the line's
+        length."""
+        return self.lines_at_roll(self.flank_roll(flank, phi_p))
+
+    def lines_at_roll(self, u: float) -> list[tuple[int, float, float]]:
+        """As :meth:`lines`, from the roll coordinate ``u`` of :meth:`flank_roll`."""
+        pb = self.base_pitch
+        half = 0.5 * self.line_span
+        s0, s1 = self.s_start, self.s_end
+        n_lo = math.floor((u - s1 - half) / pb) + 1
+        n_hi = math.ceil((u - s0 + half) / pb) - 1
+        out = []
+        for n in range(n_lo, n_hi + 1):
+            s = u - n * pb  # the pair's face centre
+            if half > 0.0:
+                if not (s + half > s0 and s - half < s1):
+                    continue
+                lo, hi = max(s - half, s0), min(s + half, s1)
+                length = (hi - lo) / self.sin_beta_b
+            else:
+                if not s0 < s < s1:
+                    continue
+                lo = hi = s
+                length = self.face_width
+            out.append((n % MAX_PAIR_SLOTS, min(max(0.5 * (lo + hi), s0), s1), length))
+        return out
+
     def _roll_breakpoints(self) -> tuple[float, ...]:
         """Roll coordinates (mod base pitch) of a pair's face centre where the pair enters or
         leaves the zone of action (s_start - w/2, s_end + w/2) or its contact point starts or
         stops following the face centre (s_start, s_end); between them every pair quantity
         is a smooth function of the pinion angle."""
         half = 0.5 * self.line_span
-        raw = {self.s_start - half, self.s_start, self.s_end, self.s_end + half}
+        if self.layout == LAYOUT_CROWNED:
+            raw = {self.s_start - half, self.s_start, self.s_end, self.s_end + half}
+        else:  # where an end of the engaged line starts or stops following the path's end
+            raw = {self.s_start - half, self.s_start + half, self.s_end - half,
+                   self.s_end + half}
         return tuple(sorted(v % self.base_pitch for v in raw))
 
     def next_breakpoint(self, u_a: float, u_b: float) -> float | None:
@@ -244,9 +308,33 @@ class HelicalPairGeometry:
         rw = (self.line_length - s) / c
         return rp, rw, rp * rw / (rp + rw)
 
+    def radius_y_eq6(self, s: float) -> float:
+        """r_y of eq. 6 at roll coordinate ``s`` [m]: the gears' radii at the contact point
+        (eq. 4's sqrt(R_b^2 + rho^2)) with the wheel's counted concave,
+        1/r_y = 1/R_p - 1/R_w (the printed denominator R_p - R_w would make r_y negative for a
+        wheel larger than the pinion)."""
+        R_p = math.sqrt(self.rb_pinion**2 + s * s)
+        R_w = math.sqrt(self.rb_wheel**2 + (self.line_length - s) ** 2)
+        if R_w == R_p:  # (equal radii: no curvature difference, as IEEE division gives)
+            return math.inf
+        return R_p * R_w / (R_w - R_p)
+
     def radius_ratio_range(self) -> tuple[float, float]:
         """Bounds of ln(R/r), R and r the larger and smaller of r_x and r_y, over the contact
-        points the path of contact allows (s in [s_start, s_end])."""
+        points the path of contact allows (s in [s_start, s_end]): r_y the crown's, or for the
+        paper's eq. 6 (varying along the path) from EQ6_RANGE_SAMPLES + 1 samples, widened by
+        EQ6_RANGE_MARGIN of the range at both ends."""
+        if self.layout == LAYOUT_PAPER:
+            span = self.s_end - self.s_start
+            v = [math.log(self.radius_y_eq6(s) / self.normal_radii(s)[2])
+                 for s in (self.s_start + span * k / EQ6_RANGE_SAMPLES
+                           for k in range(EQ6_RANGE_SAMPLES + 1))]
+            lo, hi = min(v), max(v)
+            margin = EQ6_RANGE_MARGIN * (hi - lo)
+            lo, hi = lo - margin, hi + margin
+            crosses = any((a > 0) != (b > 0) for a, b in itertools.pairwise(v))
+            return (0.0 if crosses or lo <= 0.0 <= hi else min(abs(lo), abs(hi)),
+                    max(abs(lo), abs(hi)))
         samples = [self.s_start, self.s_end]
         mid = 0.5 * self.line_length  # r_x(s) = s (L - s) / (L cos beta_b) peaks there
         if self.s_start < mid < self.s_end:

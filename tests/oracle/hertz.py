@@ -231,7 +231,10 @@ class ContactLaw:
         """``(K, R, ka, kz)`` at the contact radius r_x: the stiffness non-linearity K
         [N/m^1.5], the larger radius R [m] and the coefficients of the semi-major axis
         a = ka W^(1/3) [m] and of the area A = kz W^(2/3) [m^2]."""
-        r_y = self.r_y
+        return self.coefficients_at(r_x, self.r_y)
+
+    def coefficients_at(self, r_x: float, r_y: float) -> LawCoefficients:
+        """As :meth:`coefficients` for a pair whose r_y is its own (the paper's eq. 6)."""
         E = self.E_star
         if self.law == LAW_EXACT:
             if r_y >= r_x:

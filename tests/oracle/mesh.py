@@ -8,13 +8,17 @@ The rigid-body approach along the tooth normal is common to all pairs of a flank
     delta = flank * x - backlash / 2                       (penetration; < 0 is a gap)
 
 Each pair in the zone of action touches at its own contact point with its own crown offset
-g_i (geometry.py), so its penetration is delta_i = delta - g_i, and it carries the Hertz force
-with Hunt-Crossley dissipation on its own penetration rate,
+g_i (geometry.py; zero on unmodified flanks), so its penetration is delta_i = delta - g_i, and
+it carries the load of its load-approach law (approach.py) with Hunt-Crossley dissipation on
+its own penetration rate,
 
-    W_i = K_i delta_i^(3/2) (1 + d ddelta_i/dt),   W_i >= 0,
+    W_i = W(delta_i) (1 + d ddelta_i/dt),   W_i >= 0,
 
-K_i from the contact law at the pair's radii.  Torques (each gear positive in its own forward
-direction), with F_i the pair's friction force and sgn_i the sign of its sliding speed:
+W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
+radii (the crown's r_y, or eq. 6's for the paper's contact.geometry 1), Palmgren's line law
+for contact.geometry 2, either in series with the asperity layer for contact.roughness 1.
+Torques (each gear positive in its own forward direction), with F_i the pair's friction force
+and sgn_i the sign of its sliding speed:
 
     wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
     pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
@@ -27,9 +31,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from . import hertz, lubrication, roots
-from .geometry import DRIVE, HelicalPairGeometry
+from .approach import ApproachLaw
+from .geometry import DRIVE, LAYOUT_CROWNED, LAYOUT_LINE, LAYOUT_PAPER, HelicalPairGeometry
 
 DISSIPATION_NONE = 0
 DISSIPATION_RESTITUTION = 1
@@ -69,6 +75,23 @@ class MeshLoads:
     pairs: list[PairLoad] = field(default_factory=list)
 
 
+class PairLaw(NamedTuple):
+    """A pair in the zone of action with its load-approach law's coefficients (the order of
+    the library's rm_probe_pair_laws rows, then its crown offset and rate)."""
+
+    slot: int
+    s: float  # roll coordinate of its contact point [m]
+    length: float  # of its engaged contact line (unmodified flanks) [m]
+    r_x: float  # [m]
+    r_y: float  # [m] (0 for a line)
+    K: float  # of the smooth law W = K delta^p
+    ka: float  # semi-major axis a = ka W^(1/3) (ellipse)
+    kz: float  # area A = kz W^(2/3) (ellipse) or kz W^(1/2) (line)
+    W_r: float  # asperity layer's load scale [N] (0: smooth)
+    offset: float  # crown offset [m]
+    dg: float  # its rate per roll of the face centre
+
+
 def damping_factor(params) -> float:
     """Hunt-Crossley factor d [s/m] of the parameters' contact.dissipation model."""
     if params.dissipation == DISSIPATION_RESTITUTION:
@@ -86,8 +109,15 @@ class MeshModel:
         self.geometry = g = HelicalPairGeometry(params)
         self.E_star = hertz.effective_modulus(
             params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
-        self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
-                                    g.radius_ratio_range())
+        if g.layout == LAYOUT_LINE:  # Palmgren's law: no elliptical contact to tabulate
+            self.law = hertz.ContactLaw(hertz.LAW_EQUIVALENT_SPHERE, self.E_star, g.r_y,
+                                        (0.0, 0.0))
+        else:
+            self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
+                                        g.radius_ratio_range())
+        self.approach = ApproachLaw(g.layout == LAYOUT_LINE, getattr(params, "roughness", 0),
+                                    self.E_star, params.sigma, params.gamma,
+                                    getattr(params, "asperity_density", 1e9))
         self.damping = damping_factor(params)
         # Arms of the normal force about each axis: cos(beta_b) * base radius.
         self.arm_wheel = g.normal_factor * g.rb_wheel
@@ -116,22 +146,47 @@ class MeshModel:
         its face centre, flank rb_p w_p)."""
         return dg * (flank * self.geometry.rb_pinion * w_p)
 
+    # ------------------------------------------------------------------ pairs
+    def pair_laws(self, flank: int, phi_p: float) -> list[PairLaw]:
+        """The pairs in the zone of action of ``flank`` with their laws' coefficients."""
+        g, a = self.geometry, self.approach
+        if g.layout == LAYOUT_CROWNED:
+            rows = [(slot, s, 0.0, off, dg) for slot, s, off, dg in g.pairs(flank, phi_p)]
+        else:
+            rows = [(slot, s, length, 0.0, 0.0) for slot, s, length in g.lines(flank, phi_p)]
+        out = []
+        for slot, s, length, offset, dg in rows:
+            r_x = g.normal_radii(s)[2]
+            if g.layout == LAYOUT_LINE:
+                r_y, ka = 0.0, 0.0
+                K = a.line_coefficient(length) if length > 0.0 else 0.0
+                kz = a.line_area_coefficient(r_x, length)
+            else:
+                r_y = g.radius_y_eq6(s) if g.layout == LAYOUT_PAPER else self.law.r_y
+                K, _R, ka, kz = self.law.coefficients_at(r_x, r_y)
+            W_r = a.asperity_scale(r_x, r_y, length) if a.rough and K > 0.0 else 0.0
+            out.append(PairLaw(slot, s, length, r_x, r_y, K, ka, kz, W_r, offset, dg))
+        return out
+
     # ------------------------------------------------------------------ loads
     def stiffness_sum(self, flank: int, phi_p: float) -> float:
-        """sum K_i [N/m^1.5] over the pairs in the zone of action of ``flank``."""
-        return sum(self.law.coefficients(self.geometry.normal_radii(s)[2]).K
-                   for _, s, _, _ in self.geometry.pairs(flank, phi_p))
+        """sum K_i over the pairs in the zone of action of ``flank`` (W = K delta^p)."""
+        return sum(pl.K for pl in self.pair_laws(flank, phi_p))
 
     def static_force(self, flank: int, phi_p: float, delta: float) -> float:
         """Total normal force [N] of ``flank`` at penetration ``delta`` without dissipation:
-        sum_i K_i (delta - g_i)^(3/2) over the pairs that touch."""
+        sum_i W_i(delta - g_i) over the pairs that touch."""
         total = 0.0
-        for _slot, s, g, _dg in self.geometry.pairs(flank, phi_p):
-            d = delta - g
+        for pl in self.pair_laws(flank, phi_p):
+            d = delta - pl.offset
             if d > 0.0:
-                K = self.law.coefficients(self.geometry.normal_radii(s)[2]).K
-                total += K * d**1.5
+                total += self.approach.force(pl.K, pl.W_r, d)
         return total
+
+    def elastic_energy(self, flank: int, phi_p: float, delta: float) -> float:
+        """sum_i integral_0^(delta - g_i) W_i [J] over the pairs of ``flank`` that touch."""
+        return sum(self.approach.energy(pl.K, pl.W_r, delta - pl.offset)
+                   for pl in self.pair_laws(flank, phi_p) if delta > pl.offset)
 
     def torques(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
                 v_impact: float) -> tuple[float, float, float]:
@@ -150,15 +205,16 @@ class MeshModel:
         if delta <= 0.0:
             return out
         delta_dot = self.approach_rate(flank, w_p, w_w)
-        for slot, s, offset, dg in g.pairs(flank, phi_p):
+        a = self.approach
+        for pl in self.pair_laws(flank, phi_p):
+            slot, s, offset, dg = pl.slot, pl.s, pl.offset, pl.dg
+            r_x, K, ka, kz = pl.r_x, pl.K, pl.ka, pl.kz
             pen = delta - offset
-            r_x = g.normal_radii(s)[2]
-            K, _R, ka, kz = self.law.coefficients(r_x)
             if pen <= 0.0:
                 out.pairs.append(PairLoad(slot, s, offset, r_x, K, pen,
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
-            W = K * pen**1.5
+            W = a.force(K, pl.W_r, pen)
             if self.damping > 0.0:
                 W *= 1.0 + self.damping * (delta_dot - self.pair_rate(flank, w_p, dg))
                 W = max(W, 0.0)  # the flanks never pull on each other
@@ -171,8 +227,8 @@ class MeshModel:
             F = h = lam = psi = d_max = 0.0
             if W > 0.0:
                 A_e = lubrication.asperity_area(W, self.E_star, p.gamma, p.sigma)
-                A = kz * W ** (2.0 / 3.0)
-                d_max = hertz.film_delta_max(v_impact, K, r_x, ka, p.density)
+                A = a.area(kz, W)
+                d_max = a.film_delta_max(v_impact, K, r_x, ka, pl.length, p.density)
                 h = lubrication.film_thickness(-pen, d_max)
                 lam = h / p.sigma
                 psi = lubrication.dry_fraction(lam)
