@@ -255,5 +255,6 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
 
 def test_a_step_the_coupled_system_cannot_take_names_the_step_to_use(fmus):
     with CoSimulation(fmus["GearMeshRattle"], fmus["Driveline"], {}, step=1e-2) as sim, \
-            pytest.raises(CoSimulationError, match=r"use 0\.0001 s"):
+            pytest.raises(CoSimulationError,
+                          match=r"Reduce the communication step to at most 0\.0001 s"):
         sim.run(STOP)
