@@ -17,6 +17,9 @@ from drive_rattle_cosim.ssp import run_libcosim
 
 def run(kind: str, args: dict) -> dict:
     outputs = args.get("outputs")
+    if args.get("integer_codes"):  # libcosim and ecos ignore Enumeration variables
+        target = Path(args["dir"]) / f"integer_codes_{Path(args['ssp']).name}"
+        args = {**args, "ssp": str(masters.integer_codes(Path(args["ssp"]), target))}
     if kind == "libcosim":
         result = run_libcosim(Path(args["ssp"]), args["stop"], outputs or masters.COUPLING)
     elif kind == "fmpy.ssp":
