@@ -39,7 +39,7 @@ COUPLING = [f"{src}.{out}" for src, out, _, _ in CONNECTIONS]
 #: ``harness.time_grid`` name of each master's communication points.
 MASTER_GRIDS = {"libcosim": "nanoseconds", "fmpy.ssp": "accumulated",
                 "container": "multiplied", "gemseo": "accumulated-clipped",
-                "ecos": "accumulated"}
+                "ecos": "accumulated", "cofmupy": "accumulated"}
 #: Real inputs and outputs of each unit, for masters that read every variable as Real.
 REAL_INPUTS = {MESH: [i for _, _, d, i in CONNECTIONS if d == MESH],
                DRIVELINE: [i for _, _, d, i in CONNECTIONS if d == DRIVELINE]}
@@ -367,6 +367,81 @@ def run_gemseo(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: floa
     columns = {f"{unit}.{name}": data[name] for unit, names in REAL_OUTPUTS.items()
                for name in names}
     return _result(data[f"{DRIVELINE}_time"], columns)
+
+
+# ---------------------------------------------------------------- cofmupy
+@contextlib.contextmanager
+def cofmupy_real_outputs():
+    """Inside this context cofmupy (1.0.0) reads only the Real outputs of an FMI 2.0 unit: it
+    reads every output with ``fmi2GetReal`` after every step, with no setting to leave some
+    out, and the Integer outputs (the impact counters, ``mesh.n_contact``) fail
+    (``getReal: no Real variable with value reference ...``)."""
+    from cofmupy.wrappers import Fmu2Handler
+
+    original = Fmu2Handler.get_output_names
+
+    def real_outputs(self):
+        return [n for n in original(self) if self.var_name2attr[n].type == "Real"]
+
+    Fmu2Handler.get_output_names = real_outputs
+    try:
+        yield
+    finally:
+        Fmu2Handler.get_output_names = original
+
+
+def cofmupy_config(mesh_fmu: Path, driveline_fmu: Path, parameters: dict | None = None) -> dict:
+    """cofmupy's configuration of the pair (Jacobi), each unit's ``"initialization"`` holding
+    its Real ``parameters`` (``"<Unit>.<name>"``; cofmupy sets every variable with
+    ``fmi2SetReal``) and every coupling input at the partner's output at the start for these
+    parameters (``ssp.consistent_input_starts``): cofmupy writes 0 to every input that is not in
+    ``"initialization"`` before it initializes the units, and exchanges nothing then."""
+    from .ssp import consistent_input_starts
+
+    parameters = parameters or {}
+    for qualified, value in parameters.items():
+        if type(value) is not float:
+            raise ValueError(f"cofmupy sets FMI 2 variables as Real: '{qualified}' = "
+                             f"{value!r} cannot be set")
+    values = {**parameters, **consistent_input_starts(parameters)}
+    paths = {MESH: str(mesh_fmu), DRIVELINE: str(driveline_fmu)}
+    return {
+        "fmus": [{"id": unit, "path": paths[unit],
+                  "initialization": {k.partition(".")[2]: v for k, v in values.items()
+                                     if k.partition(".")[0] == unit}}
+                 for unit in (DRIVELINE, MESH)],
+        "connections": [{"source": {"id": src, "variable": out},
+                         "target": [{"id": dst, "variable": inp}]}
+                        for src, out, dst, inp in CONNECTIONS],
+        "cosim_method": "jacobi",
+    }
+
+
+def run_cofmupy(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float,
+                parameters: dict | None = None, workarounds: bool = True,
+                fixed_point: bool = False) -> Result:
+    """cofmupy's ``Coordinator`` on ``cofmupy_config`` inside ``cofmupy_real_outputs``, its
+    fixed-point initialization off (``fixed_point``: on; it calls ``fmi2SetupExperiment`` on
+    running units, which they refuse: ``setupExperiment is not allowed in mode
+    'stepping'``).  ``workarounds=False``: the configuration without the input starts, and
+    every output read.  Accumulated time ``t += step``; the result holds the values after
+    every step, at the step's end."""
+    from cofmupy.coordinator import Coordinator
+
+    config = cofmupy_config(mesh_fmu, driveline_fmu, parameters)
+    if not workarounds:
+        for unit in config["fmus"]:
+            unit["initialization"] = {k: v for k, v in unit["initialization"].items()
+                                      if k not in REAL_INPUTS[unit["id"]]}
+    outputs = cofmupy_real_outputs() if workarounds else contextlib.nullcontext()
+    with outputs:
+        coordinator = Coordinator()
+        coordinator.start(config, fixed_point_init=fixed_point)
+        while coordinator.master.current_time < stop_time:
+            coordinator.do_step(step)
+        rows = coordinator.get_results()
+    return _result([t + step for t in rows["time"]],
+                   {name: rows[tuple(name.split(".", 1))] for name in COUPLING})
 
 
 # ---------------------------------------------------------------- libcosim and ecos
