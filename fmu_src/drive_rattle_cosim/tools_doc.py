@@ -85,6 +85,32 @@ def _first_refused() -> float:
                 if "refused" in step_accuracy.measure(step))
 
 
+def step_accuracy_setup() -> str:
+    phases = ", ".join(f"{p:g}" for p in step_accuracy.PHASES)
+    return (f"the default system over {step_accuracy.STOP_TIME:g} s; each cell: the mean over "
+            f"{len(step_accuracy.PHASES)} runs whose engine-order-1 phase differs by {phases} "
+            "rad, and in brackets their range")
+
+
+def input_file_command() -> str:
+    """fmpy driving the mesh from the regression inputs, to their last time."""
+    path = _regression_inputs()
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().split()
+    columns, last = lines[0], float(lines[-1].split(",")[0])
+    relative = f"regression/{path.parent.name}/{path.name}"
+    return f"""
+<!-- run: fmpy-input-file -->
+```sh
+fmpy simulate dist/native/GearMeshRattle.fmu --input-file {relative} \\
+    --output-interval {DEFAULT_EXPERIMENT['stepSize']:g} --stop-time {last:g} \\
+    --output-file mesh_driven.csv
+```
+
+(`{relative}` holds the regression inputs, {last:g} s; its columns are `{columns}`.)
+"""
+
+
 def first_refused_step() -> str:
     return f"{_first_refused():g} s"
 
@@ -308,7 +334,9 @@ def _regression_inputs():
 BLOCKS: dict[str, Callable[[], str]] = {
     "default step": default_step,
     "solver limits": solver_limits,
+    "step accuracy setup": step_accuracy_setup,
     "step accuracy": step_table,
+    "input file command": input_file_command,
     "first refused step": first_refused_step,
     "h_comm_max": h_comm_max,
     "fmpy steps": fmpy_steps,
