@@ -5,14 +5,21 @@ scenario over two parameter planes, as PNG heat maps --
 * order-2 amplitude x engine speed --
 
 each a grid sweep on dask (LocalCluster) with results written case by case, so that an
-interrupted run resumes where it stopped.  The cases run on the model library's compiled loop
+interrupted run resumes where it stopped.  With ``--starts smooth,free`` (or any starts of
+``drive_rattle_cosim.multistability``: kicks, free, phase-shifted orders) every cell runs from
+each start, the map shows the value of the start listed first in
+``multistability.STARTS`` (smooth, kicks, free, phases), and a cell whose starts disagree beyond
+their window scatter -- the rattle index of two starts apart by more than twice the root sum of
+squares of their window-to-window standard deviations plus 1 % -- is cross-hatched as
+multistable (docs/analysis.md section 7).  The cases run on the model library's compiled loop
 (the FMUs' numbers bit for bit, tests/cosim/test_sweep.py); ``--fmu-dir`` runs them on built
 FMUs in the fmpy harness instead.  Every case runs a start transient (left out) and
 then several equal windows; a map shows the mean over the windows, hatched where the
 window-to-window scatter exceeds a stated fraction of the value, next to a map of that scatter.
 
     python examples/rattle_maps.py [--points 5] [--transient 1] [--window 1] [--windows 3]
-                                   [--workers 2] [--out out/rattle_maps] [--fmu-dir dist]
+                                   [--starts smooth] [--workers 2] [--out out/rattle_maps]
+                                   [--fmu-dir dist]
 """
 
 from __future__ import annotations
@@ -25,8 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
+from drive_rattle.parameters import DrivelineParameters, MeshParameters
 from drive_rattle_build.library import build_in_place
-from drive_rattle_cosim.sweep import grid_design, read_results, run_sweep
+from drive_rattle_cosim import multistability
+from drive_rattle_cosim.sweep import Case, grid_design, read_results, run_sweep
 
 RPM = 2 * math.pi / 60
 
@@ -42,37 +51,98 @@ MAPS = (
 )
 #: Hatch a cell whose window-to-window standard deviation exceeds this fraction of its mean.
 SCATTER_LIMIT = 0.2
+#: Starts of a cell disagree when their rattle indices differ by more than SEPARATION root sums
+#: of squares of their window scatters plus this fraction of the larger (the multistability
+#: study's test on its energy-rate statistic).
+START_FLOOR = 0.01
+#: The public parameters a start sets, per unit (a case names all of them, so that every row
+#: of a sweep has the same columns).
+START_PARAMETERS = {
+    "GearMeshRattle": {"init.in_contact": "init_in_contact", "wheel.phi_start": "phi_start",
+                       "wheel.w_start": "w_start"},
+    "Driveline": {"pinion.phi_start": "phi_start",
+                  **{f"engine.phase[{k}]": f"phase_{k}" for k in range(1, 5)}},
+}
+
+
+def start_cases(cases: list[Case], starts: list[str]) -> dict[str, tuple[Case, int]]:
+    """Each case once per start (names of multistability.STARTS_BY_KEY), with the parameters
+    that start sets: case id -> (case, the start's place in multistability.STARTS); one start
+    "smooth": the cases as they are (the default start)."""
+    if starts == ["smooth"]:
+        return {c.case_id: (c, 0) for c in cases}
+    out = {}
+    for case in cases:
+        split = {unit: {k.split(".", 1)[1]: v for k, v in case.parameters.items()
+                        if k.startswith(unit + ".")} for unit in START_PARAMETERS}
+        mesh = MeshParameters.from_public(split["GearMeshRattle"])
+        drive = DrivelineParameters.from_public(split["Driveline"])
+        for key in starts:
+            m, d = multistability.start_parameters(mesh, drive,
+                                                   multistability.STARTS_BY_KEY[key])
+            extra = {}
+            for unit, params in (("GearMeshRattle", m), ("Driveline", d)):
+                for public, attr in START_PARAMETERS[unit].items():
+                    extra[f"{unit}.{public}"] = float(getattr(params, attr))
+            c = Case.of({**case.parameters, **extra})
+            out[c.case_id] = (c, list(multistability.STARTS_BY_KEY).index(key))
+    return out
+
+
+def disagreeing(values: list[tuple[float, float]], separation: float = 2.0,
+                floor: float = START_FLOOR) -> bool:
+    """Whether the (mean, window scatter) of a cell's starts disagree beyond their scatter."""
+    for i, (m1, s1) in enumerate(values):
+        for m2, s2 in values[i + 1:]:
+            s1_, s2_ = (s if math.isfinite(s) else 0.0 for s in (s1, s2))
+            if abs(m1 - m2) > separation * math.hypot(s1_, s2_) + floor * max(abs(m1),
+                                                                               abs(m2)):
+                return True
+    return False
 
 
 def run(points: int = 5, transient: float = 1.0, window: float = 1.0, windows: int = 3,
         workers: int = 2, out_dir: str | Path = "out/rattle_maps",
         fmu_dir: str | Path | None = None, progress: bool = True,
-        scatter_limit: float = SCATTER_LIMIT) -> dict:
+        scatter_limit: float = SCATTER_LIMIT, starts=("smooth",)) -> dict:
     """Sweep both planes (``points`` values per parameter; each case ``transient`` +
-    ``windows`` x ``window`` seconds) and draw the maps; returns the written files and the
-    sweep counts."""
+    ``windows`` x ``window`` seconds, from each of ``starts``) and draw the maps; returns the
+    written files, the sweep counts and the multistable cells per map."""
     if not (points >= 1 and windows >= 1 and window > 0 and transient >= 0):
         raise ValueError(f"points = {points!r}, windows = {windows!r}, window = {window!r} s, "
                          f"transient = {transient!r} s; allowed: points >= 1, windows >= 1, "
                          "window > 0, transient >= 0")
+    starts = [k.strip().replace(" ", "") for k in starts]
+    unknown = [k for k in starts if k not in multistability.STARTS_BY_KEY]
+    if unknown or not starts or len(set(starts)) != len(starts):
+        raise ValueError(f"starts = {starts!r}; allowed: distinct names of "
+                         f"{', '.join(multistability.STARTS_BY_KEY)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     build_in_place()  # the library of this checkout's sources (the workers load it)
     stop_time = transient + windows * window
     settings = {"transient [s]": transient, "window [s]": window, "windows": windows}
-    files, counts = [], {}
+    if starts != ["smooth"]:
+        settings["starts"] = starts
+    files, counts, multistable = [], {}, {}
     for stem, xname, xr, xf, xlabel, yname, yr, yf, ylabel in MAPS:
         results = out / f"{stem}.csv"
         _same_settings(out / f"{stem}.settings.json", settings, results)
-        cases = grid_design({xname: xr, yname: yr}, points)
-        counts[stem] = run_sweep(cases, results, fmu_dir, stop_time, workers=workers,
-                                 progress=progress, transient=transient, window=window)
+        cases = start_cases(grid_design({xname: xr, yname: yr}, points), starts)
+        counts[stem] = run_sweep([c for c, _ in cases.values()], results, fmu_dir, stop_time,
+                                 workers=workers, progress=progress, transient=transient,
+                                 window=window)
+        rows = [{**r, "start": cases[r["case_id"]][1]} for r in read_results(results)]
         title = (f"{windows} windows of {window:g} s per case after a {transient:g} s "
                  "transient")
-        files += [results, _heat_map(read_results(results), (xname, xf, xlabel),
-                                     (yname, yf, ylabel), out / f"{stem}.png", title,
-                                     scatter_limit)]
-    return {"files": files, "counts": counts, "stop_time": stop_time}
+        if len(starts) > 1:
+            title += f"; starts: {', '.join(starts)}"
+        path, multistable[stem] = _heat_map(rows, (xname, xf, xlabel),
+                                            (yname, yf, ylabel), out / f"{stem}.png", title,
+                                            scatter_limit)
+        files += [results, path]
+    return {"files": files, "counts": counts, "stop_time": stop_time,
+            "multistable": multistable}
 
 
 def _same_settings(path: Path, settings: dict, results: Path) -> None:
@@ -98,7 +168,9 @@ def _edges(values: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * values[0] - mid[0]], mid, [2 * values[-1] - mid[-1]]])
 
 
-def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
+def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float
+              ) -> tuple[Path, list[tuple[float, float]]]:
+    """Draw a map; returns its file and the (x, y) of its multistable cells."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -110,11 +182,17 @@ def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
     xs, ys = _grid(rows, xname), _grid(rows, yname)
     mean = np.full((len(ys), len(xs)), np.nan)
     spread = np.full_like(mean, np.nan)
-    for r in rows:
+    by_cell: dict[tuple[int, int], list[tuple[float, float]]] = {}
+    # the row of the start first in multistability.STARTS shows (drawn last)
+    for r in sorted(rows, key=lambda r: -r["start"]):
         i, j = ys.index(r[yname]), xs.index(r[xname])
+        if not r["error"]:
+            by_cell.setdefault((i, j), []).append(
+                (r["rattle_index_W"], r.get("rattle_index_W_std", math.nan)))
         mean[i, j] = r["rattle_index_W"]
         std = r.get("rattle_index_W_std", math.nan)
         spread[i, j] = std / mean[i, j] if mean[i, j] > 0 else math.nan
+    split = {cell for cell, values in by_cell.items() if disagreeing(values)}
     xv, yv = np.asarray(xs) * xf, np.asarray(ys) * yf
     xe, ye = _edges(xv), _edges(yv)
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 5), layout="constrained")
@@ -134,6 +212,8 @@ def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
             cell = (xe[j], ye[i]), xe[j + 1] - xe[j], ye[i + 1] - ye[i]
             if spread[i, j] > scatter_limit:
                 ax.add_patch(Rectangle(*cell, fill=False, hatch="//", ec="cyan", lw=0))
+            if (i, j) in split:
+                ax.add_patch(Rectangle(*cell, fill=False, hatch="xx", ec="lime", lw=1.5))
             if np.isfinite(mean[i, j]):
                 text = "no\nimpact" if mean[i, j] == 0 else f"{mean[i, j] * 1e3:.3g}"
                 _label(ax, xv[j], yv[i], text, m1.to_rgba(shown[i, j] * 1e3))
@@ -143,6 +223,9 @@ def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
     if np.any(spread > scatter_limit):
         handles.append(Patch(fill=False, hatch="///", ec="cyan",
                              label=f"scatter > {scatter_limit:.0%} of the value"))
+    if split:
+        handles.append(Patch(fill=False, hatch="xx", ec="lime",
+                             label="multistable: starts disagree beyond their scatter"))
     failed = [(r[xname] * xf, r[yname] * yf) for r in rows if r["error"]]
     if failed:
         handles += ax.plot(*zip(*failed, strict=True), "x", color="cyan", ms=10,
@@ -158,7 +241,7 @@ def _heat_map(rows, x, y, path: Path, title: str, scatter_limit: float) -> Path:
     fig.suptitle(title, fontsize=10)
     fig.savefig(path, dpi=120)
     plt.close(fig)
-    return path
+    return path, sorted((xs[j], ys[i]) for i, j in split)
 
 
 def _label(ax, x, y, text: str, background) -> None:
@@ -187,6 +270,10 @@ def main(argv=None) -> int:
                     help="start transient per case, left out [s]")
     ap.add_argument("--window", type=float, default=1.0, help="window of the statistics [s]")
     ap.add_argument("--windows", type=int, default=3, help="windows per case")
+    ap.add_argument("--starts", default="smooth",
+                    help="starts of every cell, comma-separated (of "
+                         f"{', '.join(multistability.STARTS_BY_KEY)}); with two or more, "
+                         "cells whose starts disagree beyond their scatter are marked")
     ap.add_argument("--workers", type=int, default=2, help="dask worker processes")
     ap.add_argument("--out", default="out/rattle_maps")
     ap.add_argument("--fmu-dir", default=None,
@@ -194,9 +281,10 @@ def main(argv=None) -> int:
                          "(default: the model library's compiled loop)")
     args = ap.parse_args(argv)
     result = run(args.points, args.transient, args.window, args.windows, args.workers,
-                 args.out, args.fmu_dir)
+                 args.out, args.fmu_dir, starts=args.starts.split(","))
     for stem, c in result["counts"].items():
-        print(f"{stem}: {c['done']} cases run ({c['failed']} failed), {c['skipped']} resumed")
+        print(f"{stem}: {c['done']} cases run ({c['failed']} failed), {c['skipped']} resumed; "
+              f"{len(result['multistable'][stem])} multistable cells")
     for f in result["files"]:
         print("wrote", f)
     return 0

@@ -7,8 +7,8 @@ Every test carries the marker of its layer, from its folder (registered in pypro
   equations of tests/oracle and the monolithic reference; the package structure;
 * ``analysis``: tests/analysis -- the statistics and spectral lines of the studies;
 * ``fmi``: tests/fmi -- the slave classes instantiated directly and the native shim;
-* ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native -- the built FMUs (both
-  flavours) in fmpy, the other masters and native hosts;
+* ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native, tests/fmi3 -- the built
+  FMUs (both flavours, and the FMI 3.0 FMUs) in fmpy, the other masters and native hosts;
 * ``sanitize``: tests/sanitize -- the C built and run under AddressSanitizer and
   UndefinedBehaviorSanitizer;
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
@@ -25,7 +25,7 @@ from drive_rattle_build import build
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
 LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
-          "adversarial": "fmu", "native": "fmu", "sanitize": "sanitize"}
+          "adversarial": "fmu", "native": "fmu", "fmi3": "fmu", "sanitize": "sanitize"}
 
 
 def pytest_configure(config):
@@ -59,6 +59,17 @@ def native_fmus(tmp_path_factory):
     out = tmp_path_factory.mktemp("dist_native")
     paths = build_native(out)
     return {p.stem: p for p in paths}
+
+
+@pytest.fixture(scope="session")
+def fmi3_fmus(tmp_path_factory):
+    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only, x86_64-linux and
+    x86_64-windows binaries and sources), built, held against their templates and validated
+    for this session."""
+    from drive_rattle_build.fmi3 import build_fmi3  # on first use: the FMI 3.0 build alone
+
+    out = tmp_path_factory.mktemp("dist_fmi3")
+    return {p.stem: p for p in build_fmi3(out)}
 
 
 FLAVOURS = ("pythonfmu", "native")

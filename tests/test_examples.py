@@ -39,22 +39,48 @@ def test_paper_scenario_example(tmp_path, fmus):
 
 
 def test_rattle_maps_example(tmp_path):
-    """The maps on the library engine (the default); engine 'fmu' is the same numbers bit for
-    bit (tests/cosim/test_sweep.py)."""
+    """The maps on the library engine (the default; engine 'fmu' is the same numbers bit for
+    bit, tests/cosim/test_sweep.py), every cell from two starts."""
     mod = load("rattle_maps")
     result = mod.run(points=2, transient=0.01, window=0.01, windows=2, workers=2,
-                     out_dir=tmp_path, progress=False)
+                     out_dir=tmp_path, progress=False, starts=("smooth", "free"))
     names = sorted(f.name for f in result["files"])
     assert names == ["amplitude_speed.csv", "amplitude_speed.png", "backlash_drag.csv",
                      "backlash_drag.png"]
     rows = {f.stem: read_results(f) for f in result["files"] if f.suffix == ".csv"}
     assert [r["error"] for rs in rows.values() for r in rs if r["error"]] == []
-    assert all(c["done"] == 4 and c["failed"] == 0 for c in result["counts"].values()), (
+    assert all(c["done"] == 8 and c["failed"] == 0 for c in result["counts"].values()), (
         result["counts"])
     assert (tmp_path / "backlash_drag.png").stat().st_size > 5000
     assert all(r["windows"] == 2 and "rattle_index_W_std" in r and r["engine"] == "library"
                for r in rows["backlash_drag"])
+    # each cell once per start: in the flank equilibrium, and free in mid-backlash at the
+    # rigid speed of its own engine speed
+    for r in rows["amplitude_speed"]:
+        if r["GearMeshRattle.init.in_contact"] == 0.0:
+            assert r["GearMeshRattle.wheel.w_start"] == pytest.approx(
+                r["Driveline.engine.w_mean"] * 20 / 39, rel=1e-12)
+    assert sorted(r["GearMeshRattle.init.in_contact"] for r in rows["backlash_drag"]) == [
+        0.0] * 4 + [1.0] * 4
+    assert set(result["multistable"]) == {"backlash_drag", "amplitude_speed"}
     # Resuming with other windows would mix settings: refused.
     with pytest.raises(ValueError, match="was run with"):
         mod.run(points=2, transient=0.01, window=0.01, windows=3, workers=1, out_dir=tmp_path,
-                progress=False)
+                progress=False, starts=("smooth", "free"))
+
+
+def test_rattle_maps_mark_the_cells_whose_starts_disagree_beyond_their_scatter(tmp_path):
+    mod = load("rattle_maps")
+    x, y = "Driveline.vehicle.drag", "GearMeshRattle.gear.backlash"
+
+    def row(xv, yv, start, mean, std):
+        return {x: xv, y: yv, "start": start, "rattle_index_W": mean,
+                "rattle_index_W_std": std, "error": ""}
+
+    rows = [row(0.1, 1e-4, 0, 10e-3, 0.1e-3), row(0.1, 1e-4, 4, 12e-3, 0.2e-3),  # apart
+            row(0.2, 1e-4, 0, 10e-3, 2e-3), row(0.2, 1e-4, 4, 12e-3, 2e-3),  # within scatter
+            row(0.1, 2e-4, 0, 5e-3, 0.0), row(0.1, 2e-4, 4, 5.02e-3, 0.0),  # within 1 %
+            row(0.2, 2e-4, 0, 0.0, 0.0), row(0.2, 2e-4, 4, 0.0, 0.0)]
+    path, split = mod._heat_map(rows, (x, 1.0, "drag"), (y, 1e3, "backlash"),
+                                tmp_path / "m.png", "test", 0.2)
+    assert split == [(0.1, 1e-4)] and path.stat().st_size > 5000

@@ -35,7 +35,7 @@ PHASES = ("instantiated", "initialization", "stepping", "terminated")
 TYPES = ("Real", "Integer", "Boolean", "String")
 CAUSALITIES = ("parameter", "input", "output")
 #: Event kinds (RM_EVENT_...).
-EVENT_KINDS = ("onset", "release", "reversal", "pair")
+EVENT_KINDS = ("onset", "release", "reversal", "pair", "touch")
 #: Largest number of events of a step the library keeps (RM_MAX_EVENTS).
 MAX_EVENTS = 512
 #: The interface version this binding speaks (RM_API_VERSION).

@@ -183,6 +183,13 @@ DISSIPATION_MODELS = {
 }
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
+#: vehicle.model codes (see docs/model.md section 6)
+VEHICLE_MODELS = {
+    0: "output shaft: spring-damper shaft.k, shaft.c to the reflected vehicle inertia vehicle.J "
+       "with drag vehicle.drag + vehicle.drag_viscous*w",
+    1: "constant load torque on the wheel, wheel.tau_load = vehicle.drag (the paper's M_res; "
+       "the shaft, vehicle.J and vehicle.drag_viscous unused)",
+}
 
 
 @dataclass(frozen=True)
@@ -423,6 +430,10 @@ class DrivelineParameters(ParameterSet):
     drag_viscous: float = declare(
         "vehicle.drag_viscous", 0.0, "N.m.s/rad", "speed-proportional drag coefficient",
         minimum=0.0, maximum=1e5)
+    vehicle_model: int = declare(
+        "vehicle.model", 0, "1", "what loads the wheel: "
+        + "; ".join(f"{k} = {v}" for k, v in VEHICLE_MODELS.items()),
+        minimum=0, maximum=1, choices=VEHICLE_MODELS)
     h_max: float = declare(
         "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
         minimum=1e-8, maximum=1.0)

@@ -53,8 +53,9 @@ class Event(NamedTuple):
     """A located contact event of a step."""
 
     time: float  # from the start of the step [s]
-    kind: str  # "onset", "release", "reversal" (a pair's friction turns) or "pair" (a crowned
-    # pair starts or stops carrying load)
+    kind: str  # "onset" (an impact), "release", "reversal" (a pair's friction turns), "pair" (a
+    # crowned pair starts or stops carrying load) or "touch" (a contact begun by the inputs
+    # on a receding flank at a communication point: not an impact, not counted)
     flank: int  # +1 drive, -1 coast
     speed: float  # normal approach speed d(delta)/dt at the event [m/s]
 

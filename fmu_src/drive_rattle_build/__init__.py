@@ -1,7 +1,7 @@
 """The build of the drive-rattle FMUs: from the specs, the model library's C sources, the
 runtime packages and the slave modules to ``dist/GearMeshRattle.fmu``, ``dist/Driveline.fmu``,
 ``dist/DriveRattle.ssp`` (with ``dist/DriveRattle_outputs.ssp``: every output a system output)
-and the native FMUs in ``dist/native/``.
+the native FMUs in ``dist/native/`` and the FMI 3.0 FMUs in ``dist/fmi3/``.
 
 Needs a source checkout (it reads ``fmu_src/`` and ``regression/``), pythonfmu, fmpy and a C
 compiler (``compiler.c_compiler``).  Command line: ``drive-rattle-build`` (or ``python
@@ -14,7 +14,8 @@ Modules, one job each: ``paths`` (where sources and results are), ``compiler`` (
 compiler), ``model_tables`` (the library's tables from the specs), ``library`` (the model
 library), ``shim`` (the pythonfmu FMUs' status shim), ``documentation`` (the interface pages
 and tables), ``templates`` (the interface check), ``fmu`` (packaging and validation),
-``native`` (the native FMUs), ``system`` (the SSP files), ``cli``.  The names below are
+``native`` (the native FMUs), ``fmi3`` and ``model_description_fmi3`` (the FMI 3.0 FMUs),
+``system`` (the SSP files), ``cli``.  The names below are
 imported on first use, so that building the library alone needs none of the rest.
 """
 
@@ -23,7 +24,7 @@ from importlib import import_module
 _EXPORTS = {"BuildError": "compiler", "c_compiler": "compiler", "build": "fmu",
             "build_fmus": "fmu", "build_one": "fmu", "package": "fmu", "validate": "fmu",
             "write_system": "system", "write_systems": "system",
-            "build_in_place": "library"}
+            "build_in_place": "library", "build_fmi3": "fmi3"}
 
 __all__ = sorted(_EXPORTS)
 

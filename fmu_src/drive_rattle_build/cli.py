@@ -1,12 +1,14 @@
 """The build's command line: ``drive-rattle-build`` (``python build_fmu.py`` in a clone).
 
     drive-rattle-build [--out dist] [--update-templates] [--no-fmutool] [--no-native]
+                       [--no-fmi3]
     drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
     drive-rattle-build --update-docs   # docs/fmi.md's tables, docs/tools.md's numbers
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
-own system files (``native``; ``--no-native`` skips them).  The system files: ``DriveRattle.ssp``
+own system files (``native``; ``--no-native`` skips them), and as FMI 3.0 co-simulation FMUs
+into ``<out>/fmi3/`` (``fmi3``; ``--no-fmi3`` skips them).  The system files: ``DriveRattle.ssp``
 and ``DriveRattle_outputs.ssp`` (the same with every output a system output, ``system``).
 """
 
@@ -54,6 +56,8 @@ def main(argv=None) -> int:
                          "where the Python API, the studies and the tests load it) and exit")
     ap.add_argument("--no-native", action="store_true",
                     help="skip the native (C only) FMUs of <out>/native/")
+    ap.add_argument("--no-fmi3", action="store_true",
+                    help="skip the FMI 3.0 (C only) FMUs of <out>/fmi3/")
     args = ap.parse_args(argv)
     try:
         if args.library:
@@ -80,6 +84,13 @@ def main(argv=None) -> int:
                 print(f"built and validated {fmu} (native: C only, linux64 and win64)")
             for system in write_systems(native, args.out / NATIVE_SUBDIR):
                 print(f"wrote the system {system}")
+        if not args.no_fmi3:
+            from .fmi3 import FMI3_SUBDIR, build_fmi3
+
+            for fmu in build_fmi3(args.out / FMI3_SUBDIR, not args.no_fmutool,
+                                  update_templates=args.update_templates):
+                print(f"built and validated {fmu} (FMI 3.0 co-simulation, C only, "
+                      "x86_64-linux and x86_64-windows)")
     except BuildError as err:
         print(f"drive-rattle-build: {err}", file=sys.stderr)
         return 1

@@ -118,6 +118,36 @@ def _fmt(value) -> str:
     return str(value)
 
 
+def variable_rows(model: str) -> list[tuple]:
+    """``(name, causality, spec, start)`` of every variable of ``model`` in value-reference
+    order (parameters with their defaults, inputs with the library's start values, outputs),
+    held against the model library's table (BuildError when they differ)."""
+    unit = UNITS[model]
+    build_in_place()
+    starts = input_starts(unit.kind)
+    rows = [(spec.name, "parameter", spec, spec.default) for _, spec in specs(unit.parameters)]
+    rows += [(s.name, "input", s, starts[s.name]) for s in unit.inputs]
+    rows += [(s.name, "output", s, None) for s in unit.outputs]
+    table = binding.variables(unit.kind)
+    if [r[0] for r in rows] != [v["name"] for v in table]:
+        raise BuildError(f"{model}: the model library's variables are not the specs' "
+                         "(rebuild the library: drive-rattle-build --library)")
+    return rows
+
+
+def unit_definitions(root: Element, names: Sequence[str]) -> Element:
+    """<UnitDefinitions> of the units ``names`` (base units and display units; the same in
+    FMI 2.0 and 3.0), appended to ``root``."""
+    units = SubElement(root, "UnitDefinitions")
+    for name in names:
+        check_display_unit(name, None)
+        u = SubElement(units, "Unit", {"name": name})
+        SubElement(u, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[name].items()})
+        for display, factor in DISPLAY_UNITS.get(name, {}).items():
+            SubElement(u, "DisplayUnit", {"name": display, "factor": repr(factor)})
+    return units
+
+
 def render(model: str, guid: str, generation_tool: str, needs_execution_tool: bool,
            sources: Sequence[str] = (), generation_time: str | None = None) -> Element:
     """The complete modelDescription of ``model`` with ``guid``; ``sources``: the C files of
@@ -139,24 +169,9 @@ def render(model: str, guid: str, generation_tool: str, needs_execution_tool: bo
         for name in sources:
             SubElement(files, "File", {"name": name})
 
-    # (name, causality, spec, start) in value-reference order
-    build_in_place()
-    starts = input_starts(unit.kind)
-    rows = [(spec.name, "parameter", spec, spec.default) for _, spec in specs(unit.parameters)]
-    rows += [(s.name, "input", s, starts[s.name]) for s in unit.inputs]
-    rows += [(s.name, "output", s, None) for s in unit.outputs]
-    table = binding.variables(unit.kind)
-    if [r[0] for r in rows] != [v["name"] for v in table]:
-        raise BuildError(f"{model}: the model library's variables are not the specs' "
-                         "(rebuild the library: drive-rattle-build --library)")
-
-    units = SubElement(root, "UnitDefinitions")
-    for name in sorted({spec.unit for _, _, spec, _ in rows if spec.fmi_type == "Real"}):
-        check_display_unit(name, None)
-        u = SubElement(units, "Unit", {"name": name})
-        SubElement(u, "BaseUnit", {k: str(e) for k, e in BASE_UNITS[name].items()})
-        for display, factor in DISPLAY_UNITS.get(name, {}).items():
-            SubElement(u, "DisplayUnit", {"name": display, "factor": repr(factor)})
+    rows = variable_rows(model)
+    unit_definitions(root, sorted({spec.unit for _, _, spec, _ in rows
+                                   if spec.fmi_type == "Real"}))
     enumerations = [e for e in (enumeration(spec) for _, _, spec, _ in rows) if e is not None]
     if enumerations:
         types = SubElement(root, "TypeDefinitions")

@@ -13,6 +13,8 @@ SOURCE = ROOT / "fmu_src"
 MODEL_SOURCE = SOURCE / "rattle_model"
 #: The FMI 2.0 face of the native FMUs and what it shares with the pythonfmu FMUs' status shim.
 FMI2_SOURCE = SOURCE / "fmi2"
+#: The FMI 3.0 face of the native FMI 3.0 FMUs (it compiles fmi2/rattle_fmi_common.c too).
+FMI3_SOURCE = SOURCE / "fmi3"
 #: The packages copied whole into every pythonfmu FMU (standard library only;
 #: docs/architecture.md).
 RUNTIME_PACKAGES = ("drive_rattle", "drive_rattle_fmi")

@@ -7,8 +7,8 @@ logging on and as a printf *format* string, and checks nothing a master passes: 
 ("The status shim") lists what crashed, leaked or corrupted the host, and how the shim stops
 each.  Its sources are not shipped, so it cannot be rebuilt; the shim stands in front of it.
 
-``fmu_src/fmi2/rattle_fmi_shim.c`` (with ``rattle_fmi_common.c``, which the native FMUs' glue
-shares) is compiled (against the official FMI 2.0 headers that
+``fmu_src/fmi2/rattle_fmi_shim.c`` (with ``rattle_fmi_common.c`` and ``rattle_fmi2_common.c``,
+which the native FMUs' glue shares) is compiled (against the official FMI 2.0 headers that
 fmpy ships, :func:`fmi2_headers`) into ``binaries/linux64/<modelIdentifier>.so``; it
 loads pythonfmu's library, renamed to ``<modelIdentifier>_pythonfmu.so``, from its own directory
 and forwards every FMI 2.0 call to it, adding:
@@ -94,6 +94,8 @@ from .paths import FMI2_SOURCE
 SHIM_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_shim.c"
 #: What the shim shares with the native FMUs' glue (the state envelope, UTF-8), compiled with it.
 COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_common.c"
+#: What the shim shares with the native FMI 2.0 face (fmi2Instantiate's checks, logging).
+FMI2_COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi2_common.c"
 
 
 def fmi2_headers() -> Path:
@@ -154,7 +156,8 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
           if model_identifier is not None else []),
     ]
-    return compile_library(cc, flags, [SHIM_SOURCE, COMMON_SOURCE], Path(out_path),
+    return compile_library(cc, flags, [SHIM_SOURCE, COMMON_SOURCE, FMI2_COMMON_SOURCE],
+                           Path(out_path),
                            SHIM_SOURCE.name, libs=["-ldl"])
 
 

@@ -96,8 +96,8 @@ def _write_csv(path: Path, names: list[str], columns: list) -> None:
 
 def _output_names(fmu: Path) -> list[str]:
     md = read_model_description(str(fmu))
-    return [v.name for v in md.modelVariables
-            if v.causality == "output" and v.type in ("Real", "Integer")]
+    return [v.name for v in md.modelVariables  # FMI 2.0's types and FMI 3.0's
+            if v.causality == "output" and v.type in ("Real", "Integer", "Float64", "Int32")]
 
 
 def simulate_on_inputs(fmu: Path, inputs: np.ndarray, opt: dict, start_values=None):

@@ -7,8 +7,8 @@
  * are the library's (the same in the pythonfmu FMUs by construction).  What is FMI's is here:
  *
  *   - fmi2Instantiate's checks (instance name, fmuType, GUID: rattle_check_instantiate) and
- *     the resource location, decoded (rattle_location_to_path) to this FMU's resources folder,
- *     which must hold model_identifier.txt naming it (read only when it is a regular file);
+ *     the resource location, decoded to this FMU's resources folder, which must hold
+ *     model_identifier.txt naming it (rattle_resources_folder);
  *   - the pointers and arrays the host passes, checked before anything reaches the library;
  *   - the host's logger: every non-OK status is logged with the library's message verbatim
  *     (as "%s", message), whatever debug logging says, in the category of its status;
@@ -30,7 +30,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
-#include "rattle_fmi_common.h"
+#include "rattle_fmi2_common.h"
 #include "rattle_fmu_config.h"
 #include "rattle_model.h"
 
@@ -40,15 +40,6 @@ typedef char boolean_is_int32[sizeof(fmi2Boolean) == sizeof(int32_t) ? 1 : -1];
 
 /* The prefix of fmi2Instantiate's messages, before an instance exists. */
 #define PREFIX "rattle native FMU: "
-/* The file in the resources folder that names the FMU. */
-#define RESOURCE_MARKER "model_identifier.txt"
-/* The longest resources folder accepted: the library joins speed-table paths to it. */
-#define MAX_RESOURCES_PATH_BYTES 4032
-#if defined(_WIN32)
-#define SEP "\\"
-#else
-#define SEP "/"
-#endif
 
 typedef struct State State;
 
@@ -115,71 +106,14 @@ static char* copy_string(const char* s)
 
 /* ------------------------------------------------------------------ resource location */
 /* The canonical path of this FMU's resources folder that `location` names (malloc'ed), or
- * NULL with the reason: the folder must exist and hold RESOURCE_MARKER naming this FMU. */
+ * NULL with the reason (rattle_resources_folder). */
 static char* resolve_resources(const char* location, char* why, size_t why_size)
 {
-    char shown[256], module[256], reason[256];
-    char* decoded;
-    char* real;
-    char* marker;
-    size_t n;
-    int found;
     if (location == NULL) {
         snprintf(why, why_size, "is NULL; allowed: the URI of this FMU's resources folder");
         return NULL;
     }
-    decoded = rattle_location_to_path(location, why, why_size);
-    if (decoded == NULL) return NULL;
-    rattle_printable(shown, sizeof shown, decoded);
-    real = rattle_canonical_path(decoded, reason, sizeof reason);
-    free(decoded);
-    if (real == NULL || !rattle_is_dir(real)) {
-        snprintf(why, why_size, "names '%s', which %s; allowed: this FMU's resources folder",
-                 shown, real == NULL ? reason : "is not a folder");
-        free(real);
-        return NULL;
-    }
-    rattle_printable(shown, sizeof shown, real);
-    n = strlen(real);
-    if (n > MAX_RESOURCES_PATH_BYTES) {
-        snprintf(why, why_size, "names a path of %zu bytes; allowed: at most %d", n,
-                 MAX_RESOURCES_PATH_BYTES);
-        free(real);
-        return NULL;
-    }
-    marker = malloc(n + sizeof SEP "resources" SEP RESOURCE_MARKER);
-    if (marker == NULL) {
-        snprintf(why, why_size, "cannot be read: out of memory");
-        free(real);
-        return NULL;
-    }
-    sprintf(marker, "%s" SEP RESOURCE_MARKER, real);
-    found = rattle_read_marker(marker, module, sizeof module, reason, sizeof reason);
-    if (found == RATTLE_MARKER_MISSING) {
-        sprintf(marker, "%s" SEP "resources" SEP RESOURCE_MARKER, real);
-        if (rattle_is_regular_file(marker))
-            snprintf(why, why_size, "names '%s', the folder the FMU was unpacked to; allowed: "
-                     "its resources folder, '%s" SEP "resources'", shown, shown);
-        else
-            snprintf(why, why_size, "names '%s', which has no " RESOURCE_MARKER ": not the "
-                     "resources folder of this FMU", shown);
-    }
-    else if (found == RATTLE_MARKER_BAD)
-        snprintf(why, why_size, "names '%s', whose " RESOURCE_MARKER " %s: not the resources "
-                 "folder of this FMU", shown, reason);
-    else if (strcmp(module, RATTLE_MODEL_IDENTIFIER) != 0) {
-        char other[64];
-        rattle_printable(other, sizeof other, module);
-        snprintf(why, why_size, "names '%s', the resources of FMU '%s', not of "
-                 RATTLE_MODEL_IDENTIFIER, shown, other);
-        found = RATTLE_MARKER_BAD;
-    }
-    free(marker);
-    if (found != RATTLE_MARKER_OK) {
-        free(real);
-        return NULL;
-    }
-    return real;
+    return rattle_resources_folder(location, RATTLE_MODEL_IDENTIFIER, why, why_size);
 }
 
 /* ------------------------------------------------------------------ FMU states */
@@ -461,6 +395,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
     int status;
     if (inst == NULL) return fmi2Error;
     if (state == NULL) return refuse(inst, function, "the FMUstate pointer is NULL");
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
     status = rm_save(inst->unit, NULL, 0, &size);
     if (status != RM_OK) return done(inst, status);
@@ -489,7 +425,11 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
     Instance* inst = c;
     State* st;
     if (inst == NULL) return fmi2Error;
-    if (state == NULL || *state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (state == NULL) return fmi2OK; /* FMI 2.0: the call is ignored */
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, "fmi2FreeFMUstate", "FMUstate " RATTLE_STATE_MISADDRESSED
+                      "; nothing freed");
+    if (*state == NULL) return fmi2OK;
     if ((st = own_state(inst, *state, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
     delete_state(st);
     *state = NULL;
@@ -541,6 +481,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     if (serializedState == NULL) return refuse(inst, function, "the buffer is NULL");
     if (!rattle_state_open(in, size, RATTLE_GUID, &n, why, sizeof why))
         return refuse(inst, function, "%s", why);
+    if (rattle_state_misaddressed(state))
+        return refuse(inst, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
     /* the record's bytes as they are: rm_restore checks them when the state is set */
     record = malloc(n > 0 ? (size_t)n : 1);

@@ -8,11 +8,8 @@
 
 #include "rattle_fmi_common.h"
 
-#include "fmi2Functions.h"
-
 #include <errno.h>
 #include <fcntl.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,7 +56,15 @@ void rattle_state_tag(RattleStateTag* tag, const char* guid)
 
 void rattle_state_untag(RattleStateTag* tag) { memset(tag->magic, 0, sizeof tag->magic); }
 
-int rattle_state_is_ours(const void* state, const char* guid, char* why, size_t why_size)
+int rattle_state_misaddressed(const void* address)
+{
+    /* no more bytes than a pointer variable has */
+    size_t n = sizeof(void*) < 8 ? sizeof(void*) : 8;
+    return address != NULL && memcmp(address, STATE_MAGIC, n) == 0;
+}
+
+int rattle_state_check(const void* state, const char* guid, const char* makers, char* why,
+                       size_t why_size)
 {
     const RattleStateTag* tag = state;
     if (tag == NULL) {
@@ -67,8 +72,8 @@ int rattle_state_is_ours(const void* state, const char* guid, char* why, size_t 
         return 0;
     }
     if (memcmp(tag->magic, STATE_MAGIC, 8) != 0) {
-        snprintf(why, why_size, "not an FMU state of this FMU (made by fmi2GetFMUstate or "
-                 "fmi2DeSerializeFMUstate of %s); nothing changed", guid[0] ? guid : "this FMU");
+        snprintf(why, why_size, "not an FMU state of this FMU (made by %s of %s); nothing "
+                 "changed", makers, guid[0] ? guid : "this FMU");
         return 0;
     }
     if (strncmp(tag->guid, guid, sizeof tag->guid) != 0) {
@@ -83,12 +88,11 @@ int rattle_state_is_ours(const void* state, const char* guid, char* why, size_t 
     return 1;
 }
 
-int rattle_state_fits(size_t size, size_t n, char* why, size_t why_size)
+int rattle_state_room(size_t size, size_t n, const char* size_call, char* why, size_t why_size)
 {
     if (size >= RATTLE_STATE_HEADER && size - RATTLE_STATE_HEADER >= n) return 1;
     snprintf(why, why_size, "the buffer of %zu bytes is too small: this state needs %zu bytes "
-             "(fmi2SerializedFMUstateSize); nothing written", size,
-             (size_t)(RATTLE_STATE_HEADER + n));
+             "(%s); nothing written", size, (size_t)(RATTLE_STATE_HEADER + n), size_call);
     return 0;
 }
 
@@ -524,16 +528,15 @@ int rattle_read_marker(const char* path, char* out, size_t size, char* why, size
     return RATTLE_MARKER_OK;
 }
 
-/* ------------------------------------------------------------------ fmi2Instantiate */
-int rattle_check_instantiate(const char* instanceName, int fmuType, const char* fmuGUID,
-                             const char* guid, char* name, size_t name_size, char* why,
-                             size_t why_size)
+/* ------------------------------------------------------------------ instantiation */
+int rattle_check_instance_name(const char* instanceName, const char* rule, char* name,
+                               size_t name_size, char* why, size_t why_size)
 {
     size_t bad;
     name[0] = '\0';
     if (instanceName == NULL || instanceName[strspn(instanceName, " \t\r\n")] == '\0') {
-        snprintf(why, why_size, "instanceName is %s; allowed: a non-empty string (FMI 2.0, "
-                 "2.1.5)", instanceName == NULL ? "NULL" : "blank");
+        snprintf(why, why_size, "instanceName is %s; allowed: a non-empty string (%s)",
+                 instanceName == NULL ? "NULL" : "blank", rule);
         return 0;
     }
     rattle_printable(name, name_size, instanceName);
@@ -544,65 +547,97 @@ int rattle_check_instantiate(const char* instanceName, int fmuType, const char* 
                  bad);
         return 0;
     }
-    if (fmuType != fmi2CoSimulation) {
-        snprintf(why, why_size, "fmuType = %d (%s) is not supported: this FMU is for "
-                 "co-simulation only; allowed: fmi2CoSimulation (1)", fmuType,
-                 fmuType == fmi2ModelExchange ? "fmi2ModelExchange" : "not an fmi2Type");
-        return 0;
-    }
-    /* FMI 2.0 2.1.5: the FMU checks that the master's modelDescription is the one it was
-     * built with (pythonfmu does not). */
-    if (guid[0] != '\0' && (fmuGUID == NULL || strcmp(fmuGUID, guid) != 0)) {
-        char shown[128];
-        rattle_printable(shown, sizeof shown, fmuGUID != NULL ? fmuGUID : "(null)");
-        snprintf(why, why_size, "GUID %s does not match this FMU's %s", shown, guid);
-        return 0;
-    }
     return 1;
+}
+
+int rattle_check_token(const char* given, const char* expected, const char* what, char* why,
+                       size_t why_size)
+{
+    char shown[128];
+    if (expected[0] == '\0' || (given != NULL && strcmp(given, expected) == 0)) return 1;
+    rattle_printable(shown, sizeof shown, given != NULL ? given : "(null)");
+    snprintf(why, why_size, "%s %s does not match this FMU's %s", what, shown, expected);
+    return 0;
+}
+
+#if defined(_WIN32)
+#define SEP "\\"
+#else
+#define SEP "/"
+#endif
+
+char* rattle_resources_folder(const char* location, const char* identifier, char* why,
+                              size_t why_size)
+{
+    char shown[256], found_identifier[256], reason[256];
+    char* decoded;
+    char* real;
+    char* marker;
+    size_t n;
+    int found;
+    decoded = rattle_location_to_path(location, why, why_size);
+    if (decoded == NULL) return NULL;
+    rattle_printable(shown, sizeof shown, decoded);
+    real = rattle_canonical_path(decoded, reason, sizeof reason);
+    free(decoded);
+    if (real == NULL || !rattle_is_dir(real)) {
+        snprintf(why, why_size, "names '%s', which %s; allowed: this FMU's resources folder",
+                 shown, real == NULL ? reason : "is not a folder");
+        free(real);
+        return NULL;
+    }
+    rattle_printable(shown, sizeof shown, real);
+    n = strlen(real);
+    if (n > RATTLE_MAX_RESOURCES_PATH_BYTES) {
+        snprintf(why, why_size, "names a path of %zu bytes; allowed: at most %d", n,
+                 RATTLE_MAX_RESOURCES_PATH_BYTES);
+        free(real);
+        return NULL;
+    }
+    marker = malloc(n + sizeof SEP "resources" SEP RATTLE_RESOURCE_MARKER);
+    if (marker == NULL) {
+        snprintf(why, why_size, "cannot be read: out of memory");
+        free(real);
+        return NULL;
+    }
+    sprintf(marker, "%s" SEP RATTLE_RESOURCE_MARKER, real);
+    found = rattle_read_marker(marker, found_identifier, sizeof found_identifier, reason,
+                               sizeof reason);
+    if (found == RATTLE_MARKER_MISSING) {
+        sprintf(marker, "%s" SEP "resources" SEP RATTLE_RESOURCE_MARKER, real);
+        if (rattle_is_regular_file(marker))
+            snprintf(why, why_size, "names '%s', the folder the FMU was unpacked to; allowed: "
+                     "its resources folder, '%s" SEP "resources'", shown, shown);
+        else
+            snprintf(why, why_size, "names '%s', which has no " RATTLE_RESOURCE_MARKER ": not "
+                     "the resources folder of this FMU", shown);
+    }
+    else if (found == RATTLE_MARKER_BAD)
+        snprintf(why, why_size, "names '%s', whose " RATTLE_RESOURCE_MARKER " %s: not the "
+                 "resources folder of this FMU", shown, reason);
+    else if (strcmp(found_identifier, identifier) != 0) {
+        char other[64];
+        rattle_printable(other, sizeof other, found_identifier);
+        snprintf(why, why_size, "names '%s', the resources of FMU '%s', not of %s", shown,
+                 other, identifier);
+        found = RATTLE_MARKER_BAD;
+    }
+    free(marker);
+    if (found != RATTLE_MARKER_OK) {
+        free(real);
+        return NULL;
+    }
+    return real;
 }
 
 /* ------------------------------------------------------------------ logging */
 const char* rattle_status_category(int status)
 {
     switch (status) {
-    case fmi2OK: return "logAll";
-    case fmi2Warning: return "logStatusWarning";
-    case fmi2Discard: return "logStatusDiscard";
-    case fmi2Error: return "logStatusError";
+    case 0: return "logAll";
+    case 1: return "logStatusWarning";
+    case 2: return "logStatusDiscard";
+    case 3: return "logStatusError";
     default: return "logStatusFatal";
     }
-}
-
-void rattle_instantiate_log(const fmi2CallbackFunctions* functions, const char* name,
-                            fmi2Status status, const char* prefix, const char* fmt, ...)
-{
-    char text[3072];
-    int n;
-    va_list ap;
-    if (functions->logger == NULL) return;
-    n = snprintf(text, sizeof text, "%sfmi2Instantiate: ", prefix);
-    va_start(ap, fmt);
-    vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-    va_end(ap);
-    functions->logger(functions->componentEnvironment, name, status,
-                      rattle_status_category(status), "%s", text);
-}
-
-/* ------------------------------------------------------------------ status inquiries */
-static const char* status_kind_name(int kind)
-{
-    switch (kind) {
-    case fmi2DoStepStatus: return "fmi2DoStepStatus";
-    case fmi2PendingStatus: return "fmi2PendingStatus";
-    case fmi2LastSuccessfulTime: return "fmi2LastSuccessfulTime";
-    case fmi2Terminated: return "fmi2Terminated";
-    default: return "not an fmi2StatusKind";
-    }
-}
-
-void rattle_status_refusal(char* why, size_t why_size, int kind, const char* allowed)
-{
-    snprintf(why, why_size, "status kind %d (%s) is not answered here: this FMU completes every "
-             "step within fmi2DoStep (never fmi2Pending); allowed: %s", kind,
-             status_kind_name(kind), allowed);
 }

@@ -1,7 +1,10 @@
 /*
- * rattle_fmi_common.h - what both FMI layers do the same way, written once: the status shim of
- * the pythonfmu FMUs (rattle_fmi_shim.c) and the FMI 2.0 glue of the native FMUs
- * (fmi2_functions.c) both compile rattle_fmi_common.c.
+ * rattle_fmi_common.h - what every FMI layer of these FMUs does the same way, of no FMI version,
+ * written once: the status shim of the pythonfmu FMUs (rattle_fmi_shim.c), the FMI 2.0 face
+ * (fmi2_functions.c, with what FMI 2.0 layers share: rattle_fmi2_common.c) and the FMI 3.0
+ * face (fmu_src/fmi3/fmi3_functions.c) compile rattle_fmi_common.c.  It includes no FMI
+ * header: the words of a message that differ between FMI versions (the names of the calls,
+ * the standard's section) are the caller's.
  *
  * Serialized FMU states: an envelope of RATTLE_STATE_HEADER bytes, then the unit's state (the
  * model library's record, rm_save).  Little-endian:
@@ -10,18 +13,16 @@
  *  12  4  0 (reserved)
  *  16  8  payload length n
  *  24  8  FNV-1a 64 of the payload
- *  32 64  the FMU's GUID, NUL-padded
+ *  32 64  the FMU's GUID (FMI 3.0: its instantiation token), NUL-padded
  *  96  n  payload
- * The host's buffer may be larger than the reported size (FMI 2.0 allows it): the rest is
- * zeroed and ignored when the state is read back.
+ * The host's buffer may be larger than the reported size (FMI 2.0 and 3.0 allow it): the rest
+ * is zeroed and ignored when the state is read back.
  */
 #ifndef RATTLE_FMI_COMMON_H
 #define RATTLE_FMI_COMMON_H
 
 #include <stddef.h>
 #include <stdint.h>
-
-#include "fmi2Functions.h"
 
 /* Internal to the FMU's binary: never exported to the host (nor interposed by a namesake). */
 #if defined(__GNUC__) && !defined(_WIN32)
@@ -43,16 +44,28 @@ typedef struct {
 RATTLE_INTERNAL void rattle_state_tag(RattleStateTag* tag, const char* guid);
 /* Clears the tag of a state about to be freed (a dangling pointer then fails the check). */
 RATTLE_INTERNAL void rattle_state_untag(RattleStateTag* tag);
-/* 1 when `state` (an fmi2FMUstate from the host) carries the tag of the FMU `guid` ("" when
- * the FMU has none); else 0 with the refusal in why. */
-RATTLE_INTERNAL int rattle_state_is_ours(const void* state, const char* guid, char* why,
-                                         size_t why_size);
+/* 1 when `address`, which the host passed as the address of its FMU-state variable
+ * (fmi2FMUstate*, fmi3FMUState*), points at a state of these FMUs itself: the host passed the
+ * state where FMI asks for its address (fmusim of Reference-FMUs 0.0.39 does, when it frees
+ * the state of a state file).  Reading there is safe either way (the host's pointer variable
+ * or the state), and the tag's first bytes are never those of a pointer on x86-64 (not a
+ * canonical address); `address` NULL gives 0. */
+RATTLE_INTERNAL int rattle_state_misaddressed(const void* address);
+#define RATTLE_STATE_MISADDRESSED                                                              \
+    "points to an FMU state, not to the host's variable that holds one (FMI asks for its "     \
+    "address, &state)"
+/* 1 when `state` (an FMU state pointer from the host) carries the tag of the FMU `guid` (""
+ * when the FMU has none); else 0 with the refusal in why.  `makers` names the calls that make
+ * states ("fmi2GetFMUstate or fmi2DeSerializeFMUstate"). */
+RATTLE_INTERNAL int rattle_state_check(const void* state, const char* guid, const char* makers,
+                                       char* why, size_t why_size);
 
 /* 1 when a state of n payload bytes fits a buffer of `size` bytes; else 0 with the refusal's
- * text in why. */
-RATTLE_INTERNAL int rattle_state_fits(size_t size, size_t n, char* why, size_t why_size);
+ * text in why; `size_call` names the call that tells the size ("fmi2SerializedFMUstateSize"). */
+RATTLE_INTERNAL int rattle_state_room(size_t size, size_t n, const char* size_call, char* why,
+                                      size_t why_size);
 /* Writes the envelope around the n payload bytes already at out + RATTLE_STATE_HEADER and
- * zeroes the rest of the `size` bytes (rattle_state_fits(size, n) must hold). */
+ * zeroes the rest of the `size` bytes (rattle_state_room(size, n) must hold). */
 RATTLE_INTERNAL void rattle_state_seal(unsigned char* out, size_t size, size_t n,
                                        const char* guid);
 /* 1 with the payload length in *n when the `size` bytes at `in` are an intact state of the
@@ -81,12 +94,17 @@ RATTLE_INTERNAL int rattle_path_is_absolute(const char* path);
 RATTLE_INTERNAL char* rattle_location_to_path(const char* location, char* why,
                                               size_t why_size);
 
-/* fmi2Instantiate's argument checks that both FMI layers make: instanceName (non-blank,
- * UTF-8), fmuType (co-simulation only) and fmuGUID (equal to `guid`, unless that is "").  1,
- * or 0 with the refusal in why; `name` gets a printable copy of instanceName either way. */
-RATTLE_INTERNAL int rattle_check_instantiate(const char* instanceName, int fmuType,
-                                             const char* fmuGUID, const char* guid, char* name,
-                                             size_t name_size, char* why, size_t why_size);
+/* The instance name every instantiation function checks: non-blank (FMI 2.0 and 3.0 ask for
+ * it) and UTF-8.  1, or 0 with the refusal in why ("... allowed: a non-empty string (<rule>)",
+ * `rule` citing the standard); `name` gets a printable copy of instanceName either way. */
+RATTLE_INTERNAL int rattle_check_instance_name(const char* instanceName, const char* rule,
+                                               char* name, size_t name_size, char* why,
+                                               size_t why_size);
+/* The token the master read from the modelDescription (`what`: "GUID", "instantiationToken")
+ * against the FMU's own `expected` (no check when that is ""): 1, or 0 with "<what> <given>
+ * does not match this FMU's <expected>" in why. */
+RATTLE_INTERNAL int rattle_check_token(const char* given, const char* expected,
+                                       const char* what, char* why, size_t why_size);
 
 /* The file system, for the resources folder (paths are UTF-8; on Windows converted to the
  * wide-character API). */
@@ -105,31 +123,20 @@ enum { RATTLE_MARKER_OK = 0, RATTLE_MARKER_MISSING = 1, RATTLE_MARKER_BAD = 2 };
 RATTLE_INTERNAL int rattle_read_marker(const char* path, char* out, size_t size, char* why,
                                        size_t why_size);
 
-/* The log category of a status (the modelDescription's <LogCategories>). */
-RATTLE_INTERNAL const char* rattle_status_category(int status);
-/* A refusal of fmi2Instantiate to the host's logger, before any instance exists:
- * "<prefix>fmi2Instantiate: <message>", passed verbatim (never as a format string). */
-RATTLE_INTERNAL void rattle_instantiate_log(const fmi2CallbackFunctions* functions,
-                                            const char* name, fmi2Status status,
-                                            const char* prefix, const char* fmt, ...)
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((format(printf, 5, 6)))
-#endif
-    ;
+/* The file in a native FMU's resources folder that names the FMU: its model identifier on the
+ * first line (the counterpart of pythonfmu's slavemodule.txt). */
+#define RATTLE_RESOURCE_MARKER "model_identifier.txt"
+/* The longest resources folder accepted: the model library joins speed-table paths to it. */
+#define RATTLE_MAX_RESOURCES_PATH_BYTES 4032
+/* The canonical path of the resources folder of the native FMU `identifier` that `location`
+ * (not NULL) names (malloc'ed): decoded (rattle_location_to_path), existing, a folder holding
+ * RATTLE_RESOURCE_MARKER that names `identifier` (read only when it is a regular file).  NULL
+ * with the reason in why ("names '<path>', which has no model_identifier.txt: ..."). */
+RATTLE_INTERNAL char* rattle_resources_folder(const char* location, const char* identifier,
+                                              char* why, size_t why_size);
 
-/* The refusals of what these FMUs do not provide (the modelDescription says so). */
-#define RATTLE_NO_DIRECTIONAL_DERIVATIVES                                                      \
-    "not provided by this FMU (providesDirectionalDerivative = false)"
-#define RATTLE_NO_INPUT_DERIVATIVES                                                            \
-    "not provided by this FMU (canInterpolateInputs = false): set pinion.a as an input "      \
-    "instead; nothing stored"
-#define RATTLE_NO_OUTPUT_DERIVATIVES "not provided by this FMU (maxOutputDerivativeOrder = 0)"
-#define RATTLE_NO_ASYNCHRONOUS_STEP                                                            \
-    "no asynchronous step to cancel: every fmi2DoStep of this FMU completes within the call "  \
-    "(canRunAsynchronuously = false)"
-/* The refusal of a status inquiry that FMI 2.0 does not define for the function called, or
- * that only means something after fmi2Pending (never returned): `allowed` names what is. */
-RATTLE_INTERNAL void rattle_status_refusal(char* why, size_t why_size, int kind,
-                                           const char* allowed);
+/* The log category of a status (0 OK .. 4 Fatal, the numbers of fmi2Status and fmi3Status;
+ * the modelDescription's <LogCategories>). */
+RATTLE_INTERNAL const char* rattle_status_category(int status);
 
 #endif

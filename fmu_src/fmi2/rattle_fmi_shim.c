@@ -86,7 +86,7 @@
  * compiler checks each definition below against the standard's signature.  Their callback
  * struct has non-const members (FMI 2.0.1 and later), so the shim can build its own copy. */
 #include "fmi2Functions.h"
-#include "rattle_fmi_common.h"
+#include "rattle_fmi2_common.h"
 
 /* Every function the shim exports, once: used for the table of the wrapped library's
  * functions and the dlsym loop (fmi2Functions.h declares the exports). */

@@ -10,8 +10,11 @@
  * so the mean speed is exactly w_mean and the three are consistent.  A speed table: speed
  * linear between samples, the angle its exact integral, held constant beyond the table.
  *
- * Output shaft: tau_load = k (phi_w - phi_v) + c (w_w - w_v) resists the wheel;
+ * Output shaft (vehicle.model 0): tau_load = k (phi_w - phi_v) + c (w_w - w_v) resists the
+ * wheel;
  *     J_v dw_v/dt = tau_load - drag - drag_viscous w_v.
+ * Or (vehicle.model 1, the paper's M_res) a constant load on the wheel, tau_load = drag; the
+ * "vehicle" then moves with the wheel (its angle and speed are the wheel's).
  * Within a step the wheel moves at its step-start speed; RK4 on substeps <= h_max, or, where
  * that substep is not small against the shaft's own time scales, the exact solution of the
  * same linear equation, so that every legal parameter set integrates stably.
@@ -157,8 +160,14 @@ static double shaft_torque(const RmShaftParams* p, double phi_w, double w_w, dou
 
 void rm_shaft_start(RmDriveline* d, double phi_w, double w_w)
 {
-    /* steady state: the vehicle at the wheel speed, the shaft wound up by the drag */
     const RmShaftParams* p = &d->p;
+    if (p->model == RM_VEHICLE_CONSTANT_LOAD) {
+        d->shaft_phi = phi_w;
+        d->shaft_w = w_w;
+        d->tau_load = p->drag;
+        return;
+    }
+    /* steady state: the vehicle at the wheel speed, the shaft wound up by the drag */
     double steady = p->drag + p->drag_viscous * w_w;
     d->shaft_phi = phi_w - steady / p->k;
     d->shaft_w = w_w;
@@ -248,6 +257,14 @@ int rm_driveline_step(RmDriveline* d, double t, double h, double phi_w, double w
                       RmText* err)
 {
     const RmShaftParams* p = &d->p;
+    if (p->model == RM_VEHICLE_CONSTANT_LOAD) {
+        d->shaft_phi = phi_w + w_w * h;
+        d->shaft_w = w_w;
+        d->tau_load = p->drag;
+        d->time = t + h;
+        d->last_step = h;
+        return 1;
+    }
     double n = rm_max(1.0, ceil(h / p->h_max * (1.0 - GRID_SLACK)));
     double dt = h / n;
     /* an upper bound of the magnitude of the shaft's eigenvalues (at most twice the largest) */

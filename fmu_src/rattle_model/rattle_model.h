@@ -151,7 +151,17 @@ typedef struct {
     int flank;    /* +1 drive, -1 coast */
     double speed; /* normal approach speed d(delta)/dt at the event [m/s] */
 } RmEvent;
-enum { RM_EVENT_ONSET = 0, RM_EVENT_RELEASE = 1, RM_EVENT_REVERSAL = 2, RM_EVENT_PAIR = 3 };
+/* ONSET: a contact begins with the flanks approaching (an impact, counted); RELEASE: it ends;
+ * REVERSAL: a pair's friction turns; PAIR: a crowned pair starts or stops carrying load;
+ * TOUCH: the inputs moved the pinion into a flank that recedes at a communication point: a
+ * contact begins without approach, loaded but not an impact (not counted, no energy). */
+enum {
+    RM_EVENT_ONSET = 0,
+    RM_EVENT_RELEASE = 1,
+    RM_EVENT_REVERSAL = 2,
+    RM_EVENT_PAIR = 3,
+    RM_EVENT_TOUCH = 4
+};
 /* The events of the last accepted step and their number (at most RM_MAX_EVENTS are kept,
  * `total` counts all), and the step's cost counters. */
 #define RM_MAX_EVENTS 512

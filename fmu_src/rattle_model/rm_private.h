@@ -402,8 +402,12 @@ RM_INTERNAL int rm_free_start(const RmMesh* M, double phi_start, double w_start,
 /* ------------------------------------------------------------------ driveline.c */
 #define RM_N_ORDERS 4
 
+/* vehicle.model: the output shaft to the reflected vehicle, or a constant load on the wheel */
+enum { RM_VEHICLE_SHAFT = 0, RM_VEHICLE_CONSTANT_LOAD = 1 };
+
 typedef struct {
     double k, c, J, drag, drag_viscous, h_max, h_comm_max;
+    int model; /* RM_VEHICLE_SHAFT or RM_VEHICLE_CONSTANT_LOAD */
 } RmShaftParams;
 
 typedef struct {

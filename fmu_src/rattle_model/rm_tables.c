@@ -78,6 +78,7 @@ const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"pair[7].W", RM_REAL, RM_OUTPUT, "N", 0.0, NULL, 0, 0, 0, 0, 0.0, 0.0, 0, NULL, ""},
 };
 
+static const int DRIVELINE_CHOICES_21[] = {0, 1};
 const RmVariable RM_DRIVELINE_VARIABLES[RM_DRIVELINE_N_VARIABLES] = {
     {"engine.w_mean", RM_REAL, RM_PARAMETER, "rad/s", 86.9173967493176, NULL, 1, 1, 0, 0, 1.0, 2000.0, 0, NULL, "[1, 2000] rad/s"},
     {"engine.order[1]", RM_REAL, RM_PARAMETER, "1", 2.0, NULL, 1, 1, 0, 0, 0.1, 100.0, 0, NULL, "[0.1, 100]"},
@@ -100,6 +101,7 @@ const RmVariable RM_DRIVELINE_VARIABLES[RM_DRIVELINE_N_VARIABLES] = {
     {"vehicle.J", RM_REAL, RM_PARAMETER, "kg.m2", 5.0, NULL, 1, 1, 0, 0, 1e-06, 1000000.0, 0, NULL, "[1e-06, 1e+06] kg.m2"},
     {"vehicle.drag", RM_REAL, RM_PARAMETER, "N.m", 0.0833, NULL, 1, 1, 0, 0, -100000.0, 100000.0, 0, NULL, "[-100000, 100000] N.m"},
     {"vehicle.drag_viscous", RM_REAL, RM_PARAMETER, "N.m.s/rad", 0.0, NULL, 1, 1, 0, 0, 0.0, 100000.0, 0, NULL, "[0, 100000] N.m.s/rad"},
+    {"vehicle.model", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, DRIVELINE_CHOICES_21, "one of 0 (output shaft: spring-damper shaft.k, shaft.c to the reflected vehicle inertia vehicle.J with drag vehicle.drag + vehicle.drag_viscous*w), 1 (constant load torque on the wheel, wheel.tau_load = vehicle.drag (the paper's M_res; the shaft, vehicle.J and vehicle.drag_viscous unused))"},
     {"solver.h_max", RM_REAL, RM_PARAMETER, "s", 0.0001, NULL, 1, 1, 0, 0, 1e-08, 1.0, 0, NULL, "[1e-08, 1] s"},
     {"solver.h_comm_max", RM_REAL, RM_PARAMETER, "s", 1.0, NULL, 1, 1, 0, 0, 1e-07, 1.0, 0, NULL, "[1e-07, 1] s"},
     {"init.settle_first_step", RM_BOOLEAN, RM_PARAMETER, "", 1.0, NULL, 0, 0, 0, 0, 0.0, 0.0, 0, NULL, "true or false"},

@@ -46,6 +46,12 @@ const int64_t RM_MAX_CONTACT_SUBSTEPS = 200000;
  * the kink's offset to the power 2.5), and splitting there would let a pair hovering at its
  * offset end substep after substep a few femtoseconds long. */
 #define ENGAGEMENT_MIN_FRACTION 1e-3
+/* A contact substep that would end within this fraction of the grid spacing of its start (an
+ * onset located on a grid point to rounding: its time carries the rounding of the quadratic
+ * root, up to ~1e-7 of the spacing late in a long run at a slow approach) is merged into the
+ * next grid substep: a substep of a few ulps integrates nothing and its end state is the
+ * onset's to rounding. */
+#define MERGE_FRACTION 1e-6
 /* Main-loop iterations without progress in time before a step is refused, and the largest
  * number of grid substeps (an int64). */
 #define STALL_LIMIT 1000000
@@ -121,6 +127,20 @@ static void onset(Run* r, double t, int flank)
     }
 }
 
+/* The first onset in free flight of a flank whose penetration is c0 + c1 t + c2 t^2: its
+ * upward crossing of zero, or t = 0 when the flank already penetrates (a rounding-level
+ * positive value: with no backlash the other flank's penetration is minus the released
+ * one's) and moves into contact -- approaching, or at rest and accelerated into it.  A
+ * penetrating flank that recedes is the one just released (rounding again): no onset. */
+static int flight_onset(double c0, double c1, double c2, double span, double* out)
+{
+    if (c0 > 0.0 && (c1 > 0.0 || (c1 == 0.0 && c2 > 0.0))) {
+        *out = 0.0;
+        return 1;
+    }
+    return rm_first_crossing(c0, c1, c2, span, 1, out);
+}
+
 /* Exact motion under the held load until the next onset or the step end. */
 static double free_flight(Run* r, double t)
 {
@@ -133,8 +153,8 @@ static double free_flight(Run* r, double t)
     double span = r->H - t;
     double half_backlash = M->g.half_backlash;
     double hit_d = 0.0, hit_c = 0.0;
-    int has_d = rm_first_crossing(x0 - half_backlash, v0, half_acc, span, 1, &hit_d);
-    int has_c = rm_first_crossing(-x0 - half_backlash, -v0, -half_acc, span, 1, &hit_c);
+    int has_d = flight_onset(x0 - half_backlash, v0, half_acc, span, &hit_d);
+    int has_c = flight_onset(-x0 - half_backlash, -v0, -half_acc, span, &hit_c);
     double dt;
     int flank;
     if (!has_d && !has_c) {
@@ -448,7 +468,8 @@ static double contact_substep(Run* r, double t)
     int64_t j = (int64_t)x; /* truncation (t < H, so x < n_sub) */
     if (r->n_sub - 1 < j) j = r->n_sub - 1;
     double t_end = grid(r, j + 1);
-    if (t_end <= t) t_end = grid(r, j + 2); /* t sits on a grid point within rounding */
+    /* t sits on a grid point within rounding: the substep of a few ulps merges into the next */
+    if (t_end - t <= MERGE_FRACTION * (r->H / (double)r->n_sub)) t_end = grid(r, j + 2);
     /* split at the next pair entry/exit so that the right-hand side is smooth */
     double u_a = rm_flank_roll(&M->g, flank, run_phi_p(r, t));
     double bp;
@@ -537,7 +558,10 @@ static double contact_substep(Run* r, double t)
         event(r, t_end, RM_EVENT_REVERSAL, flank);
     }
     if (engaged >= 0) event(r, t_end, RM_EVENT_PAIR, flank);
-    if (released || delta_b <= 0.0) {
+    /* a release needs a non-approaching rate: a penetration at or below zero to rounding
+     * while the flanks still approach (the substep right after an onset) keeps the contact */
+    if (released
+        || (delta_b <= 0.0 && !(rm_approach_rate(M, flank, run_w_p(r, t_end), st->w) > 0.0))) {
         event(r, t_end, RM_EVENT_RELEASE, flank);
         st->flank = 0;
     }
@@ -585,9 +609,24 @@ int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h, doubl
     /* inputs may move the pinion discontinuously between steps: re-establish the mode */
     RmWheel* st = &run.st;
     int flank = rm_contact_flank(M, phi_p, w_p, a_p, tau_load, st);
+    /* a release needs a non-approaching rate: a flank in contact that the inputs moved to a
+     * penetration at or below zero while the flanks still approach keeps its contact (the same
+     * impact: the penetration resumes within the step; with no backlash the other flank's
+     * rounding-level penetration is not a contact then) */
+    if (st->flank != 0 && flank != st->flank
+        && rm_approach_rate(M, st->flank, w_p, st->w) > 0.0)
+        flank = st->flank;
     if (flank != st->flank) {
         if (st->flank != 0) event(&run, 0.0, RM_EVENT_RELEASE, st->flank);
-        if (flank != 0) onset(&run, 0.0, flank);
+        if (flank != 0) {
+            /* a contact the inputs begin on a receding flank (the pinion's exact angle at the
+             * communication point against its extrapolation over the last step: typically the
+             * tail of a contact released just before the point) is no impact */
+            if (rm_approach_rate(M, flank, w_p, st->w) < 0.0)
+                event(&run, 0.0, RM_EVENT_TOUCH, flank);
+            else
+                onset(&run, 0.0, flank);
+        }
         st->flank = flank;
     }
     double t = 0.0;

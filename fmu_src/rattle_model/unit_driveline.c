@@ -75,6 +75,7 @@ static DrivelineModel* new_model(const RmUnit* u, double t_start)
     d->p.J = R(RM_DRIVELINE_VEHICLE_J);
     d->p.drag = R(RM_DRIVELINE_VEHICLE_DRAG);
     d->p.drag_viscous = R(RM_DRIVELINE_VEHICLE_DRAG_VISCOUS);
+    d->p.model = (int)values[RM_DRIVELINE_VEHICLE_MODEL].i;
     d->p.h_max = R(RM_DRIVELINE_SOLVER_H_MAX);
     d->p.h_comm_max = R(RM_DRIVELINE_SOLVER_H_COMM_MAX);
     d->w_mean = R(RM_DRIVELINE_ENGINE_W_MEAN);

@@ -23,7 +23,7 @@ def build_without_gcc(out: Path, hide_ziglang: bool = False, **env) -> subproces
     code = ("import runpy, sys\n"
             + ("sys.modules['ziglang'] = None\n" if hide_ziglang else "")
             + f"sys.argv = ['build_fmu.py', '--out', {str(out)!r}, '--no-fmutool', "
-            "'--no-native']\n"
+            "'--no-native', '--no-fmi3']\n"
             + f"runpy.run_path({str(BUILD)!r}, run_name='__main__')\n")
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=600, env={"HOME": os.environ.get("HOME", "/tmp"),

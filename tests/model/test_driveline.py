@@ -191,3 +191,33 @@ def test_a_refused_driveline_step_leaves_the_unit_unchanged():
     with pytest.raises(ModelError, match=r"'wheel\.phi' = nan"):
         unit.call("rm_do_step", unit.time, H)
     assert unit.save() == before
+
+
+def test_the_constant_load_model_loads_the_wheel_with_the_drag_alone():
+    # vehicle.model = 1, the paper's M_res: wheel.tau_load = vehicle.drag at the start and
+    # after every step, whatever the wheel does; the "vehicle" moves with the wheel; a
+    # restored unit continues; the coupled start settles the wheel in its flank equilibrium
+    # for that load.
+    from drive_rattle import MeshParameters
+    from drive_rattle.units import coupled_start_inputs
+
+    p = DrivelineParameters(vehicle_model=1, drag=0.0667, k_shaft=50.0, c_shaft=3.0)
+    unit = DrivelineUnit(p, 0.3, 44.0)
+    assert unit.outputs()["wheel.tau_load"] == 0.0667
+    saved = None
+    rows = []
+    for k in range(200):
+        w = 44.0 + 5.0 * math.sin(k / 9)
+        unit.step(H, 0.3 + 44.0 * k * H, w)
+        out = unit.outputs()
+        assert out["wheel.tau_load"] == 0.0667 and out["vehicle.w"] == w
+        if k == 99:
+            saved = unit.save()
+        if k >= 100:
+            rows.append(out)
+    unit.restore(saved)
+    for k in range(100, 200):
+        unit.step(H, 0.3 + 44.0 * k * H, 44.0 + 5.0 * math.sin(k / 9))
+        assert unit.outputs() == rows[k - 100]
+    mesh_in, _ = coupled_start_inputs(MeshParameters(), p)
+    assert mesh_in["wheel.tau_load"] == 0.0667

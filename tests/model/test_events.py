@@ -175,3 +175,130 @@ def test_grazing_contact_from_exact_touch_is_one_onset_and_one_release(v):
                   if e.kind in ("onset", "release")]
     assert kinds == ["onset", "release"]
     assert unit.outputs()["mesh.n_contact"] == 0
+
+
+# ------------------------------------------------------------------ one impact, counted once
+ON_GRID = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 2.0, 3.5)
+OFF_GRID = (0.05, 0.37, 1.234, 2.71)
+
+
+def placed_onset(v: float, f: float, flank: int, w_p: float, h: float = H):
+    """A free wheel approaching ``flank`` at normal speed ``v`` [m/s], no load, against a
+    pinion turning at the constant speed ``w_p`` [rad/s] (phi_p = w_p t, exact at every
+    point), placed to reach the flank at f h: ``(unit, derived values)``."""
+    p = MeshParameters(init_in_contact=False, friction_enabled=False)
+    d = p.derived()
+    gap = v * f * h
+    p = replace(p, phi_start=-flank * (d["half_backlash"] - gap) / d["arm_wheel"],
+                w_start=(d["arm_pinion"] * w_p - flank * v) / d["arm_wheel"])
+    return MeshUnit(p, 0.0, w_p, 0.0), d
+
+
+@pytest.mark.parametrize("w_p", [0.0, 86.92], ids=["pinion at rest", "pinion turning"])
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+@pytest.mark.parametrize("f", ON_GRID + OFF_GRID)
+def test_an_onset_on_the_substep_grid_or_a_communication_point_counts_once(f, flank, w_p):
+    # An onset at f H falls on the 10 us substep grid (f a tenth), on a communication point
+    # (f whole) or between them; its located time carries the rounding of the quadratic root,
+    # so it lands a few ulps before or after the grid point.  Before, the contact substep of a
+    # few ulps that followed ended with the penetration at or below zero to rounding and
+    # reported a release while the flanks still approached, then a second onset: the impact
+    # counted twice and its energy entered the rattle index twice.
+    v, tau = 4e-3, MeshParameters().rattle_time
+    unit, d = placed_onset(v, f, flank, w_p)
+    energy = 0.5 * d["normal_mass"] * v * v
+    events, k = [], 0
+    while not any(e.kind == "release" for _, e in events):
+        t = k * H
+        report = unit.step(H, w_p * t, w_p, 0.0, 0.0)
+        events += [(t + e.time, e) for e in report.events if e.kind in ("onset", "release")]
+        k += 1
+        if k == math.ceil(f) + 1:  # the step after the onset's: the index of one impact
+            onset_time = events[0][0]
+            out = unit.outputs()
+            assert out["mesh.rattle_index"] == pytest.approx(
+                energy / tau * math.exp(-(k * H - onset_time) / tau), rel=1e-9)
+            assert out["mesh.impact_energy"] == pytest.approx(energy, rel=1e-9)
+        assert k < 100
+    kinds = [(e.kind, e.flank) for _, e in events]
+    assert kinds == [("onset", flank), ("release", flank)], events
+    assert events[0][0] == pytest.approx(f * H, rel=1e-9, abs=1e-15)
+    assert events[0][1].speed == pytest.approx(v, rel=1e-9)
+    out = unit.outputs()
+    assert (out["mesh.impacts_drive"], out["mesh.impacts_coast"]) == (
+        (1, 0) if flank == DRIVE else (0, 1))
+
+
+def jumped_unit(flank: int, v: float, jump: float):
+    """A wheel in free flight at normal speed ``v`` [m/s] on ``flank`` (> 0 approaching, < 0
+    receding), pinion at rest, after one step that leaves it short of the flank; and the
+    pinion angle that puts the flank ``jump`` [m] deep against the wheel where it is:
+    ``(unit, pinion angle, derived values)``."""
+    p = MeshParameters(init_in_contact=False, friction_enabled=False)
+    d = p.derived()
+    gap = 1e-9 + max(v, 0.0) * H
+    p = replace(p, phi_start=-flank * (d["half_backlash"] - gap) / d["arm_wheel"],
+                w_start=-flank * v / d["arm_wheel"])
+    unit = MeshUnit(p, 0.0, 0.0, 0.0)
+    unit.step(H, 0.0, 0.0, 0.0, 0.0)
+    out = unit.outputs()
+    assert out["mesh.n_contact"] == 0 and out["mesh.impacts_drive"] + out[
+        "mesh.impacts_coast"] == 0
+    pen = flank * out["mesh.transmission_error"] - d["half_backlash"]
+    assert pen < 0.0
+    return unit, flank * (jump - pen) / d["arm_pinion"], d
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_a_pinion_jump_into_a_receding_flank_is_a_touch_not_an_impact(flank):
+    # The inputs move the pinion 10 nm into a flank the wheel recedes from at 0.4 mm/s (in
+    # the co-simulation: the driveline's exact angle against the mesh's extrapolation over
+    # the last step, typically right after a release).  The flanks carry the penetration's
+    # load until they separate, but there is no approach: no impact counted, no energy in the
+    # rattle index, mesh.v_impact unchanged, and the contact's start is a "touch" event.
+    unit, phi_p, _ = jumped_unit(flank, -4e-4, 10e-9)
+    report = unit.step(H, phi_p, 0.0, 0.0, 0.0)
+    kinds = [(e.kind, e.flank, e.time) for e in report.events if e.kind != "pair"]
+    assert kinds[0] == ("touch", flank, 0.0)
+    assert report.events[0].speed == pytest.approx(-4e-4, rel=1e-6)
+    assert unit.outputs()["mesh.W_peak"] > 0.0
+    for _ in range(20):
+        kinds += [(e.kind, e.flank, e.time) for e in unit.step(H, phi_p, 0.0, 0.0, 0.0).events
+                  if e.kind != "pair"]
+    assert [k[:2] for k in kinds] == [("touch", flank), ("release", flank)]
+    out = unit.outputs()
+    assert out["mesh.impacts_drive"] == out["mesh.impacts_coast"] == 0
+    assert out["mesh.rattle_index"] == 0.0 and out["mesh.v_impact"] == 0.0
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_a_pinion_jump_into_an_approaching_flank_is_an_impact_at_its_speed(flank):
+    v = 4e-4
+    unit, phi_p, d = jumped_unit(flank, v, 10e-9)
+    report = unit.step(H, phi_p, 0.0, 0.0, 0.0)
+    onset = report.events[0]
+    assert (onset.kind, onset.flank, onset.time) == ("onset", flank, 0.0)
+    assert onset.speed == pytest.approx(v, rel=1e-6)
+    out = unit.outputs()
+    assert out["mesh.impacts_drive" if flank == DRIVE else "mesh.impacts_coast"] == 1
+    assert out["mesh.impact_energy"] == pytest.approx(0.5 * d["normal_mass"] * v * v, rel=1e-6)
+
+
+@pytest.mark.parametrize("flank", [DRIVE, COAST])
+def test_a_pinion_jump_out_of_an_approaching_contact_keeps_the_contact(flank):
+    # In contact and still approaching, the inputs move the pinion 0.1 nm out of the flank:
+    # a release needs a non-approaching rate, so the contact goes on (one impact, one release)
+    # instead of a release while approaching and a second onset.
+    v = 4e-3
+    unit, phi_p, d = jumped_unit(flank, v, 0.0)
+    kinds = [(e.kind, e.flank) for e in unit.step(H, phi_p, 0.0, 0.0, 0.0).events
+             if e.kind in ("onset", "release", "touch")]
+    assert kinds == [("onset", flank)]
+    assert unit.outputs()["mesh.delta"] > 0.0  # approaching still (the contact lasts ~0.3 ms)
+    phi_p -= flank * (unit.outputs()["mesh.delta"] + 0.1e-9) / d["arm_pinion"]
+    for _ in range(10):
+        kinds += [(e.kind, e.flank) for e in unit.step(H, phi_p, 0.0, 0.0, 0.0).events
+                  if e.kind in ("onset", "release", "touch")]
+    assert kinds == [("onset", flank), ("release", flank)]
+    out = unit.outputs()
+    assert out["mesh.impacts_drive"] + out["mesh.impacts_coast"] == 1

@@ -1,6 +1,8 @@
-"""The default contact makes the rattle a property of the operating point, not of the start
-(issue 10): smooth, kicked and free starts reach the same statistics after the transient,
-below and above the separation load M*; the quasi-static separation threshold A* holds."""
+"""At the default load and above M* the default contact makes the rattle a property of the
+operating point, not of the start (issue 10): smooth, kicked and free starts reach the same
+statistics after the transient at 0.5 M* and 1.2 M*; the quasi-static separation threshold A*
+holds.  (Not at every load: 0.4 M* has coexisting attractors, which the multistability study
+finds, tests/analysis/test_multistability.py.)"""
 
 import math
 from dataclasses import replace

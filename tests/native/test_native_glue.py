@@ -328,6 +328,13 @@ def test_state_handles_reused_and_foreign_pointers_refused(mesh):
     junk = ctypes.create_string_buffer(b"x" * 200)
     assert mesh.lib.fmi2SetFMUstate(inst.c, ctypes.cast(junk, ctypes.c_void_p)) == ERROR
     assert "not an FMU state of this FMU" in last(inst)[2]
+    # the state passed where its address belongs (fmusim 0.0.39 frees its state files' states
+    # so, which crashed the FMU): refused with a message, not dereferenced
+    wrong = ctypes.cast(state, POINTER(ctypes.c_void_p))
+    for call in ("fmi2FreeFMUstate", "fmi2GetFMUstate"):
+        assert getattr(mesh.lib, call)(inst.c, wrong) == ERROR
+        assert last(inst)[2].startswith(f"{call}: FMUstate points to an FMU state, not to the "
+                                        "host's variable that holds one")
     assert inst.free_state(state) == OK and not state
     assert mesh.lib.fmi2FreeFMUstate(inst.c, POINTER(ctypes.c_void_p)()) == OK  # ignored
     _, _other = inst.get_state()

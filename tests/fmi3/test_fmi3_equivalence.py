@@ -1,0 +1,128 @@
+"""The FMI 3.0 FMUs are the model library under its FMI 3.0 face: in fmpy they give the FMI 2.0
+native face's numbers bit for bit -- each FMU alone on the committed regression inputs, the
+pair coupled in the paper scenario (and with other contact laws, friction readings and
+dissipation, set through the Enumerations) -- and their FMU states are the library's records.
+Every float is compared as its hexadecimal text, never with a tolerance: rattle is chaotic, and
+one ulp of difference would grow into another impact sequence."""
+
+from __future__ import annotations
+
+import pytest
+
+from drive_rattle.interface import DRIVELINE, MESH, MODELS
+from drive_rattle.units import Unit
+from drive_rattle_cosim.harness import CoSimulation
+from drive_rattle_cosim.regression import REFERENCE_ROOT, check
+
+from ..native.test_native_hosts import run_fmpy
+from ..native.twin import KINDS, bits, input_rows, interface, twin_run
+from .master3 import Pair, run_alone
+from .raw_fmi3 import OK, Model, unpack
+
+#: (mesh parameters, driveline parameters) by public name; the integer codes go through
+#: fmi3SetInt64 (Enumerations) in FMI 3.0 and fmi2SetInteger in FMI 2.0
+VARIANTS = {
+    "paper scenario (defaults)": ({}, {}),
+    "regression scenario: strong order 2": ({}, {"engine.amplitude[1]": 2000.0}),
+    "sphere law, apparent-area friction on sliding speed": (
+        {"contact.hertz_law": 1, "friction.form": 1, "friction.shear_speed": 1},
+        {"engine.amplitude[1]": 2000.0}),
+    "spur gears, damping factor, printed friction, free start": (
+        {"gear.beta": 0.0, "contact.dissipation": 2, "contact.damping": 300.0,
+         "friction.form": 2, "init.in_contact": False, "wheel.w_start": 40.0}, {}),
+}
+STOP = 0.05  # s: 500 communication steps
+#: the paper scenario over a longer horizon (5000 steps)
+STOPS = {"paper scenario (defaults)": 0.5}
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_alone_in_fmpy_is_the_fmi2_face(fmi3_fmus, native_fmus, model):
+    """On the committed regression inputs (500 steps of 0.1 ms), every output at every point
+    equals the FMI 2.0 native FMU's under the same calls in fmpy, and the library's own unit
+    driven by them."""
+    rows = input_rows(model)
+    table = run_alone(fmi3_fmus[model], rows)
+    assert len(table) == len(rows) == 501
+    assert bits(table) == bits(run_fmpy(native_fmus[model], rows))
+    names = interface(native_fmus[model])[2]
+    assert bits(table) == bits(twin_run(model, rows, names))
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_simulate_fmu_passes_the_regression_references(fmi3_fmus, model):
+    """fmpy's simulate_fmu (its own FMI 3.0 loop) on the references' inputs, held by the
+    regression kit (the references packed in the FMU, and the committed ones)."""
+    for source in (None, REFERENCE_ROOT):
+        checks = check(fmi3_fmus[model], source)
+        assert len(checks) >= 5 and all(c.passed for c in checks), [
+            c for c in checks if not c.passed]
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_coupled_pair_is_the_fmi2_face(fmi3_fmus, native_fmus, variant):
+    """The pair coupled in fmpy (FMI 3.0) and the FMI 2.0 native pair under the harness, the
+    same master algorithm: every output of both units at every point, bit for bit."""
+    mesh, driveline = VARIANTS[variant]
+    params = {**{f"{MESH}.{k}": v for k, v in mesh.items()},
+              **{f"{DRIVELINE}.{k}": v for k, v in driveline.items()}}
+    stop = STOPS.get(variant, STOP)
+    with Pair(fmi3_fmus, params) as pair:
+        mine = pair.run(stop)
+        assert not pair.messages(), pair.messages()
+    with CoSimulation(native_fmus[MESH], native_fmus[DRIVELINE], params) as sim:
+        reference = sim.run(stop)
+    assert [t.hex() for t in mine.time] == [t.hex() for t in reference.time]
+    assert len(mine.time) == round(stop / 1e-4) + 1
+    assert set(mine.columns) == set(reference.columns) and len(mine.columns) >= 35
+    for name, column in reference.columns.items():
+        assert bits([mine[name]]) == bits([column]), name
+    assert mine[f"{MESH}.mesh.impacts_drive"][-1] > 0
+
+
+# ------------------------------------------------------------------ FMU states
+@pytest.mark.parametrize("model", MODELS)
+def test_fmu_states_are_the_library_records(fmi3_fmus, model, tmp_path):
+    """On the regression inputs the serialized state is the envelope (this FMU's token)
+    around the unit's own record (the library's rm_save at the same point, byte for byte);
+    deserialized into a fresh instance it continues as the original did."""
+    m = Model(unpack(fmi3_fmus[model], tmp_path / "unpacked"))
+    names = m.names(causality="input")
+    rows = input_rows(model)[:121]
+    inst = m.instantiate(b"original")
+    twin = Unit(KINDS[model], initialize=False)
+    assert inst.enter(rows[0][0]) == OK
+    twin.call("rm_setup", rows[0][0])
+    twin.call("rm_enter_initialization")
+    inst.set_named(dict(zip(names, rows[0][1:], strict=True)))
+    twin.set(dict(zip(names, rows[0][1:], strict=True)))
+    assert inst.exit() == OK
+    twin.call("rm_exit_initialization")
+    saved, after = None, []
+    for k in range(len(rows) - 1):
+        inputs = dict(zip(names, rows[k][1:], strict=True))
+        assert inst.set_named(inputs) == OK
+        twin.set(inputs)
+        t, h = rows[k][0], rows[k + 1][0] - rows[k][0]
+        assert inst.step(t, h) == OK, inst.log[-2:]
+        twin.call("rm_do_step", t, h)
+        if k % 40 == 0:
+            blob = inst.serialized()
+            assert blob[32:32 + len(m.token)] == m.token.encode()
+            assert blob[96:] == twin.save(), k
+            if k == 40:
+                saved = blob
+        if saved is not None:
+            after.append(inst.snapshot())
+    other = m.instantiate(b"restored")
+    status, state = other.deserialize(saved)
+    assert status == OK and other.set_state(state) == OK, other.log
+    assert other.snapshot() == after[0]
+    for k in range(41, len(rows) - 1):
+        other.set_named(dict(zip(names, rows[k][1:], strict=True)))
+        assert other.step(rows[k][0], rows[k + 1][0] - rows[k][0]) == OK
+        assert other.snapshot() == after[k - 40], k
+    assert not inst.log and not other.log
+    for i in (inst, other):
+        i.free()
+    twin.close()
