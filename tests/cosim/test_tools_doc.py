@@ -87,6 +87,8 @@ def user_folder(dist: Path, folder: Path) -> dict:
     for proxy in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY"):
         env[proxy] = "http://127.0.0.1:9"  # nothing listens there: no network
     env.update({"no_proxy": "", "NO_PROXY": "", "PIP_NO_INDEX": "1"})
+    (folder / "tmp").mkdir()
+    env["TMPDIR"] = str(folder / "tmp")  # mktemp -d, and the masters' unpacked FMUs, in here
     return env
 
 
