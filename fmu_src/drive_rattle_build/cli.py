@@ -3,7 +3,7 @@
     drive-rattle-build [--out dist] [--update-templates] [--no-fmutool] [--no-native]
                        [--no-fmi3]
     drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
-    drive-rattle-build --update-docs   # regenerate the interface tables of docs/fmi.md
+    drive-rattle-build --update-docs   # docs/fmi.md's tables, docs/tools.md's numbers
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
@@ -21,18 +21,24 @@ from pathlib import Path
 from .compiler import BuildError
 from .documentation import interface_docs
 from .library import build_in_place
-from .paths import DIST, FMI_DOCS
+from .paths import DIST, FMI_DOCS, TOOLS_DOCS
 
 DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), "
                "validate them, and write the systems dist/DriveRattle.ssp and "
                "dist/DriveRattle_outputs.ssp")
 
 
-def update_docs() -> None:
-    """Regenerate the interface tables of docs/fmi.md from the specs."""
+def update_docs() -> list[Path]:
+    """Regenerate the interface tables of docs/fmi.md from the specs and the numbers of
+    docs/tools.md from the model library (``drive_rattle_cosim.tools_doc``); the files."""
+    from drive_rattle_cosim import tools_doc
+
     build_in_place()
     text = FMI_DOCS.read_text(encoding="utf-8")
     FMI_DOCS.write_text(interface_docs(text), encoding="utf-8")
+    text = TOOLS_DOCS.read_text(encoding="utf-8")
+    TOOLS_DOCS.write_text(tools_doc.update(text), encoding="utf-8")
+    return [FMI_DOCS, TOOLS_DOCS]
 
 
 def main(argv=None) -> int:
@@ -42,7 +48,9 @@ def main(argv=None) -> int:
                     help="write the normalised modelDescriptions to modelDescription_templates/")
     ap.add_argument("--no-fmutool", action="store_true", help="skip `fmutool -check`")
     ap.add_argument("--update-docs", action="store_true",
-                    help="regenerate the interface tables in docs/fmi.md and exit")
+                    help="regenerate the interface tables in docs/fmi.md and the numbers "
+                         "of docs/tools.md (after a change of the specs or the physics) "
+                         "and exit")
     ap.add_argument("--library", action="store_true",
                     help="build the model library in place (next to fmu_src/drive_rattle, "
                          "where the Python API, the studies and the tests load it) and exit")
@@ -56,8 +64,8 @@ def main(argv=None) -> int:
             print(f"built the model library {build_in_place()}")
             return 0
         if args.update_docs:
-            update_docs()
-            print(f"updated {FMI_DOCS}")
+            for path in update_docs():
+                print(f"updated {path}")
             return 0
         # imported here: building the library alone needs none of the FMU tooling
         from .fmu import build

@@ -12,6 +12,7 @@ from drive_rattle.parameters import specs
 from drive_rattle.units import input_starts
 
 from .compiler import BuildError
+from .model_description import enumeration
 from .paths import FMI_DOCS
 
 
@@ -23,8 +24,13 @@ def interface_rows(unit: UnitSpec) -> list[tuple[str, str, str, str, str, str]]:
     for _attr, spec in specs(unit.parameters):
         limits = spec.allowed() if spec.fmi_type in ("Real", "Integer") else ""
         start = repr(spec.default) if spec.fmi_type != "Boolean" else str(spec.default).lower()
+        fmi_type = spec.fmi_type
+        declared = enumeration(spec)
+        if declared is not None:  # the codes by their item names
+            fmi_type = f"Enumeration ({declared.type_name})"
+            limits = "one of " + ", ".join(f"{i.value} = {i.name}" for i in declared.items)
         allowed = f"{start}; {limits}".rstrip("; ")
-        rows.append((spec.name, "parameter", spec.fmi_type, spec.unit, allowed, spec.description))
+        rows.append((spec.name, "parameter", fmi_type, spec.unit, allowed, spec.description))
     for spec in unit.inputs:
         allowed = repr(starts[spec.name])
         if spec.minimum is not None:
@@ -46,8 +52,9 @@ def markdown_interface(unit: UnitSpec) -> str:
 
 
 def html_page(unit: UnitSpec, how_to_run: str,
-              build_note: str = "built with pythonfmu and a status shim (linux64), the model "
-                                "a C library (linux64, win64)") -> str:
+              build_note: str = "built with pythonfmu and a status shim, the model a C "
+                                "library; linux64 only (on Windows use the native FMU of the "
+                                "same name, dist/native/)") -> str:
     """documentation/index.html of the FMU (``build_note``: how this flavour is built)."""
     rows = "\n".join(
         "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
@@ -80,16 +87,20 @@ a rejected call leaves the instance's state as it was.</p>
 """
 
 
-HOW_TO_RUN = """<p>The FMU needs a Python 3 interpreter (3.10 or newer) on the machine where it
-runs; its Python uses only the standard library, pythonfmu's runtime is bundled, and the model
-is a C library shipped for linux64 and win64 (<code>resources/drive_rattle/</code>).
-Inside a Python host (fmpy, libcosimpy) the host's interpreter is used:</p>
+HOW_TO_RUN = """<p>This FMU runs on Linux (x86-64) only: it has a <code>binaries/linux64</code>
+binary and no other. <b>On Windows, or in a tool without Python, use the native FMU of the same
+name</b> (<code>dist/native/{name}.fmu</code>: the same model, interface and numbers, in C).
+This one needs a Python 3 interpreter (3.10 or newer) on the machine where it runs; its Python
+uses only the standard library, pythonfmu's runtime is bundled, and the model is a C library
+(<code>resources/drive_rattle/rattle_model.so</code>). Inside a Python host (fmpy, libcosimpy)
+the host's interpreter is used:</p>
 <pre>from fmpy import simulate_fmu
 result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
 <p>A native host (a C/C++ simulation tool) on Linux must load libpython into the process first
-(<code>LD_PRELOAD=/path/to/libpython3.x.so</code>, the library of the Python installation whose
-<code>python3</code> is first on <code>PATH</code>). Do not unpack the FMU under a path that
-needs escaping beyond what the shim decodes (any %XX is decoded).</p>
+(<code>LD_PRELOAD</code> set to the output of <code>python3 -c "import os, sysconfig as s;
+print(os.path.join(s.get_config_var('LIBDIR'), s.get_config_var('INSTSONAME')))"</code>, run
+with the <code>python3</code> that is first on <code>PATH</code>). Do not unpack the FMU under a
+path that needs escaping beyond what the shim decodes (any %XX is decoded).</p>
 """
 
 

@@ -2,13 +2,17 @@
 
 Each FMU bundles its slave module (``fmu_src/<Model>.py``), the runtime packages whole
 (``paths.RUNTIME_PACKAGES``: the specs and the ctypes binding, the pythonfmu face; standard
-library only), the model library compiled for linux64 and win64 next to the binding
-(``resources/drive_rattle/rattle_model.so`` and ``.dll``, where the slave loads it from), the
-regression references, generated documentation and the status shim.  Its GUID is derived from
-the model library's sources and the face's (``identity.fmu_guid``), so that another build of
-the same sources accepts its FMU states.  Its normalised modelDescription is held against the
-committed template (``templates``), and every FMU is checked with fmpy's ``validate_fmu`` and,
-when installed, fmu-manipulation-toolbox's ``fmutool -check``; any problem fails the build.
+library only), the model library compiled for linux64 next to the binding
+(``resources/drive_rattle/rattle_model.so``, where the slave loads it from), the regression
+references, generated documentation and the status shim.  linux64 only (``PLATFORMS``): the
+win64 binary pythonfmu's builder adds is removed (``drop_other_platforms``), because it has
+neither the shim nor a way to be tested here (it needs an installed Windows Python and the
+VC++ runtime, and fails to load with error 126 without them); the native FMUs serve Windows.
+Its GUID is derived from the model library's sources and the face's (``identity.fmu_guid``),
+so that another build of the same sources accepts its FMU states.  Its normalised
+modelDescription is held against the committed template (``templates``), and every FMU is
+checked with fmpy's ``validate_fmu`` and, when installed, fmu-manipulation-toolbox's
+``fmutool -check``; any problem fails the build.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from drive_rattle.interface import MODELS
 from . import library, model_description, templates
 from .compiler import BuildError, c_compiler
 from .documentation import HOW_TO_RUN, html_page
+from .icon import add_icon
 from .identity import fmu_guid
 from .paths import DIST, RUNTIME_PACKAGES, SOURCE, slave_module
 from .shim import COMMON_SOURCE, FMI2_COMMON_SOURCE, SHIM_SOURCE, install_shim
@@ -39,6 +44,8 @@ _NOT_SHIPPED = shutil.ignore_patterns("__pycache__", "*.pyc", "*.so", "*.dll", "
                                       "*.id", ".*")
 #: The folder of the model library inside the FMU's resources (next to the binding).
 LIBRARY_FOLDER = "drive_rattle"
+#: The platforms of the pythonfmu FMUs: where the status shim is built and the FMUs are tested.
+PLATFORMS = ("linux64",)
 
 
 def slave_class(name: str, script: Path | None = None):
@@ -50,12 +57,29 @@ def slave_class(name: str, script: Path | None = None):
     return getattr(module, name)
 
 
-def compile_libraries(out_dir: Path, cc: str | None = None) -> list[Path]:
-    """The model library for every platform of ``library.PLATFORMS`` (linux64 and win64) in
-    ``out_dir``, under the names the binding loads (``rattle_model.so``, ``.dll``)."""
+def compile_libraries(out_dir: Path, cc: str | None = None,
+                      platforms: tuple[str, ...] = PLATFORMS) -> list[Path]:
+    """The model library for ``platforms`` (of ``library.PLATFORMS``; default: the pythonfmu
+    FMUs' ``PLATFORMS``) in ``out_dir``, under the names the binding loads
+    (``rattle_model.so``, ``.dll``)."""
     return [library.compile_model_library(Path(out_dir) / name, platform,
                                           cc=cc if target is None else None)
-            for platform, (name, target) in library.PLATFORMS.items()]
+            for platform, (name, target) in library.PLATFORMS.items()
+            if platform in platforms]
+
+
+def drop_other_platforms(fmu: Path, platforms: tuple[str, ...] = PLATFORMS) -> None:
+    """Remove every ``binaries/<platform>/`` but ``platforms`` from ``fmu`` (rewritten in
+    place): pythonfmu's builder adds its generic binary for every platform it ships."""
+    fmu = Path(fmu)
+    kept = tuple(f"binaries/{p}/" for p in platforms)
+    part = fmu.with_name(f".{fmu.name}.part")
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(part, "w") as dst:
+        for info in src.infolist():
+            if not info.filename.startswith("binaries/") or info.filename.startswith(kept):
+                dst.writestr(info, src.read(info))
+    shutil.copymode(fmu, part)
+    part.replace(fmu)
 
 
 def stage_runtime(staging: Path, libraries: list[Path]) -> list[Path]:
@@ -172,6 +196,8 @@ def package(script: Path, out_dir: Path, references: bool = True,
                      vrs[LAST_SUCCESSFUL_TIME_VARIABLE], cc=cc)
     except RuntimeError as err:
         raise BuildError(str(err)) from None
+    drop_other_platforms(fmu)
+    add_icon(fmu)
     return fmu
 
 

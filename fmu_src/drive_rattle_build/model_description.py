@@ -9,7 +9,9 @@ the rest against ``modelDescription_templates/`` (``templates``)."""
 from __future__ import annotations
 
 import datetime
+import re
 from collections.abc import Sequence
+from typing import NamedTuple
 from xml.etree.ElementTree import Element, SubElement
 
 from drive_rattle import library as binding
@@ -40,6 +42,72 @@ LOG_CATEGORIES = {
 }
 #: The FMUs' metadata.
 ABOUT = {"author": "drive-rattle developers", "version": "0.1.0", "license": "MIT"}
+
+
+#: Item names of the enumerations, by parameter and code: short identifiers a tool shows
+#: instead of the number.  A code with no name here gets one derived from its description
+#: (:func:`derived_item_name`), so an integer code added to the specs gets its enumeration
+#: without a change here; a name is used only while each of its words still occurs in the
+#: code's description, so that a code whose meaning changed never keeps a wrong name.
+ITEM_NAMES = {
+    "contact.hertz_law": {0: "exact_elliptical", 1: "equivalent_sphere"},
+    "contact.dissipation": {0: "none", 1: "hunt_crossley_restitution",
+                            2: "hunt_crossley_damping"},
+    "friction.form": {0: "load_sharing", 1: "apparent_area", 2: "as_printed"},
+    "friction.shear_speed": {0: "entrainment", 1: "sliding"},
+}
+
+
+class Item(NamedTuple):
+    name: str
+    value: int
+    description: str
+
+
+class Enumeration(NamedTuple):
+    """The FMI 2.0 enumeration type of an integer-coded parameter."""
+
+    type_name: str  # the <SimpleType name>, the variable's declaredType
+    items: list[Item]
+
+
+def _words(text: str) -> list[str]:
+    return re.findall(r"[a-z0-9]+", text.lower())
+
+
+def derived_item_name(description: str) -> str:
+    """A short identifier from a code's description: its first (at most three) words before
+    the first parenthesis, colon, comma, semicolon or '='; ``""`` when there is none."""
+    words = _words(re.split(r"[(:,;=]", description, maxsplit=1)[0])[:3]
+    name = "_".join(words)
+    return name if re.fullmatch(r"[a-z][a-z0-9_]*", name) else ""
+
+
+def item_name(parameter: str, code: int, description: str) -> str:
+    """The item name of ``code`` of ``parameter`` (``ITEM_NAMES``, or derived)."""
+    name = ITEM_NAMES.get(parameter, {}).get(code)
+    if name is not None and set(name.split("_")) <= set(_words(description)):
+        return name
+    return derived_item_name(description) or f"code_{code}"
+
+
+def enumeration(spec) -> Enumeration | None:
+    """The enumeration type of an integer variable with ``choices`` (else None): named after
+    the parameter (``contact.hertz_law`` -> ``ContactHertzLaw``), one item per code, its
+    description the code's meaning from the specs; unique item names (a repeated one gets
+    its code appended)."""
+    choices = getattr(spec, "choices", None)  # parameters have them; a signal may
+    if spec.fmi_type != "Integer" or not choices:
+        return None
+    type_name = "".join(part[:1].upper() + part[1:] for part in re.split(r"[._]", spec.name))
+    items, seen = [], set()
+    for code, text in sorted(choices.items()):
+        name = item_name(spec.name, code, text)
+        if name in seen:
+            name = f"{name}_{code}"
+        seen.add(name)
+        items.append(Item(name, int(code), text))
+    return Enumeration(type_name, items)
 
 
 def _fmt(value) -> str:
@@ -104,6 +172,15 @@ def render(model: str, guid: str, generation_tool: str, needs_execution_tool: bo
     rows = variable_rows(model)
     unit_definitions(root, sorted({spec.unit for _, _, spec, _ in rows
                                    if spec.fmi_type == "Real"}))
+    enumerations = [e for e in (enumeration(spec) for _, _, spec, _ in rows) if e is not None]
+    if enumerations:
+        types = SubElement(root, "TypeDefinitions")
+        for e in enumerations:
+            simple = SubElement(SubElement(types, "SimpleType", {"name": e.type_name}),
+                                "Enumeration")
+            for item in e.items:
+                SubElement(simple, "Item", {"name": item.name, "value": str(item.value),
+                                            "description": item.description})
     categories = SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": name, "description": text})
@@ -134,6 +211,11 @@ def render(model: str, guid: str, generation_tool: str, needs_execution_tool: bo
             # attribute order as the schema lists them: unit first, to read
             typed = {k: typed[k] for k in ("unit", "displayUnit", "min", "max", "start")
                      if k in typed}
+        declared = enumeration(spec)
+        if declared is not None:  # set and got with fmi2SetInteger/GetInteger, as an Integer
+            fmi_type = "Enumeration"
+            typed = {"declaredType": declared.type_name,
+                     **{k: typed[k] for k in ("min", "max", "start") if k in typed}}
         sv = SubElement(variables, "ScalarVariable", attrs)
         SubElement(sv, fmi_type, typed)
 

@@ -44,6 +44,7 @@ from . import model_description, model_tables, templates
 from .compiler import IEEE_CFLAGS, TARGETS, BuildError, c_compiler, compile_library, zig_cc
 from .documentation import html_page
 from .fmu import validate
+from .icon import model_png
 from .identity import fmu_guid
 from .library import source_flags
 from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
@@ -238,6 +239,7 @@ def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = N
             for ref in reference_files:
                 z.write(ref, f"resources/regression/{Path(ref).name}")
             z.writestr("documentation/index.html", page)
+            z.writestr("model.png", model_png())
         os.replace(part, fmu)
     return fmu
 

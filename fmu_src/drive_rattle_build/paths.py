@@ -24,6 +24,8 @@ TEMPLATES = ROOT / "modelDescription_templates"
 DIST = ROOT / "dist"
 #: The documentation page whose interface tables the build generates.
 FMI_DOCS = ROOT / "docs" / "fmi.md"
+#: The tools guide, whose numbers the build computes (drive_rattle_cosim.tools_doc).
+TOOLS_DOCS = ROOT / "docs" / "tools.md"
 
 
 def slave_module(model: str) -> Path:

@@ -130,7 +130,10 @@ class Unit:
         md = read_model_description(str(self.fmu))
         self.model_name = md.coSimulation.modelIdentifier
         self.variables = {
-            v.name: Variable(v.name, v.valueReference, v.type, v.causality, v.unit or "")
+            # an Enumeration is set and got as an Integer (fmi2SetInteger, fmi2GetInteger)
+            v.name: Variable(v.name, v.valueReference,
+                             "Integer" if v.type == "Enumeration" else v.type, v.causality,
+                             v.unit or "")
             for v in md.modelVariables
         }
         self.messages: list[tuple[str, str]] = []  # (status, message) from the logger

@@ -39,7 +39,7 @@ COUPLING = [f"{src}.{out}" for src, out, _, _ in CONNECTIONS]
 #: ``harness.time_grid`` name of each master's communication points.
 MASTER_GRIDS = {"libcosim": "nanoseconds", "fmpy.ssp": "accumulated",
                 "container": "multiplied", "gemseo": "accumulated-clipped",
-                "ecos": "accumulated"}
+                "ecos": "accumulated", "cofmupy": "accumulated"}
 #: Real inputs and outputs of each unit, for masters that read every variable as Real.
 REAL_INPUTS = {MESH: [i for _, _, d, i in CONNECTIONS if d == MESH],
                DRIVELINE: [i for _, _, d, i in CONNECTIONS if d == DRIVELINE]}
@@ -274,7 +274,8 @@ def run_ecos(ssp: Path, stop_time: float, step: float, outputs: list[str] | None
     try:
         if not sim.init(parameter_set=parameter_set):
             raise RuntimeError(f"ecos: init failed: {EcosLib.get_last_error()}")
-        getters = {name: (sim.get_integer if types[name] == "Integer" else sim.get_real,
+        getters = {name: (sim.get_integer if types[name] in ("Integer", "Enumeration")
+                          else sim.get_real,
                           name.replace(".", "::", 1)) for name in outputs}
         result = Result(units=dict.fromkeys(outputs, ""))
         result.columns = {name: [] for name in outputs}
@@ -368,6 +369,144 @@ def run_gemseo(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: floa
     return _result(data[f"{DRIVELINE}_time"], columns)
 
 
+# ---------------------------------------------------------------- cofmupy
+@contextlib.contextmanager
+def cofmupy_real_outputs():
+    """Inside this context cofmupy (1.0.0) reads only the Real outputs of an FMI 2.0 unit: it
+    reads every output with ``fmi2GetReal`` after every step, with no setting to leave some
+    out, and the Integer outputs (the impact counters, ``mesh.n_contact``) fail
+    (``getReal: no Real variable with value reference ...``)."""
+    from cofmupy.wrappers import Fmu2Handler
+
+    original = Fmu2Handler.get_output_names
+
+    def real_outputs(self):
+        return [n for n in original(self) if self.var_name2attr[n].type == "Real"]
+
+    Fmu2Handler.get_output_names = real_outputs
+    try:
+        yield
+    finally:
+        Fmu2Handler.get_output_names = original
+
+
+def cofmupy_config(mesh_fmu: Path, driveline_fmu: Path, parameters: dict | None = None) -> dict:
+    """cofmupy's configuration of the pair (Jacobi), each unit's ``"initialization"`` holding
+    its Real ``parameters`` (``"<Unit>.<name>"``; cofmupy sets every variable with
+    ``fmi2SetReal``) and every coupling input at the partner's output at the start for these
+    parameters (``ssp.consistent_input_starts``): cofmupy writes 0 to every input that is not in
+    ``"initialization"`` before it initializes the units, and exchanges nothing then."""
+    from .ssp import consistent_input_starts
+
+    parameters = parameters or {}
+    for qualified, value in parameters.items():
+        if type(value) is not float:
+            raise ValueError(f"cofmupy sets FMI 2 variables as Real: '{qualified}' = "
+                             f"{value!r} cannot be set")
+    values = {**parameters, **consistent_input_starts(parameters)}
+    paths = {MESH: str(mesh_fmu), DRIVELINE: str(driveline_fmu)}
+    return {
+        "fmus": [{"id": unit, "path": paths[unit],
+                  "initialization": {k.partition(".")[2]: v for k, v in values.items()
+                                     if k.partition(".")[0] == unit}}
+                 for unit in (DRIVELINE, MESH)],
+        "connections": [{"source": {"id": src, "variable": out},
+                         "target": [{"id": dst, "variable": inp}]}
+                        for src, out, dst, inp in CONNECTIONS],
+        "cosim_method": "jacobi",
+    }
+
+
+def run_cofmupy(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float,
+                parameters: dict | None = None, workarounds: bool = True,
+                fixed_point: bool = False) -> Result:
+    """cofmupy's ``Coordinator`` on ``cofmupy_config`` inside ``cofmupy_real_outputs``, its
+    fixed-point initialization off (``fixed_point``: on; it calls ``fmi2SetupExperiment`` on
+    running units, which they refuse: ``setupExperiment is not allowed in mode
+    'stepping'``).  ``workarounds=False``: the configuration without the input starts, and
+    every output read.  Accumulated time ``t += step``; the result holds the values after
+    every step, at the step's end."""
+    from cofmupy.coordinator import Coordinator
+
+    config = cofmupy_config(mesh_fmu, driveline_fmu, parameters)
+    if not workarounds:
+        for unit in config["fmus"]:
+            unit["initialization"] = {k: v for k, v in unit["initialization"].items()
+                                      if k not in REAL_INPUTS[unit["id"]]}
+    outputs = cofmupy_real_outputs() if workarounds else contextlib.nullcontext()
+    with outputs:
+        coordinator = Coordinator()
+        coordinator.start(config, fixed_point_init=fixed_point)
+        while coordinator.master.current_time < stop_time:
+            coordinator.do_step(step)
+        rows = coordinator.get_results()
+    return _result([t + step for t in rows["time"]],
+                   {name: rows[tuple(name.split(".", 1))] for name in COUPLING})
+
+
+# ---------------------------------------------------------------- libcosim and ecos
+def _integer_coded_model_description(xml: bytes) -> bytes:
+    """``xml`` (a modelDescription) with every Enumeration variable declared an Integer of the
+    same start and limits, and no TypeDefinitions."""
+    from xml.etree import ElementTree
+
+    root = ElementTree.fromstring(xml)
+    for types in root.findall("TypeDefinitions"):
+        root.remove(types)
+    for variable in root.iter("ScalarVariable"):
+        typed = variable.find("Enumeration")
+        if typed is not None:
+            typed.tag = "Integer"
+            for attribute in ("declaredType", "quantity"):
+                typed.attrib.pop(attribute, None)
+    return (b'<?xml version="1.0" encoding="UTF-8"?>\n'
+            + ElementTree.tostring(root, encoding="utf-8", xml_declaration=False) + b"\n")
+
+
+def _rewrite_zip(source: Path, target: Path, convert: dict) -> None:
+    """Copy the zip ``source`` to ``target``, member ``name`` through ``convert[name]`` (a
+    function of its bytes)."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    part = target.with_name(f".{target.name}.part")
+    with zipfile.ZipFile(source) as src, zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename in convert:
+                data = convert[info.filename](data)
+            dst.writestr(info, data)
+    part.replace(target)
+
+
+def integer_codes(source: Path, target: Path) -> Path:
+    """A copy of an FMU or SSP (``source``) whose integer codes are declared ``Integer``
+    instead of ``Enumeration``, for libcosim and ecos, which ignore FMI 2.0 Enumeration
+    variables (libcosim: "FMI 2.0 Enumeration variable type not supported, variable ... will be
+    ignored"; ecos: "No variable named ... of type int"): there the parameters
+    ``contact.hertz_law``, ``contact.dissipation``, ``friction.form`` ... can be set (from the
+    SSD's bindings too) only in such a copy.  Only the modelDescription changes: the binaries,
+    the GUID and the value references are the FMU's, so the numbers are the same."""
+    source, target = Path(source), Path(target)
+    if source.suffix == ".fmu":
+        _rewrite_zip(source, target, {"modelDescription.xml": _integer_coded_model_description})
+        return target
+
+    def fmu(data: bytes) -> bytes:
+        buffer = io.BytesIO()
+        with zipfile.ZipFile(io.BytesIO(data)) as src, \
+                zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as dst:
+            for info in src.infolist():
+                member = src.read(info)
+                if info.filename == "modelDescription.xml":
+                    member = _integer_coded_model_description(member)
+                dst.writestr(info, member)
+        return buffer.getvalue()
+
+    with zipfile.ZipFile(source) as z:
+        fmus = [n for n in z.namelist() if n.endswith(".fmu")]
+    _rewrite_zip(source, target, dict.fromkeys(fmus, fmu))
+    return target
+
+
 # ---------------------------------------------------------------- fmpy alone
 def run_alone(fmu: Path, stop_time: float | None = None) -> tuple[Result, float]:
     """One FMU in fmpy's ``simulate_fmu`` with its defaults (as ``fmpy simulate X.fmu``): no
@@ -380,3 +519,22 @@ def run_alone(fmu: Path, stop_time: float | None = None) -> tuple[Result, float]
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     return (_result(rows["time"], {name: rows[name] for name in outputs}),
             float(rows["time"][1] - rows["time"][0]))
+
+
+def main(argv=None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.masters",
+                                 description="Workarounds of the masters' own defects.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    codes = sub.add_parser("integer-codes", help="a copy of an FMU or SSP with its "
+                           "enumerations declared as Integers (for libcosim and ecos)")
+    codes.add_argument("source", type=Path, help="an .fmu or .ssp")
+    codes.add_argument("target", type=Path)
+    args = ap.parse_args(argv)
+    print(f"wrote {integer_codes(args.source, args.target)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

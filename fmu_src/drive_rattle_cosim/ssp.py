@@ -75,7 +75,8 @@ def check_bindings(fmus: dict[str, Path], parameters: dict, causality: str = "pa
         if v is None or v.causality != causality:
             raise ValueError(f"SSP {what} binding '{qualified}': no such {causality}")
         expected = _SSV_TYPE.get(type(value))
-        if v.type != expected and not (v.type == "Real" and expected == "Integer"):
+        declared = "Integer" if v.type == "Enumeration" else v.type  # set as an Integer
+        if declared != expected and not (v.type == "Real" and expected == "Integer"):
             raise ValueError(
                 f"SSP {what} binding '{qualified}' = {value!r} is {expected or type(value)}; "
                 f"the FMU declares {v.type}")
@@ -83,7 +84,8 @@ def check_bindings(fmus: dict[str, Path], parameters: dict, causality: str = "pa
 
 def default_parameters(fmus: dict[str, Path]) -> dict:
     """Every parameter of the FMUs at its start value, ``{"<Unit>.<name>": value}``."""
-    convert = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true", "String": str}
+    convert = {"Real": float, "Integer": int, "Enumeration": int,
+               "Boolean": lambda v: v == "true", "String": str}
     return {f"{unit}.{v.name}": convert[v.type](v.start)
             for unit, path in fmus.items()
             for v in read_model_description(str(path)).modelVariables

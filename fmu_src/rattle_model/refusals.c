@@ -63,16 +63,12 @@ void rm_refusal_text(RmText* t, int code, const double* v)
                    "transmission (check wheel.tau_load and the pinion kinematics, or reduce the "
                    "communication step)");
         return;
-    case RM_FAIL_TOO_STIFF:
-        rm_puts(t, "the contact is too stiff to resolve: its fastest time scale ");
+    case RM_FAIL_TOO_STIFF: /* v: fastest rate [1/s], k, c, normal mass (k alone can read 0:
+                               the damping factor of a fast release) */
+        rm_puts(t, "the contact is too stiff to resolve in this step: the flanks are pressed so "
+                   "deep into each other that its fastest time scale falls to ");
         rm_put_g(t, 1.0 / v[0], 3);
-        rm_puts(t, " s (stiffness ");
-        rm_put_g(t, v[1], 4);
-        rm_puts(t, " N/m, damping ");
-        rm_put_g(t, v[2], 4);
-        rm_puts(t, " N.s/m on the wheel's normal mass ");
-        rm_put_g(t, v[3], 4);
-        rm_printf(t, " kg) needs more than %lld substeps in this step; reduce the communication "
+        rm_printf(t, " s, which would take more than %lld substeps; reduce the communication "
                      "step, the impact speed (inputs) or contact.damping, or raise wheel.J",
                   (long long)RM_MAX_CONTACT_SUBSTEPS);
         return;

@@ -209,13 +209,13 @@ static int step(RmUnit* u, double t, double h, RmText* err)
         else {
             rm_refusal_text(err, code, values4);
             if (h > RM_DEFAULT_STEP_SIZE) {
-                rm_puts(err, ". The communication step ");
-                rm_put_number(err, h);
-                rm_puts(err, " s is ");
-                rm_put_g(err, h / RM_DEFAULT_STEP_SIZE, 3);
-                rm_puts(err, " times the default experiment's: use ");
+                rm_puts(err, ". Reduce the communication step to at most ");
                 rm_put_number(err, RM_DEFAULT_STEP_SIZE);
-                rm_puts(err, " s (docs/tools.md: accuracy against the step)");
+                rm_puts(err, " s, the default experiment's (this one, ");
+                rm_put_number(err, h);
+                rm_puts(err, " s, is ");
+                rm_put_g(err, h / RM_DEFAULT_STEP_SIZE, 3);
+                rm_puts(err, " times it; accuracy against the step: docs/tools.md)");
             }
         }
     }

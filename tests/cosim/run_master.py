@@ -17,6 +17,9 @@ from drive_rattle_cosim.ssp import run_libcosim
 
 def run(kind: str, args: dict) -> dict:
     outputs = args.get("outputs")
+    if args.get("integer_codes"):  # libcosim and ecos ignore Enumeration variables
+        target = Path(args["dir"]) / f"integer_codes_{Path(args['ssp']).name}"
+        args = {**args, "ssp": str(masters.integer_codes(Path(args["ssp"]), target))}
     if kind == "libcosim":
         result = run_libcosim(Path(args["ssp"]), args["stop"], outputs or masters.COUPLING)
     elif kind == "fmpy.ssp":
@@ -34,6 +37,14 @@ def run(kind: str, args: dict) -> dict:
     elif kind == "gemseo":
         result = masters.run_gemseo(Path(args["mesh"]), Path(args["driveline"]), args["stop"],
                                     args["step"], args.get("parameters"))
+    elif kind == "cofmupy-real-outputs":  # only that workaround
+        with masters.cofmupy_real_outputs():
+            return run("cofmupy", args)
+    elif kind == "cofmupy":
+        result = masters.run_cofmupy(Path(args["mesh"]), Path(args["driveline"]), args["stop"],
+                                     args["step"], args.get("parameters"),
+                                     args.get("workarounds", True),
+                                     args.get("fixed_point", False))
     elif kind == "alone":
         result, step = masters.run_alone(Path(args["fmu"]), args["stop"])
         return {"time": result.time, "columns": result.columns, "step": step}

@@ -1,14 +1,17 @@
 """An edited SSP parameter in every master, and the system outputs of the SSP (issue 21).
 
-A user changes ``gear.backlash`` (0.1 -> 0.2 mm) and the Driveline's ``vehicle.drag`` in the
-shipped SSP's SSD (``ssp.edit_bindings``, the inline parameter set of each component).  Each
-master must run with them: its run differs from the default run and equals, bit for bit, the
-harness's run with those parameters on the master's own communication points.  libcosim and
-ecos apply the SSD's bindings themselves (ecos only when the set is named); fmpy's SSP runner
-and fmu-manipulation-toolbox's container ignore them, and the project's runners for them apply
-the values the SSD binds (``drive_rattle_cosim.masters``).  gemseo-fmu runs the FMUs, not the
-SSP: the same parameters are given its way.  The masters' own behaviour without those runners
-is pinned too (the edit is ignored, silently), so that a fixed master shows up here.
+A user changes ``gear.backlash`` (0.1 -> 0.2 mm), the Driveline's ``vehicle.drag`` and the
+integer code ``contact.dissipation`` (an FMI enumeration) in the shipped SSP's SSD
+(``ssp.edit_bindings``, the inline parameter set of each component).  Each master must run with
+them: its run differs from the default run and equals, bit for bit, the harness's run with
+those parameters on the master's own communication points.  libcosim and ecos apply the SSD's
+bindings themselves (ecos only when the set is named), but ignore every FMI 2.0 Enumeration
+variable: they apply the integer code in the copy ``masters.integer_codes`` makes; fmpy's SSP
+runner and fmu-manipulation-toolbox's container ignore the bindings, and the project's runners
+for them apply the values the SSD binds (``drive_rattle_cosim.masters``).  gemseo-fmu runs the
+FMUs, not the SSP: the same Real parameters are given its way (it sets only Reals).  The
+masters' own behaviour without those runners is pinned too (the edit is ignored, silently or
+with a warning), so that a fixed master shows up here.
 
 Each master runs in its own process (run_master.py), on 0.1 s (1000 steps, several impacts).
 """
@@ -35,7 +38,12 @@ from drive_rattle_cosim.ssp import (
 )
 
 STOP, STEP = 0.1, 1e-4
-EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12}
+EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12,
+        "GearMeshRattle.contact.dissipation": 0}
+#: What gemseo-fmu can set (Reals: it sets every variable with fmi2SetReal).
+REAL_EDIT = {k: v for k, v in EDIT.items() if isinstance(v, float)}
+#: What libcosim and ecos apply of EDIT in the SSP as shipped (no Enumeration variable).
+NOT_ENUMERATIONS = {k: v for k, v in EDIT.items() if k != "GearMeshRattle.contact.dissipation"}
 RUNNER = Path(__file__).with_name("run_master.py")
 #: Index of the master's first recorded point in the harness's record from t = 0.
 FIRST = {"libcosim": 1, "fmpy.ssp": 1, "gemseo": 1, "ecos": 0, "container": 0}
@@ -45,7 +53,7 @@ def run_master(kind: str, **args) -> tuple[dict, str]:
     run = subprocess.run([sys.executable, str(RUNNER), kind, json.dumps(args)],
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stdout + run.stderr
-    return json.loads(run.stdout.strip().splitlines()[-1]), run.stdout
+    return json.loads(run.stdout.strip().splitlines()[-1]), run.stdout + run.stderr
 
 
 _REFERENCES: dict = {}
@@ -132,8 +140,8 @@ def test_edit_bindings_changes_only_the_named_values(shipped, edited, tmp_path):
 # ------------------------------------------------------------------ the edit in each master
 #: Each master as the project runs it: (run_master kind, arguments).
 APPLIED = {
-    "libcosim": ("libcosim", {}),
-    "ecos": ("ecos", {"step": STEP}),  # the set named: masters.PARAMETER_SET
+    "libcosim": ("libcosim", {"integer_codes": True}),  # masters.integer_codes
+    "ecos": ("ecos", {"step": STEP, "integer_codes": True}),  # and the set named
     "fmpy.ssp": ("fmpy.ssp", {"step": STEP, "workaround": True}),  # parameter_set passed
     "container": ("container", {"step": STEP}),  # bound values as START values
 }
@@ -164,14 +172,30 @@ def test_by_itself_the_master_ignores_the_edit(master, fmus, edited, tmp_path):
                             FIRST[master]) == {}
 
 
+@pytest.mark.parametrize("master, warning", [
+    ("libcosim", "FMI 2.0 Enumeration variable type not supported, variable with name "
+                 "contact.dissipation will be ignored"),
+    ("ecos", "No variable named 'contact.dissipation' of type int registered"),
+])
+def test_libcosim_and_ecos_ignore_an_enumeration_with_a_warning(master, warning, fmus, edited,
+                                                                tmp_path):
+    """In the SSP as shipped they apply every edit but the integer code's (docs/tools.md)."""
+    kind, args = APPLIED[master]
+    result, printed = run_master(kind, ssp=str(edited["plain"]), stop=STOP, dir=str(tmp_path),
+                                 **{**args, "integer_codes": False})
+    assert first_difference(result, harness(fmus, NOT_ENUMERATIONS, MASTER_GRIDS[master]),
+                            FIRST[master]) == {}
+    assert warning in printed
+
+
 def test_gemseo_sets_the_parameters_once(fmus):
     """gemseo-fmu runs the FMUs: the parameters as inputs of the disciplines, set once before
     initialization (it would set them before every step, which the units refuse), and the
     coupling inputs' defaults at the partner's start outputs for these parameters."""
     result, _ = run_master("gemseo", mesh=str(fmus[MESH]), driveline=str(fmus[DRIVELINE]),
-                           stop=STOP, step=STEP, parameters=EDIT)
+                           stop=STOP, step=STEP, parameters=REAL_EDIT)
     grid = MASTER_GRIDS["gemseo"]
-    assert first_difference(result, harness(fmus, EDIT, grid), FIRST["gemseo"]) == {}
+    assert first_difference(result, harness(fmus, REAL_EDIT, grid), FIRST["gemseo"]) == {}
     assert first_difference(result, harness(fmus, {}, grid), FIRST["gemseo"]) != {}
 
 

@@ -1,5 +1,5 @@
 """The built FMUs: validators, interface completeness, templates, documentation, what they
-ship (the model library for linux64 and win64) and their GUIDs."""
+ship (the model library for linux64, the icon) and their GUIDs."""
 
 import subprocess
 import sys
@@ -14,6 +14,7 @@ from drive_rattle.interface import DRIVELINE_INPUTS, DRIVELINE_OUTPUTS, MESH_INP
 from drive_rattle.parameters import specs
 from drive_rattle_build import BuildError, build_one, fmu, templates
 from drive_rattle_build.documentation import interface_docs
+from drive_rattle_build.icon import model_png
 from drive_rattle_build.identity import fmu_guid
 from drive_rattle_build.paths import RUNTIME_PACKAGES, SOURCE
 
@@ -108,10 +109,16 @@ def test_fmu_contents(fmus, name):
     sources = {str(p.relative_to(SOURCE)) for package in RUNTIME_PACKAGES
                for p in (SOURCE / package).glob("*.py")}
     assert "drive_rattle/library.py" in sources and "drive_rattle_fmi/slave.py" in sources
-    assert shipped == sources | {"drive_rattle/rattle_model.so", "drive_rattle/rattle_model.dll"}
+    assert shipped == sources | {"drive_rattle/rattle_model.so"}
     with zipfile.ZipFile(fmus[name]) as z:
         assert z.read("resources/drive_rattle/rattle_model.so")[:4] == b"\x7fELF"
-        assert z.read("resources/drive_rattle/rattle_model.dll")[:2] == b"MZ"  # win64 PE
+    # linux64 only: pythonfmu's generic win64 binary (no shim; it needs an installed Windows
+    # Python and the VC++ runtime) is not shipped, and the FMU says to use the native one
+    assert {n.split("/")[1] for n in names if n.startswith("binaries/")} == {"linux64"}
+    assert not any(n.endswith(".dll") for n in names)
+    assert f"dist/native/{name}.fmu" in html and "Windows" in html
+    with zipfile.ZipFile(fmus[name]) as z:  # the icon (FMI 2.0: model.png at the root)
+        assert z.read("model.png") == model_png()
     _, inputs, outputs = INTERFACE[name]
     for s in (*inputs, *outputs):
         assert f"<td>{s.name}</td>" in html
