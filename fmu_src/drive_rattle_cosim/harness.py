@@ -317,7 +317,8 @@ class CoSimulation:
         if progress and len(points) > PROGRESS_MIN_STEPS:
             from tqdm import tqdm
 
-            steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5)
+            steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5,
+                         disable=None)  # no bar where stderr is not a terminal
         # Hot loop on the FMUs' raw ctypes functions with preallocated arrays (fmpy's
         # convenience wrappers cost several microseconds per call), the arguments prepared
         # once, a row per recorded type and point (turned into columns at the end).

@@ -413,7 +413,8 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
             if progress and todo:
                 from tqdm import tqdm
 
-                stream = tqdm(stream, total=len(todo), unit="case", desc="sweep")
+                stream = tqdm(stream, total=len(todo), unit="case", desc="sweep",
+                              disable=None)  # no bar where stderr is not a terminal
             for future in stream:
                 try:
                     row = future.result()
