@@ -26,6 +26,7 @@ BASE_UNITS: dict[str, dict[str, int]] = {
     "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
     "Pa": {"kg": 1, "m": -1, "s": -2},
     "Pa.s": {"kg": 1, "m": -1, "s": -1},
+    "1/Pa": {"kg": -1, "m": 1, "s": 2},
     "kg.m2": {"kg": 1, "m": 2},
     "kg/m3": {"kg": 1, "m": -3},
 }

@@ -7,9 +7,11 @@
  *     x     = cos(beta_b) (rb_p phi_p - rb_w phi_w)        (> 0 when the pinion leads)
  *     delta = flank x - backlash / 2                       (penetration; < 0 is a gap)
  * Each pair touches at its own point with its own crown offset g_i (geometry.c), so its
- * penetration is delta_i = delta - g_i, and it carries the Hertz force with Hunt-Crossley
- * dissipation on its own penetration rate,
+ * penetration is delta_i = delta - g_i, and it carries the Hertz force with the contact's
+ * dissipation (dissipation.c) on its own penetration rate: Hunt-Crossley,
  *     W_i = K_i delta_i^(3/2) (1 + d d(delta_i)/dt),   W_i >= 0,
+ * or a viscous damping c_i (squeeze film after a sticking impact, mesh damping ratio),
+ *     W_i = K_i delta_i^(3/2) + c_i d(delta_i)/dt,    W_i >= 0,
  * K_i from the contact law at the pair's radii.  Torques (each gear positive forward), F_i the
  * pair's friction force and sgn_i the sign of its sliding speed:
  *     wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
@@ -38,6 +40,9 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
     }
     else if (p->dissipation == RM_DISSIPATION_FACTOR)
         m->damping = p->damping;
+    /* the squeeze-film law divides by St and realizes e(v) through a Hunt-Crossley factor of
+     * e in (0, 1]: e_dry > 0 and the film's viscosity, fraction and roughness are positive
+     * (their ranges) */
     /* arms of the normal force about each axis: cos(beta_b) times the base radius */
     m->arm_wheel = m->g.normal_factor * m->g.rb_wheel;
     m->arm_pinion = m->g.normal_factor * m->g.rb_pinion;
@@ -100,8 +105,9 @@ static inline double pair_rate(const RmMesh* M, int flank, double w_p, double dg
 
 /* ------------------------------------------------------------------ loads */
 void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
-                   double w_p, double phi_w, double w_w, double v_impact, const double* signs,
-                   int detail, RmLoads* out, double* pairs, size_t capacity)
+                   double w_p, double phi_w, double w_w, double v_impact,
+                   RmContactDissipation diss, const double* signs, int detail, RmLoads* out,
+                   double* pairs, size_t capacity)
 {
     const RmMeshParams* p = &M->p;
     double delta = rm_penetration(M, flank, phi_p, phi_w);
@@ -115,10 +121,12 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
     }
     if (delta <= 0.0) return;
     double delta_dot = rm_approach_rate(M, flank, w_p, w_w);
-    double damping = M->damping;
+    double damping = diss.d;
     double E_star = M->E_star;
     double tau_w = 0.0, tau_p = 0.0, W_sum = 0.0, F_net = 0.0;
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double ratio_scale = rm_ratio_scale(M, f, ps, delta);
+    int viscous = diss.film || ratio_scale > 0.0;
     for (int i = 0; i < ps->n; i++) {
         int64_t slot = ps->slot[i];
         double s = ps->s[i];
@@ -147,6 +155,11 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0; /* the flanks never pull on each other */
         }
+        else if (viscous) {
+            double c = rm_pair_viscous_damping(M, f, diss.film, ps->r_x[i], K, pen, ratio_scale);
+            W += c * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (W < 0.0) W = 0.0;
+        }
         tau_w += (double)flank * W * M->arm_wheel;
         tau_p -= (double)flank * W * M->arm_pinion;
         W_sum += W;
@@ -163,10 +176,16 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             psi = rm_dry_fraction(lam);
             if (p->friction_enabled) {
                 double U = p->shear_speed == 0 ? u : v_s;
-                F = rm_friction_force(p->friction_form, psi, A_e, A, p->tau_s, p->eta, U, h);
+                double tau_v = psi < 1.0 ? rm_viscous_stress(p->viscous_law, p->eta, p->alpha_pv,
+                                                             p->tau_limit_0, p->tau_limit_slope,
+                                                             W / A, U, h)
+                                         : 0.0;
+                F = rm_friction_force(p->friction_form, psi, A_e, A, p->tau_s, tau_v);
                 double sgn;
-                if (signs != NULL)
+                if (signs != NULL) {
                     sgn = signs[slot];
+                    if (sgn == RM_FRICTION_STICKING) sgn = rm_stick_direction(v_s);
+                }
                 else if (v_s > 0.0)
                     sgn = 1.0;
                 else if (v_s < 0.0)
@@ -229,11 +248,13 @@ double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank
  * the touching pairs at penetration delta and rate delta_dot: they set its time scales
  * sqrt(m/k) and m/c. */
 void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
-                      double w_p, double delta, double delta_dot, double* k, double* c)
+                      double w_p, double delta, double delta_dot, RmContactDissipation diss,
+                      double* k, double* c)
 {
-    double d = M->damping;
+    double d = diss.d;
     double k_sum = 0.0, c_sum = 0.0;
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double ratio_scale = rm_ratio_scale(M, f, ps, delta);
     for (int i = 0; i < ps->n; i++) {
         double pen = delta - ps->offset[i];
         if (pen > 0.0) {
@@ -243,6 +264,9 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (factor > 0.0) k_sum += 1.5 * K * root * factor;
             c_sum += K * d * (pen * root);
+            if (d == 0.0) /* the viscous dampings (none with Hunt-Crossley) */
+                c_sum += rm_pair_viscous_damping(M, f, diss.film, ps->r_x[i], K, pen,
+                                                 ratio_scale);
         }
     }
     *k = k_sum;

@@ -217,6 +217,12 @@ RM_API int rm_probe_pairs(RmUnit* u, int flank, double phi_p, double* out, size_
 RM_API int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double phi_w,
                           double w_w, double v_impact, double* totals, double* pairs,
                           size_t capacity, size_t* count);
+/* The squeeze-film impact law (contact.dissipation = 3) for an impact on `flank` at pinion
+ * angle phi_p with normal speed v: the squeeze-film area A [m^2], the Stokes number, the law's
+ * restitution e, and the contact's Hunt-Crossley factor d [s/m] and 1 if the impact does not
+ * rebound (else 0) as the onset sets them, into out5.  rm_probe_loads takes the contact's
+ * dissipation as such an onset at v_impact sets it. */
+RM_API int rm_probe_squeeze(RmUnit* u, int flank, double phi_p, double v, double* out5);
 
 #ifdef __cplusplus
 }
