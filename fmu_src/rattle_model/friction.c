@@ -17,10 +17,11 @@ double rm_dry_fraction(double lam)
     return (RM_LAMBDA_FULL_FILM - lam) / (RM_LAMBDA_FULL_FILM - RM_LAMBDA_BOUNDARY);
 }
 
-/* The sliding speed [m/s] over which the friction of a sticking pair turns from one direction
- * to the other: a creep speed far below the mesh's sliding speeds (0.1-1 m/s) and below the
- * rattle's approach speeds (mm/s), yet large enough that the regularized friction's time scale
- * J v / (F rho_w^2) stays resolvable (docs/model.md section 5). */
+/* The least sliding speed [m/s] over which the friction of a sticking pair turns from one
+ * direction to the other: a creep speed far below the mesh's sliding speeds (0.1-1 m/s) and
+ * the rattle's approach speeds (mm/s).  The stepper widens it where the regularized
+ * friction's time scale J v / (F rho_w^2) would be shorter than its substeps resolve
+ * (docs/model.md section 5). */
 const double RM_STICK_SPEED = 1e-6;
 
 /* The shear stress of the film in the viscous term of eq. (12), at the pair's mean Hertz
@@ -63,12 +64,12 @@ double rm_friction_force(int form, double psi, double A_e, double A, double tau_
 }
 
 /* The friction direction of a pair that sticks (its friction could hold the sliding speed at
- * zero; stepper.c decides): v_s / RM_STICK_SPEED clamped to [-1, 1], so that the friction
- * turns continuously instead of chattering between +F and -F (the regularization of
+ * zero; stepper.c decides): v_s / v clamped to [-1, 1] with v its stick speed, so that the
+ * friction turns continuously instead of chattering between +F and -F (the regularization of
  * Karnopp-type stick-slip models), and its power -F |v_s| min(1, |v_s| / v) never creates
  * energy. */
-double rm_stick_direction(double v_s)
+double rm_stick_direction(double v_s, double v)
 {
-    double x = v_s / RM_STICK_SPEED;
+    double x = v_s / v;
     return x > 1.0 ? 1.0 : (x < -1.0 ? -1.0 : x);
 }

@@ -106,8 +106,8 @@ static inline double pair_rate(const RmMesh* M, int flank, double w_p, double dg
 /* ------------------------------------------------------------------ loads */
 void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
                    double w_p, double phi_w, double w_w, double v_impact,
-                   RmContactDissipation diss, const double* signs, int detail, RmLoads* out,
-                   double* pairs, size_t capacity)
+                   RmContactDissipation diss, const double* signs, const double* stick_speeds,
+                   int detail, RmLoads* out, double* pairs, size_t capacity)
 {
     const RmMeshParams* p = &M->p;
     double delta = rm_penetration(M, flank, phi_p, phi_w);
@@ -184,7 +184,8 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
                 double sgn;
                 if (signs != NULL) {
                     sgn = signs[slot];
-                    if (sgn == RM_FRICTION_STICKING) sgn = rm_stick_direction(v_s);
+                    if (sgn == RM_FRICTION_STICKING)
+                        sgn = rm_stick_direction(v_s, stick_speeds[slot]);
                 }
                 else if (v_s > 0.0)
                     sgn = 1.0;

@@ -279,9 +279,9 @@ RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* e
 #define RM_VISCOUS_NEWTONIAN 0
 #define RM_VISCOUS_BARUS_LIMITED 1
 /* A friction direction (rm_mesh_loads' signs) meaning: the regularized direction
- * clamp(v_s / RM_STICK_SPEED, -1, 1) of a pair whose friction sticks (stepper.c). */
+ * clamp(v_s / v, -1, 1) of a pair whose friction sticks, v its stick speed (stepper.c). */
 #define RM_FRICTION_STICKING 2.0
-/* The sliding speed [m/s] over which a sticking pair's friction turns (friction.c). */
+/* The least sliding speed [m/s] over which a sticking pair's friction turns (friction.c). */
 RM_INTERNAL extern const double RM_STICK_SPEED;
 
 RM_INTERNAL double rm_dry_fraction(double lam);
@@ -291,8 +291,9 @@ RM_INTERNAL double rm_viscous_stress(int law, double eta, double alpha, double t
                                      double tau_limit_slope, double p, double U, double h);
 RM_INTERNAL double rm_friction_force(int form, double psi, double A_e, double A, double tau_s,
                                      double tau_viscous);
-/* The regularized friction direction of a sticking pair at sliding speed v_s. */
-RM_INTERNAL double rm_stick_direction(double v_s);
+/* The regularized friction direction of a sticking pair at sliding speed v_s, turning over
+ * the stick speed v. */
+RM_INTERNAL double rm_stick_direction(double v_s, double v);
 
 /* ------------------------------------------------------------------ mesh.c */
 #define RM_DISSIPATION_NONE 0
@@ -377,7 +378,8 @@ typedef struct {
 RM_INTERNAL void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                double phi_p, double w_p, double phi_w, double w_w,
                                double v_impact, RmContactDissipation diss, const double* signs,
-                               int detail, RmLoads* out, double* pairs, size_t capacity);
+                               const double* stick_speeds, int detail, RmLoads* out,
+                               double* pairs, size_t capacity);
 RM_INTERNAL double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                    double phi_p, double delta);
 RM_INTERNAL void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,

@@ -61,7 +61,7 @@ static double equilibrium_residual(void* vctx, double delta)
     RmLoads L;
     double phi_w = wheel_angle(r->M, r->flank, r->phi_p, delta);
     rm_mesh_loads(r->M, r->f, &r->cache, r->flank, r->phi_p, r->w_p, phi_w, r->w_w, 0.0,
-                  rm_resting_dissipation(r->M), NULL, 0, &L, NULL, 0);
+                  rm_resting_dissipation(r->M), NULL, NULL, 0, &L, NULL, 0);
     return L.tau_w - r->tau_load;
 }
 

@@ -73,6 +73,7 @@ typedef struct {
     /* the friction direction of each pair slot on the current substep, and the directions a
      * located reversal prescribes for the substep after it */
     double signs[RM_MAX_PAIR_SLOTS];
+    double stick_speeds[RM_MAX_PAIR_SLOTS]; /* of the pairs whose friction sticks */
     int has_reversed[RM_MAX_PAIR_SLOTS];
     double reversed[RM_MAX_PAIR_SLOTS];
     double rattle_time, rattle_gain;
@@ -192,7 +193,7 @@ static inline void rhs(Run* r, double t, double phi_w, double w_w, double* out)
     double v_imp = flank == RM_DRIVE ? st->v_drive : st->v_coast;
     RmLoads L;
     rm_mesh_loads(r->M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), phi_w, w_w,
-                  v_imp, st->diss, r->signs, 0, &L, NULL, 0);
+                  v_imp, st->diss, r->signs, r->stick_speeds, 0, &L, NULL, 0);
     r->log->rhs_evaluations++;
     out[0] = (L.tau_w - r->tau_load) / r->J;
     out[1] = L.tau_p;
@@ -221,7 +222,8 @@ static void rk4(Run* r, double t, double h, double phi, double w, const double* 
 }
 
 /* The rate [1/s] at which the regularized friction of the sticking pairs relaxes the wheel's
- * speed, sum F rho_w^2 / (RM_STICK_SPEED J), at the penetration `reach`: 0 when none sticks. */
+ * speed, sum F rho_w^2 / (v J) with v their stick speeds, at the penetration `reach`: 0 when
+ * none sticks. */
 static double sticking_rate(Run* r, double t, double reach)
 {
     const RmMesh* M = r->M;
@@ -237,14 +239,14 @@ static double sticking_rate(Run* r, double t, double reach)
     double rows[RM_PAIR_DETAIL * RM_MAX_PAIRS];
     RmLoads L;
     rm_mesh_loads(M, r->f, &r->pairs, flank, phi_p, run_w_p(r, t), phi_w, st->w,
-                  flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs, 0, &L,
-                  rows, RM_MAX_PAIRS);
+                  flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs, r->stick_speeds, 0,
+                  &L, rows, RM_MAX_PAIRS);
     double rate = 0.0;
     for (int i = 0; i < L.n_pairs; i++) {
         const double* row = rows + RM_PAIR_DETAIL * (size_t)i;
         if (r->signs[(int64_t)row[0]] != RM_FRICTION_STICKING) continue;
         double rho_w = M->g.line_length - row[1];
-        rate += row[7] * rho_w * rho_w / (RM_STICK_SPEED * r->J);
+        rate += row[7] * rho_w * rho_w / (r->stick_speeds[(int64_t)row[0]] * r->J);
     }
     return rate;
 }
@@ -291,31 +293,38 @@ static double contact_roll_rate(Run* r, double t, int64_t slot, double s)
     return 0.0;
 }
 
-/* Whether the friction of the pair in `slot` (roll coordinate s, sliding speed about zero)
- * sticks at t: with its friction either way, the wheel's acceleration drives the sliding
- * speed v_s = w_p s - w_w (L - s) back through zero (Filippov's attractive sliding surface),
- * d v_s/dt = a_p s + (w_p + w_w) ds/dt - (dw_w/dt) (L - s): negative with the direction +1 and
- * positive with -1.  The other pairs keep their directions. */
-static int friction_sticks(Run* r, double t, int64_t slot, double s)
+/* Whether the friction of the n pairs in `slots` (roll coordinates s, sliding speeds about
+ * zero) sticks at t: with their friction either way, the wheel's acceleration drives every
+ * one's sliding speed v_s = w_p s - w_w (L - s) back through zero (Filippov's attractive
+ * sliding surface), d v_s/dt = a_p s + (w_p + w_w) ds/dt - (dw_w/dt) (L - s): negative with
+ * the direction +1 and positive with -1.  The other pairs keep their directions.  (Pairs
+ * sliding through zero together -- every pair when the pinion rests -- can hold the wheel
+ * together where none can alone.) */
+static int friction_sticks(Run* r, double t, int n, const int64_t* slots, const double* s)
 {
     const RmMesh* M = r->M;
     const RmWheel* st = &r->st;
     int flank = st->flank;
     double w_p = run_w_p(r, t);
-    double keep = r->signs[slot];
+    double keep[RM_MAX_PAIRS];
     double accel[2];
+    for (int i = 0; i < n; i++) keep[i] = r->signs[slots[i]];
     for (int k = 0; k < 2; k++) {
         RmLoads L;
-        r->signs[slot] = k == 0 ? 1.0 : -1.0;
+        for (int i = 0; i < n; i++) r->signs[slots[i]] = k == 0 ? 1.0 : -1.0;
         rm_mesh_loads(M, r->f, &r->pairs, flank, run_phi_p(r, t), w_p, st->phi, st->w,
-                      flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs, 0, &L,
-                      NULL, 0);
+                      flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                      r->stick_speeds, 0, &L, NULL, 0);
         accel[k] = (L.tau_w - r->tau_load) / r->J;
     }
-    r->signs[slot] = keep;
-    double rho_w = M->g.line_length - s;
-    double kinematic = r->a_p * s + (w_p + st->w) * contact_roll_rate(r, t, slot, s);
-    return kinematic - accel[0] * rho_w < 0.0 && kinematic - accel[1] * rho_w > 0.0;
+    for (int i = 0; i < n; i++) r->signs[slots[i]] = keep[i];
+    for (int i = 0; i < n; i++) {
+        double rho_w = M->g.line_length - s[i];
+        double kinematic = r->a_p * s[i] + (w_p + st->w) * contact_roll_rate(r, t, slots[i], s[i]);
+        if (!(kinematic - accel[0] * rho_w < 0.0 && kinematic - accel[1] * rho_w > 0.0))
+            return 0;
+    }
+    return 1;
 }
 
 /* Each pair's friction direction for the substep from t: the sign of its sliding speed, or
@@ -338,19 +347,56 @@ static void friction_directions(Run* r, double t)
     }
     for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++) r->has_reversed[k] = 0;
     if (!M->p.friction_enabled) return;
-    /* the pairs that slide slower than RM_STICK_SPEED, copied (the test evaluates other pair
-     * sets): those whose friction would hold them stick */
-    int n = ps->n;
+    /* the pairs that slide slower than their stick speed (RM_STICK_SPEED, or the last
+     * substep's where they stuck), copied (the test evaluates other pair sets): those whose
+     * friction would hold them stick, all together or each alone */
+    int n = 0;
     int64_t slots[RM_MAX_PAIRS];
     double s_at[RM_MAX_PAIRS];
-    for (int i = 0; i < n; i++) {
-        slots[i] = ps->slot[i];
-        s_at[i] = ps->s[i];
+    for (int i = 0; i < ps->n; i++) {
+        int64_t slot = ps->slot[i];
+        if (fabs(rm_sliding_speed(M, ps->s[i], w_p, st->w)) <= r->stick_speeds[slot]) {
+            slots[n] = slot;
+            s_at[n] = ps->s[i];
+            n++;
+        }
+        else
+            r->stick_speeds[slot] = RM_STICK_SPEED;
     }
-    for (int i = 0; i < n; i++)
-        if (fabs(rm_sliding_speed(M, s_at[i], w_p, st->w)) <= RM_STICK_SPEED
-            && friction_sticks(r, t, slots[i], s_at[i]))
-            r->signs[slots[i]] = RM_FRICTION_STICKING;
+    if (n == 0) return;
+    int sticking[RM_MAX_PAIRS];
+    int together = friction_sticks(r, t, n, slots, s_at);
+    int any = 0;
+    for (int i = 0; i < n; i++) {
+        sticking[i] = together || (n > 1 && friction_sticks(r, t, 1, slots + i, s_at + i));
+        any |= sticking[i];
+    }
+    if (!any) {
+        for (int i = 0; i < n; i++) r->stick_speeds[slots[i]] = RM_STICK_SPEED;
+        return;
+    }
+    for (int i = 0; i < n; i++) {
+        r->stick_speeds[slots[i]] = RM_STICK_SPEED;
+        if (sticking[i]) r->signs[slots[i]] = RM_FRICTION_STICKING;
+    }
+    /* each sticking pair's friction turns over RM_STICK_SPEED, or where that is wider over the
+     * speed at which it relaxes the wheel's speed at the rate the grid resolves,
+     * F rho_w^2 / (J v) = CONTACT_RATE_SAFETY / solver.h_max: sticking friction then does not
+     * shorten the substeps below the grid, and the regularization tends to exact sticking as
+     * solver.h_max -> 0 */
+    double rows[RM_PAIR_DETAIL * RM_MAX_PAIRS];
+    RmLoads L;
+    rm_mesh_loads(M, r->f, &r->pairs, st->flank, run_phi_p(r, t), w_p, st->phi, st->w,
+                  st->flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                  r->stick_speeds, 0, &L, rows, RM_MAX_PAIRS);
+    for (int i = 0; i < L.n_pairs; i++) {
+        const double* row = rows + RM_PAIR_DETAIL * (size_t)i;
+        int64_t slot = (int64_t)row[0];
+        if (r->signs[slot] != RM_FRICTION_STICKING) continue;
+        double rho_w = M->g.line_length - row[1];
+        double wide = row[7] * rho_w * rho_w * M->p.h_max / (r->J * CONTACT_RATE_SAFETY);
+        r->stick_speeds[slot] = rm_max(RM_STICK_SPEED, wide);
+    }
 }
 
 typedef struct {
@@ -678,6 +724,7 @@ int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h, doubl
     log->n_events = log->total_events = 0;
     for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++) {
         run.signs[k] = 0.0;
+        run.stick_speeds[k] = RM_STICK_SPEED;
         run.has_reversed[k] = 0;
         run.reversed[k] = 0.0;
     }

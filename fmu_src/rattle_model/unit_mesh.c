@@ -281,7 +281,7 @@ static int all_outputs(const MeshModel* m, RmValue* out, int film_asked, RmText*
                     : RM_COAST;
     double v_imp = flank == RM_DRIVE ? st->v_drive : st->v_coast;
     RmLoads L;
-    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, st->phi, st->w, v_imp, st->diss, NULL, 1, &L,
+    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, st->phi, st->w, v_imp, st->diss, NULL, NULL, 1, &L,
                   NULL, 0);
     double h = 0.0, lam = 0.0, psi = 0.0;
     int film = L.n_loaded > 0 || with_film;
@@ -634,7 +634,7 @@ int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double phi_w,
     /* the contact's dissipation as an onset on this flank at v_impact would set it */
     RmContactDissipation diss;
     rm_onset_dissipation(M, &f, &cache, flank, phi_p, v_impact, &diss);
-    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, phi_w, w_w, v_impact, diss, NULL, 1, &L,
+    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, phi_w, w_w, v_impact, diss, NULL, NULL, 1, &L,
                   pairs, capacity);
     totals[0] = L.delta;
     totals[1] = L.tau_w;

@@ -9,9 +9,14 @@ The rigid-body approach along the tooth normal is common to all pairs of a flank
 
 Each pair in the zone of action touches at its own contact point with its own crown offset
 g_i (geometry.py), so its penetration is delta_i = delta - g_i, and it carries the Hertz force
-with Hunt-Crossley dissipation on its own penetration rate,
+with the contact's dissipation (squeeze.py: set by the onset at the last impact speed) on its
+own penetration rate, Hunt-Crossley
 
     W_i = K_i delta_i^(3/2) (1 + d ddelta_i/dt),   W_i >= 0,
+
+or viscous (the squeeze films after an impact that did not rebound, the mesh damping ratio)
+
+    W_i = K_i delta_i^(3/2) + c_i ddelta_i/dt,     W_i >= 0,
 
 K_i from the contact law at the pair's radii.  Torques (each gear positive in its own forward
 direction), with F_i the pair's friction force and sgn_i the sign of its sliding speed:
@@ -28,7 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from . import hertz, lubrication, roots
+from . import hertz, lubrication, roots, squeeze
 from .geometry import DRIVE, HelicalPairGeometry
 
 DISSIPATION_NONE = 0
@@ -150,7 +155,13 @@ class MeshModel:
         if delta <= 0.0:
             return out
         delta_dot = self.approach_rate(flank, w_p, w_w)
-        for slot, s, offset, dg in g.pairs(flank, phi_p):
+        # the contact's dissipation as an onset on this flank at v_impact sets it
+        contact = squeeze.onset(self, flank, phi_p, v_impact)
+        pairs = g.pairs(flank, phi_p)
+        ratio = squeeze.ratio_dampings(self, [
+            1.5 * self.law.coefficients(g.normal_radii(s)[2]).K * math.sqrt(delta - offset)
+            for _slot, s, offset, _dg in pairs if delta - offset > 0.0])
+        for slot, s, offset, dg in pairs:
             pen = delta - offset
             r_x = g.normal_radii(s)[2]
             K, _R, ka, kz = self.law.coefficients(r_x)
@@ -159,9 +170,14 @@ class MeshModel:
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             W = K * pen**1.5
-            if self.damping > 0.0:
-                W *= 1.0 + self.damping * (delta_dot - self.pair_rate(flank, w_p, dg))
+            c = (squeeze.film_damping(self, r_x) if contact.sticks
+                 else ratio.pop(0) if ratio else 0.0)
+            if contact.d > 0.0:
+                W *= 1.0 + contact.d * (delta_dot - self.pair_rate(flank, w_p, dg))
                 W = max(W, 0.0)  # the flanks never pull on each other
+            elif c > 0.0:
+                W += c * (delta_dot - self.pair_rate(flank, w_p, dg))
+                W = max(W, 0.0)
             out.tau_wheel += flank * W * self.arm_wheel
             out.tau_pinion -= flank * W * self.arm_pinion
             out.W += W
@@ -178,8 +194,11 @@ class MeshModel:
                 psi = lubrication.dry_fraction(lam)
                 if p.friction_enabled:
                     U = u if p.shear_speed == 0 else v_s
+                    tau_v = (lubrication.viscous_stress(
+                        p.viscous_law, p.eta, p.alpha_pv, p.tau_limit_0, p.tau_limit_slope,
+                        W / A, U, h) if psi < 1.0 else 0.0)
                     F = lubrication.friction_force(p.friction_form, psi, A_e, A, p.tau_s,
-                                                   p.eta, U, h)
+                                                   tau_v)
                     sgn = math.copysign(1.0, v_s) if v_s != 0.0 else 0.0
                     out.tau_wheel += sgn * F * rho_w
                     out.tau_pinion -= sgn * F * rho_p
