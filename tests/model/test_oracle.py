@@ -33,6 +33,8 @@ PARAMETER_SETS = [
     {"z_pinion": 30, "z_wheel": 45, "beta": 0.5, "backlash": 0.0},
     {"z_pinion": 18, "z_wheel": 80, "m_n": 5e-3, "alpha_n": 25 * DEG, "addendum": 1.2,
      "dissipation": 2, "damping": 300.0},
+    {"dissipation": 3, "viscous_law": 1, "shear_speed": 1, "sigma": 5e-8},
+    {"dissipation": 4, "beta": 0.0, "friction_form": 2},
 ]
 
 
@@ -312,10 +314,18 @@ parameters = st.fixed_dictionaries({
     "friction_enabled": st.booleans(),
     "friction_form": st.integers(0, 2),
     "shear_speed": st.integers(0, 1),
+    "viscous_law": st.integers(0, 1),
+    "alpha_pv": st.floats(0.0, 1e-7),
+    "tau_limit_0": st.floats(1e3, 1e8),
+    "tau_limit_slope": st.floats(0.0, 1.0),
     "hertz_law": st.integers(0, 1),
-    "dissipation": st.integers(0, 2),
+    "dissipation": st.integers(0, 4),
     "restitution": st.floats(0.05, 1.0),
     "damping": st.floats(0.0, 1000.0),
+    "stokes_critical": st.floats(0.0, 30.0),
+    "restitution_dry": st.floats(0.05, 1.0),
+    "squeeze_fraction": st.floats(1e-4, 1.0),
+    "damping_ratio": st.floats(0.0, 1.0),
     "crowning": st.floats(1e-6, 1e-4),
     "beta": st.one_of(st.just(0.0), st.floats(0.5 * DEG, 30.0 * DEG)),
     "backlash": st.floats(0.0, 2e-4),

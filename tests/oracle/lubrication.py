@@ -68,8 +68,11 @@ def viscous_stress(law: int, eta: float, alpha: float, tau_limit_0: float,
     if U == 0.0:
         return 0.0
     tau_L = tau_limit_0 + tau_limit_slope * p
+    ratio = eta * abs(U) / (h * tau_L)
+    if ratio == 0.0:
+        return 0.0
     # eta exp(alpha p) |U| / (h tau_L) through its logarithm: exp(alpha p) may overflow
-    x = math.exp(min(alpha * p + math.log(eta * abs(U) / (h * tau_L)), 709.0))
+    x = math.exp(min(alpha * p + math.log(ratio), 709.0))
     return -tau_L * math.expm1(-x)
 
 
