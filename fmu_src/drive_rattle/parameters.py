@@ -189,6 +189,12 @@ DISSIPATION_MODELS = {
 }
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
+#: lubricant.film codes
+FILM_MODELS = {
+    0: "eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)",
+    1: "the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair "
+       "(Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha)",
+}
 #: friction.viscous_law codes
 VISCOUS_LAWS = {
     0: "Newtonian, isoviscous: eta U / h (the paper)",
@@ -339,6 +345,10 @@ class MeshParameters(ParameterSet):
         "pressure coefficient gamma_L of the limiting shear stress, tau_L = tau_L0 + gamma_L p "
         "(friction.viscous_law = 1; about 0.03-0.1 for mineral oils)",
         minimum=0.0, maximum=1.0)
+    film: int = declare(
+        "lubricant.film", 0, "1", "film thickness h of the film parameter lambda = h/sigma: "
+        + "; ".join(f"{k} = {v}" for k, v in FILM_MODELS.items()),
+        minimum=0, maximum=1, choices=FILM_MODELS)
     sigma: float = declare(
         "surface.sigma", 0.4e-6, "m", "composite RMS roughness of the flanks",
         minimum=1e-9, maximum=1e-3, display_unit="um")

@@ -172,6 +172,9 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             d_max = pair_d_max(M, f, ps, i, v_impact);
             h = -pen + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, never negative */
             if (!(h > 0.0)) h = 0.0;
+            if (p->film == RM_FILM_EHL)
+                h = rm_max(h, rm_ehl_central_film(u, W, ps->r_x[i], M->g.r_y, E_star, p->eta,
+                                                  p->alpha_pv));
             lam = h / p->sigma;
             psi = rm_dry_fraction(lam);
             if (p->friction_enabled) {

@@ -275,6 +275,9 @@ RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* e
 #define RM_LAMBDA_BOUNDARY 1.0
 #define RM_LAMBDA_FULL_FILM 3.0
 
+/* lubricant.film */
+#define RM_FILM_EQ11 0
+#define RM_FILM_EHL 1
 /* friction.viscous_law */
 #define RM_VISCOUS_NEWTONIAN 0
 #define RM_VISCOUS_BARUS_LIMITED 1
@@ -285,6 +288,12 @@ RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* e
 RM_INTERNAL extern const double RM_STICK_SPEED;
 
 RM_INTERNAL double rm_dry_fraction(double lam);
+/* The central film thickness [m] of a loaded elliptical EHL contact (Hamrock and Dowson
+ * 1977): entrainment speed u [m/s], load W > 0 [N], radii r_x (rolling direction) and r_y
+ * [m], contact modulus E* [Pa], viscosity eta [Pa.s] and pressure-viscosity coefficient
+ * alpha [1/Pa]. */
+RM_INTERNAL double rm_ehl_central_film(double u, double W, double r_x, double r_y,
+                                       double E_star, double eta, double alpha);
 /* The shear stress [Pa] of the film in the viscous term, friction.viscous_law `law`, at the
  * pair's mean Hertz pressure p [Pa], shear speed U [m/s] and film thickness h > 0 [m]. */
 RM_INTERNAL double rm_viscous_stress(int law, double eta, double alpha, double tau_limit_0,
@@ -309,7 +318,7 @@ typedef struct {
     int hertz_law, dissipation;
     double restitution, restitution_speed, damping;
     double stokes_critical, restitution_dry, squeeze_fraction, damping_ratio;
-    int friction_enabled, friction_form, shear_speed, viscous_law;
+    int friction_enabled, friction_form, shear_speed, viscous_law, film;
     double tau_s, eta, alpha_pv, tau_limit_0, tau_limit_slope, sigma, gamma, rattle_time, h_max,
         h_comm_max;
 } RmMeshParams;

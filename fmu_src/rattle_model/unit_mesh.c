@@ -75,6 +75,7 @@ int rm_mesh_params(const RmValue* values, RmMeshParams* p)
     p->friction_form = (int)I(RM_MESH_FRICTION_FORM);
     p->shear_speed = (int)I(RM_MESH_FRICTION_SHEAR_SPEED);
     p->viscous_law = (int)I(RM_MESH_FRICTION_VISCOUS_LAW);
+    p->film = (int)I(RM_MESH_LUBRICANT_FILM);
     p->tau_s = R(RM_MESH_FRICTION_TAU_S);
     p->eta = R(RM_MESH_LUBRICANT_ETA);
     p->alpha_pv = R(RM_MESH_LUBRICANT_ALPHA);

@@ -60,8 +60,8 @@ def test_squeeze_film_force_of_the_paraboloidal_gap_by_quadrature():
         lambda t, u: pressure(ly * math.tan(t), lx * math.tan(u)) * lx * ly
         / (math.cos(t) ** 2 * math.cos(u) ** 2), 0, math.pi / 2, 0, math.pi / 2,
         epsabs=0, epsrel=1e-10)[0]
-    assert F == pytest.approx(6 * math.pi * eta * squeeze.pair_area(r_x, r_y) * rate / h0,
-                              rel=1e-7)
+    assert pytest.approx(6 * math.pi * eta * squeeze.pair_area(r_x, r_y) * rate / h0,
+                              rel=1e-7) == F
 
 
 laws = st.fixed_dictionaries({
@@ -127,7 +127,7 @@ def test_no_stokes_number_below_critical_rebounds_and_the_contact_is_then_film_d
     touching = [r for r in loads.pairs if r["delta"] > 0.0]
     assert touching
     film = sum(squeeze.film_damping(m, r["r_x"]) for r in touching)
-    assert loads.W - static.W == pytest.approx(film * rate, rel=1e-12)
+    assert pytest.approx(film * rate, rel=1e-12) == loads.W - static.W
 
 
 # ------------------------------------------------------------------ realized by single impacts
@@ -270,3 +270,43 @@ def test_the_limited_shear_stress_is_bounded_and_below_the_newtonian(alpha, tau0
     newtonian = eta * math.exp(min(alpha * p, 700.0)) * abs(U) / h
     assert 0.0 <= tau <= tau0 + slope * p
     assert tau <= newtonian * (1 + 1e-12)
+
+
+# ------------------------------------------------------------------ the elastohydrodynamic film
+def steady_drive_pairs(probe: Probe, load: float = 0.0833):
+    """The loaded pairs of the drive flank at the static equilibrium for ``load`` [N.m]
+    (rigid speed ratio, 830 rpm) over one base pitch of roll."""
+    from drive_rattle import MeshUnit
+
+    d = probe.derived
+    rows = []
+    for phi_p in [k * d["base_pitch"] / d["rb_pinion"] / 20 for k in range(20)]:
+        unit = MeshUnit(probe.params, phi_p, 86.92, load)
+        out = unit.outputs()
+        unit.close()
+        loads = probe.loads(DRIVE, phi_p, 86.92, out["wheel.phi"], out["wheel.w"], 0.0)
+        rows += [r for r in loads.pairs if r["W"] > 0.0]
+    return rows
+
+
+def test_the_ehl_film_is_hamrock_and_dowsons_and_reaches_the_mixed_regime():
+    # In steady drive at the scenario's load the eq. 11 film is zero (the pairs penetrate)
+    # while the entrainment builds an EHL film of 0.3-0.5 um: with the default 0.4 um
+    # roughness about the boundary of the mixed regime, partly in it.
+    p = MeshParameters(film=1, viscous_law=1, shear_speed=1)
+    probe, m = Probe(p), MeshModel(p)
+    paper = steady_drive_pairs(Probe(MeshParameters()))
+    rows = steady_drive_pairs(probe)
+    assert all(r["h"] == 0.0 and r["dry_fraction"] == 1.0 for r in paper)
+    for r in rows:
+        assert r["h"] == pytest.approx(lubrication.central_film_thickness(
+            r["entrainment_speed"], r["W"], r["r_x"], m.geometry.r_y, m.E_star, p.eta,
+            p.alpha_pv), rel=1e-12)
+    lam = [r["film_parameter"] for r in rows]
+    assert min(r["h"] for r in rows) > 0.2e-6 and max(r["h"] for r in rows) < 0.6e-6
+    assert min(lam) < 1.0 < max(lam)
+    mixed = [r for r in rows if r["dry_fraction"] < 1.0]
+    assert mixed and all(r["F"] < 0.1 * r["W"] for r in mixed)  # the film carries part
+    # no piezoviscosity, no EHL film (G = 0): the paper's eq. 11
+    flat = steady_drive_pairs(Probe(MeshParameters(film=1, alpha_pv=0.0)))
+    assert all(r["h"] == 0.0 for r in flat)

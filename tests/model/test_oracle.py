@@ -33,7 +33,7 @@ PARAMETER_SETS = [
     {"z_pinion": 30, "z_wheel": 45, "beta": 0.5, "backlash": 0.0},
     {"z_pinion": 18, "z_wheel": 80, "m_n": 5e-3, "alpha_n": 25 * DEG, "addendum": 1.2,
      "dissipation": 2, "damping": 300.0},
-    {"dissipation": 3, "viscous_law": 1, "shear_speed": 1, "sigma": 5e-8},
+    {"dissipation": 3, "viscous_law": 1, "shear_speed": 1, "sigma": 5e-8, "film": 1},
     {"dissipation": 4, "beta": 0.0, "friction_form": 2},
 ]
 
@@ -315,6 +315,7 @@ parameters = st.fixed_dictionaries({
     "friction_form": st.integers(0, 2),
     "shear_speed": st.integers(0, 1),
     "viscous_law": st.integers(0, 1),
+    "film": st.integers(0, 1),
     "alpha_pv": st.floats(0.0, 1e-7),
     "tau_limit_0": st.floats(1e3, 1e8),
     "tau_limit_slope": st.floats(0.0, 1.0),

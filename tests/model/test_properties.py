@@ -78,6 +78,7 @@ impacts = st.fixed_dictionaries({
     "friction_enabled": st.booleans(),
     "friction_form": st.integers(0, 2),
     "viscous_law": st.integers(0, 1),
+    "film": st.integers(0, 1),
     "alpha_pv": st.floats(0.0, 1e-7),
     "tau_limit_0": log_uniform(1e3, 1e9),
     "tau_limit_slope": st.floats(0.0, 1.0),

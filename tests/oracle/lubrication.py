@@ -24,6 +24,27 @@ def film_thickness(rigid_gap: float, delta_max: float) -> float:
     return h if h > 0.0 else 0.0
 
 
+FILM_EQ11 = 0
+FILM_EHL = 1
+
+
+def central_film_thickness(u: float, W: float, r_x: float, r_y: float, E_star: float,
+                           eta: float, alpha: float) -> float:
+    """Central film thickness h_c [m] of an isothermal, fully flooded elastohydrodynamic point
+    contact (Hamrock and Dowson 1977):
+
+        h_c / r_x = 2.69 U^0.67 G^0.53 W^-0.067 (1 - 0.61 exp(-0.73 k)),
+
+    U = eta |u| / (E' r_x), G = alpha E', W = load / (E' r_x^2), k = 1.03 (r_y / r_x)^0.64 and
+    E' = 2 E*, r_x the radius in the rolling direction."""
+    E2 = 2.0 * E_star
+    U = eta * abs(u) / (E2 * r_x)
+    G = alpha * E2
+    Wd = W / (E2 * r_x * r_x)
+    k = 1.03 * (r_y / r_x) ** 0.64
+    return r_x * 2.69 * U**0.67 * G**0.53 * Wd**-0.067 * (1.0 - 0.61 * math.exp(-0.73 * k))
+
+
 def asperity_area(W: float, E_star: float, gamma: float, sigma: float) -> float:
     """Real contact area A_e [m^2] of elastic asperity tips, eq. (13):
     A_e = 3.2 W / E* sqrt(gamma / sigma)."""

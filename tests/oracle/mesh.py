@@ -190,6 +190,9 @@ class MeshModel:
                 A = kz * W ** (2.0 / 3.0)
                 d_max = hertz.film_delta_max(v_impact, K, r_x, ka, p.density)
                 h = lubrication.film_thickness(-pen, d_max)
+                if p.film == lubrication.FILM_EHL:
+                    h = max(h, lubrication.central_film_thickness(
+                        u, W, r_x, g.r_y, self.E_star, p.eta, p.alpha_pv))
                 lam = h / p.sigma
                 psi = lubrication.dry_fraction(lam)
                 if p.friction_enabled:
