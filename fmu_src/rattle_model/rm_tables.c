@@ -7,6 +7,7 @@ static const int MESH_CHOICES_16[] = {0, 1, 2, 3, 4};
 static const int MESH_CHOICES_25[] = {0, 1, 2};
 static const int MESH_CHOICES_26[] = {0, 1};
 static const int MESH_CHOICES_27[] = {0, 1};
+static const int MESH_CHOICES_33[] = {0, 1};
 const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"gear.z_pinion", RM_INTEGER, RM_PARAMETER, "1", 20.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
     {"gear.z_wheel", RM_INTEGER, RM_PARAMETER, "1", 39.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
@@ -41,6 +42,7 @@ const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"lubricant.alpha", RM_REAL, RM_PARAMETER, "1/Pa", 2e-08, NULL, 1, 1, 0, 0, 0.0, 1e-07, 0, NULL, "[0, 1e-07] 1/Pa"},
     {"lubricant.tau_limit_0", RM_REAL, RM_PARAMETER, "Pa", 2000000.0, NULL, 1, 1, 0, 0, 1000.0, 1000000000000.0, 0, NULL, "[1000, 1e+12] Pa"},
     {"lubricant.tau_limit_slope", RM_REAL, RM_PARAMETER, "1", 0.07, NULL, 1, 1, 0, 0, 0.0, 1.0, 0, NULL, "[0, 1]"},
+    {"lubricant.film", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_33, "one of 0 (eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)), 1 (the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair (Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha))"},
     {"surface.sigma", RM_REAL, RM_PARAMETER, "m", 4e-07, NULL, 1, 1, 0, 0, 1e-09, 0.001, 0, NULL, "[1e-09, 0.001] m"},
     {"surface.gamma", RM_REAL, RM_PARAMETER, "m", 0.0001, NULL, 1, 1, 0, 0, 1e-07, 1.0, 0, NULL, "[1e-07, 1] m"},
     {"rattle.time_constant", RM_REAL, RM_PARAMETER, "s", 1.0, NULL, 1, 1, 0, 0, 0.001, 10000.0, 0, NULL, "[0.001, 10000] s"},
