@@ -348,6 +348,10 @@ MESH_STARTS = {
     "free start": {"init_in_contact": False, "phi_start": 0.0, "w_start": 44.5},
     "damped, spur, form 2": {"dissipation": 2, "damping": 300.0, "beta": 0.0,
                              "friction_form": 2, "sigma": 1e-7},
+    # the contact's dissipation set at its onset is part of the record
+    "squeeze film, Barus, EHL film": {"dissipation": 3, "viscous_law": 1, "film": 1,
+                                      "shear_speed": 1},
+    "mesh damping ratio, form 1": {"dissipation": 4, "friction_form": 1},
 }
 
 
