@@ -239,8 +239,8 @@ static double sticking_rate(Run* r, double t, double reach)
     double rows[RM_PAIR_DETAIL * RM_MAX_PAIRS];
     RmLoads L;
     rm_mesh_loads(M, r->f, &r->pairs, flank, phi_p, run_w_p(r, t), phi_w, st->w,
-                  flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs, r->stick_speeds, 0,
-                  &L, rows, RM_MAX_PAIRS);
+                  flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                  r->stick_speeds, 0, &L, rows, RM_MAX_PAIRS);
     double rate = 0.0;
     for (int i = 0; i < L.n_pairs; i++) {
         const double* row = rows + RM_PAIR_DETAIL * (size_t)i;
@@ -320,7 +320,8 @@ static int friction_sticks(Run* r, double t, int n, const int64_t* slots, const 
     for (int i = 0; i < n; i++) r->signs[slots[i]] = keep[i];
     for (int i = 0; i < n; i++) {
         double rho_w = M->g.line_length - s[i];
-        double kinematic = r->a_p * s[i] + (w_p + st->w) * contact_roll_rate(r, t, slots[i], s[i]);
+        double roll_rate = contact_roll_rate(r, t, slots[i], s[i]);
+        double kinematic = r->a_p * s[i] + (w_p + st->w) * roll_rate;
         if (!(kinematic - accel[0] * rho_w < 0.0 && kinematic - accel[1] * rho_w > 0.0))
             return 0;
     }
