@@ -144,6 +144,8 @@ _SIGNATURES = {
                             ctypes.POINTER(ctypes.c_size_t)], ctypes.c_int),
     "rm_probe_approach": ([_P, ctypes.c_double, ctypes.c_double, ctypes.c_double,
                            ctypes.c_double, _D], ctypes.c_int),
+    "rm_probe_squeeze": ([_P, ctypes.c_int, ctypes.c_double, ctypes.c_double, _D],
+                         ctypes.c_int),
 }
 
 _LOADED: dict[str, ctypes.CDLL] = {}

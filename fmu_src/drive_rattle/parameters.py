@@ -196,6 +196,12 @@ DISSIPATION_MODELS = {
     0: "none (the paper's equations: friction is the only loss)",
     1: "Hunt-Crossley, factor from contact.restitution at contact.restitution_speed",
     2: "Hunt-Crossley, factor contact.damping",
+    3: "squeeze film (Stokes number): each impact's restitution e = contact.restitution_dry "
+       "(1 - St_c/St), St = m v / (6 pi eta phi A_sq), realized exactly by a Hunt-Crossley "
+       "factor set at its onset; no rebound (the approach speed is lost) for St <= St_c, the "
+       "contact then damped by the pairs' squeeze films",
+    4: "mesh damping ratio contact.damping_ratio: viscous, c = 2 zeta sqrt(k m) on the "
+       "contact's linearized stiffness k = dW/d(delta) and the wheel's normal mass",
 }
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
@@ -205,6 +211,19 @@ VEHICLE_MODELS = {
        "with drag vehicle.drag + vehicle.drag_viscous*w",
     1: "constant load torque on the wheel, wheel.tau_load = vehicle.drag (the paper's M_res; "
        "the shaft, vehicle.J and vehicle.drag_viscous unused)",
+}
+#: lubricant.film codes
+FILM_MODELS = {
+    0: "eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)",
+    1: "the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair "
+       "(Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha)",
+}
+#: friction.viscous_law codes
+VISCOUS_LAWS = {
+    0: "Newtonian, isoviscous: eta U / h (the paper)",
+    1: "piezoviscous (Barus) eta = eta exp(alpha p) with a limiting shear stress: "
+       "tau_L (1 - exp(-eta exp(alpha p) U / (h tau_L))), tau_L = tau_L0 + gamma_L p, "
+       "p the pair's mean Hertz pressure",
 }
 
 
@@ -292,7 +311,7 @@ class MeshParameters(ParameterSet):
     dissipation: int = declare(
         "contact.dissipation", 1, "1", "contact dissipation: "
         + "; ".join(f"{k} = {v}" for k, v in DISSIPATION_MODELS.items()),
-        minimum=0, maximum=2, choices=DISSIPATION_MODELS)
+        minimum=0, maximum=4, choices=DISSIPATION_MODELS)
     restitution: float = declare(
         "contact.restitution", 0.8, "1",
         "coefficient of restitution of a single lubricated tooth impact at "
@@ -306,6 +325,27 @@ class MeshParameters(ParameterSet):
         "contact.damping", 0.0, "s/m",
         "Hunt-Crossley damping factor d in W = K*delta^1.5*(1 + d*delta_dot), used with "
         "contact.dissipation = 2", minimum=0.0, maximum=1e3)
+    stokes_critical: float = declare(
+        "contact.stokes_critical", 10.0, "1",
+        "critical Stokes number St_c of the squeeze-film impact law (contact.dissipation = 3): "
+        "no rebound below it (Gondret, Lance and Petit 2002; Joseph et al. 2001: about 10 for "
+        "spheres in a liquid; docs/model.md section 3)", minimum=0.0, maximum=1e3)
+    restitution_dry: float = declare(
+        "contact.restitution_dry", 0.97, "1",
+        "restitution of the unlubricated impact, the squeeze-film law's limit at large "
+        "Stokes number (contact.dissipation = 3; steel on steel, Gondret et al. 2002)",
+        minimum=0.01, maximum=1.0)
+    squeeze_fraction: float = declare(
+        "contact.squeeze_fraction", 0.03, "1",
+        "film (starvation) parameter phi of the squeeze-film law (contact.dissipation = 3): "
+        "the fraction of the flooded Reynolds squeeze-film force the flanks' oil film "
+        "develops, 1 = flooded; with the critical Stokes number it sets the critical impact "
+        "speed (docs/model.md section 3)", minimum=1e-6, maximum=1.0)
+    damping_ratio: float = declare(
+        "contact.damping_ratio", 0.05, "1",
+        "mesh damping ratio zeta (contact.dissipation = 4): viscous damping "
+        "c = 2 zeta sqrt(k m_n) with k = dW/d(delta) the contact's linearized stiffness and m_n "
+        "the wheel's normal mass (gear dynamics uses 0.03-0.1)", minimum=0.0, maximum=1.0)
     # --- lubricant, surfaces, friction (eq. 11-17) ----------------------------------------
     friction_enabled: bool = declare(
         "friction.enabled", True, "", "include flank friction (eq. 12-17)")
@@ -317,6 +357,10 @@ class MeshParameters(ParameterSet):
         "friction.shear_speed", 0, "1", "speed in the viscous term eta*U/h: "
         + "; ".join(f"{k} = {v}" for k, v in SHEAR_SPEEDS.items()),
         minimum=0, maximum=1, choices=SHEAR_SPEEDS)
+    viscous_law: int = declare(
+        "friction.viscous_law", 0, "1", "shear stress of the film in the viscous term: "
+        + "; ".join(f"{k} = {v}" for k, v in VISCOUS_LAWS.items()),
+        minimum=0, maximum=1, choices=VISCOUS_LAWS)
     tau_s: float = declare(
         "friction.tau_s", 2.28e8, "Pa",
         "boundary shear strength of the asperity junctions (default gives a boundary "
@@ -325,6 +369,25 @@ class MeshParameters(ParameterSet):
     eta: float = declare(
         "lubricant.eta", 0.05, "Pa.s", "dynamic viscosity of the lubricant",
         minimum=1e-5, maximum=1e3)
+    alpha_pv: float = declare(
+        "lubricant.alpha", 2e-8, "1/Pa",
+        "pressure-viscosity coefficient of Barus' law eta(p) = eta exp(alpha p) "
+        "(friction.viscous_law = 1; mineral gear oils about 1.5e-8 to 2.5e-8 1/Pa at 40-60 C)",
+        minimum=0.0, maximum=1e-7)
+    tau_limit_0: float = declare(
+        "lubricant.tau_limit_0", 2e6, "Pa",
+        "limiting shear stress of the lubricant at ambient pressure, tau_L0 in "
+        "tau_L = tau_L0 + gamma_L p (friction.viscous_law = 1; Bair and Winer 1979)",
+        minimum=1e3, maximum=1e12)
+    tau_limit_slope: float = declare(
+        "lubricant.tau_limit_slope", 0.07, "1",
+        "pressure coefficient gamma_L of the limiting shear stress, tau_L = tau_L0 + gamma_L p "
+        "(friction.viscous_law = 1; about 0.03-0.1 for mineral oils)",
+        minimum=0.0, maximum=1.0)
+    film: int = declare(
+        "lubricant.film", 0, "1", "film thickness h of the film parameter lambda = h/sigma: "
+        + "; ".join(f"{k} = {v}" for k, v in FILM_MODELS.items()),
+        minimum=0, maximum=1, choices=FILM_MODELS)
     sigma: float = declare(
         "surface.sigma", 0.4e-6, "m", "composite RMS roughness of the flanks",
         minimum=1e-9, maximum=1e-3, display_unit="um")

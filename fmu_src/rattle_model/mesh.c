@@ -8,8 +8,11 @@
  *     delta = flank x - backlash / 2                       (penetration; < 0 is a gap)
  * Each pair touches at its own point with its own crown offset g_i (geometry.c; zero on
  * unmodified flanks), so its penetration is delta_i = delta - g_i, and it carries the load of
- * its load-approach law (contact.c) with Hunt-Crossley dissipation on its own penetration rate,
+ * its load-approach law (contact.c) with the contact's dissipation (dissipation.c) on its own
+ * penetration rate: Hunt-Crossley,
  *     W_i = W(delta_i) (1 + d d(delta_i)/dt),   W_i >= 0,
+ * or a viscous damping c_i (squeeze film after a sticking impact, mesh damping ratio),
+ *     W_i = W(delta_i) + c_i d(delta_i)/dt,    W_i >= 0,
  * W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
  * radii.  Torques (each gear positive forward), F_i the
  * pair's friction force and sgn_i the sign of its sliding speed:
@@ -27,6 +30,20 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
 {
     m->p = *p;
     if (!rm_geometry(&p->gear, &m->g, err)) return 0;
+    /* the squeeze film's area and the EHL film are those of point contacts (dissipation.c,
+     * friction.c): a line contact squeezes and films by other laws, not in this model */
+    if (m->g.layout == RM_LAYOUT_LINE
+        && (p->dissipation == RM_DISSIPATION_SQUEEZE || p->film == RM_FILM_EHL)) {
+        rm_printf(err, "parameter 'contact.geometry' = %d (line contact of unmodified flanks) "
+                       "with %s: the law is derived for point contacts; allowed: "
+                       "contact.geometry = 0 or 1 with it, or %s with the line contact",
+                  p->gear.layout,
+                  p->dissipation == RM_DISSIPATION_SQUEEZE ? "contact.dissipation = 3 (squeeze film)"
+                                                          : "lubricant.film = 1 (EHL film)",
+                  p->dissipation == RM_DISSIPATION_SQUEEZE ? "contact.dissipation = 0, 1, 2 or 4"
+                                                          : "lubricant.film = 0");
+        return 0;
+    }
     m->E_star = rm_effective_modulus(p->E_pinion, p->nu_pinion, p->E_wheel, p->nu_wheel);
     double x_lo, x_hi;
     if (m->g.layout == RM_LAYOUT_LINE) { /* Palmgren's law: no elliptical contact to tabulate */
@@ -48,6 +65,9 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
     }
     else if (p->dissipation == RM_DISSIPATION_FACTOR)
         m->damping = p->damping;
+    /* the squeeze-film law divides by St and realizes e(v) through a Hunt-Crossley factor of
+     * e in (0, 1]: e_dry > 0 and the film's viscosity, fraction and roughness are positive
+     * (their ranges) */
     /* arms of the normal force about each axis: cos(beta_b) times the base radius */
     m->arm_wheel = m->g.normal_factor * m->g.rb_wheel;
     m->arm_pinion = m->g.normal_factor * m->g.rb_pinion;
@@ -138,7 +158,8 @@ static inline double pair_rate(const RmMesh* M, int flank, double w_p, double dg
 
 /* ------------------------------------------------------------------ loads */
 void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
-                   double w_p, double phi_w, double w_w, double v_impact, const double* signs,
+                   double w_p, double phi_w, double w_w, double v_impact,
+                   RmContactDissipation diss, const double* signs, const double* stick_speeds,
                    int detail, RmLoads* out, double* pairs, size_t capacity)
 {
     const RmMeshParams* p = &M->p;
@@ -153,10 +174,12 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
     }
     if (delta <= 0.0) return;
     double delta_dot = rm_approach_rate(M, flank, w_p, w_w);
-    double damping = M->damping;
+    double damping = diss.d;
     double E_star = M->E_star;
     double tau_w = 0.0, tau_p = 0.0, W_sum = 0.0, F_net = 0.0;
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double ratio_scale = rm_ratio_scale(M, f, ps, delta);
+    int viscous = diss.film || ratio_scale > 0.0;
     for (int i = 0; i < ps->n; i++) {
         int64_t slot = ps->slot[i];
         double s = ps->s[i];
@@ -185,6 +208,15 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0; /* the flanks never pull on each other */
         }
+        else if (viscous) {
+            double k_i = 0.0, c_i;
+            if (ratio_scale > 0.0)
+                rm_approach_rates(&M->approach, f, K, ps->W_r[i], pen, 0.0, &k_i, &c_i);
+            double c = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i], k_i,
+                                               ratio_scale);
+            W += c * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            if (W < 0.0) W = 0.0;
+        }
         tau_w += (double)flank * W * M->arm_wheel;
         tau_p -= (double)flank * W * M->arm_pinion;
         W_sum += W;
@@ -197,14 +229,24 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             d_max = pair_d_max(M, f, ps, i, v_impact);
             h = -pen + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, never negative */
             if (!(h > 0.0)) h = 0.0;
+            if (p->film == RM_FILM_EHL)
+                h = rm_max(h, rm_ehl_central_film(u, W, ps->r_x[i], ps->r_y[i], E_star, p->eta,
+                                                  p->alpha_pv));
             lam = h / p->sigma;
             psi = rm_dry_fraction(lam);
             if (p->friction_enabled) {
                 double U = p->shear_speed == 0 ? u : v_s;
-                F = rm_friction_force(p->friction_form, psi, A_e, A, p->tau_s, p->eta, U, h);
+                double tau_v = psi < 1.0 ? rm_viscous_stress(p->viscous_law, p->eta, p->alpha_pv,
+                                                             p->tau_limit_0, p->tau_limit_slope,
+                                                             W / A, U, h)
+                                         : 0.0;
+                F = rm_friction_force(p->friction_form, psi, A_e, A, p->tau_s, tau_v);
                 double sgn;
-                if (signs != NULL)
+                if (signs != NULL) {
                     sgn = signs[slot];
+                    if (sgn == RM_FRICTION_STICKING)
+                        sgn = rm_stick_direction(v_s, stick_speeds[slot]);
+                }
                 else if (v_s > 0.0)
                     sgn = 1.0;
                 else if (v_s < 0.0)
@@ -267,11 +309,13 @@ double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank
  * the touching pairs at penetration delta and rate delta_dot: they set its time scales
  * sqrt(m/k) and m/c. */
 void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p,
-                      double w_p, double delta, double delta_dot, double* k, double* c)
+                      double w_p, double delta, double delta_dot, RmContactDissipation diss,
+                      double* k, double* c)
 {
-    double d = M->damping;
+    double d = diss.d;
     double k_sum = 0.0, c_sum = 0.0;
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
+    double ratio_scale = rm_ratio_scale(M, f, ps, delta);
     for (int i = 0; i < ps->n; i++) {
         double pen = delta - ps->offset[i];
         if (pen > 0.0) {
@@ -281,6 +325,9 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (factor > 0.0) k_sum += k_i * factor;
             c_sum += c_i;
+            if (d == 0.0) /* the viscous dampings (none with Hunt-Crossley) */
+                c_sum += rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i], k_i,
+                                                 ratio_scale);
         }
     }
     *k = k_sum;

@@ -238,6 +238,12 @@ RM_API int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out,
  * [m^2]. */
 RM_API int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen,
                              double* out4);
+/* The squeeze-film impact law (contact.dissipation = 3) for an impact on `flank` at pinion
+ * angle phi_p with normal speed v: the squeeze-film area A [m^2], the Stokes number, the law's
+ * restitution e, and the contact's Hunt-Crossley factor d [s/m] and 1 if the impact does not
+ * rebound (else 0) as the onset sets them, into out5.  rm_probe_loads takes the contact's
+ * dissipation as such an onset at v_impact sets it. */
+RM_API int rm_probe_squeeze(RmUnit* u, int flank, double phi_p, double v, double* out5);
 
 #ifdef __cplusplus
 }

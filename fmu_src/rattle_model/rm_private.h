@@ -9,6 +9,9 @@
  *                   ellipse, eq. 2), Palmgren's line contact, the Greenwood-Tripp asperity
  *                   layer in series; eq. 7-8, Hunt-Crossley
  *   friction.c      film, regime and flank friction (eq. 11-17)
+ *   dissipation.c   the contact's dissipation set at each onset: the squeeze-film (Stokes
+ *                   number) impact law, the squeeze films after a sticking impact, the mesh
+ *                   damping ratio
  *   mesh.c          the mesh model: loads and torques of every pair (eq. 1-2, 10-17)
  *   stepper.c       the wheel's equation of motion (eq. 10) over one communication step
  *   start.c         the start solutions: static flank equilibrium, free start
@@ -337,14 +340,41 @@ RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* e
 #define RM_LAMBDA_BOUNDARY 1.0
 #define RM_LAMBDA_FULL_FILM 3.0
 
+/* lubricant.film */
+#define RM_FILM_EQ11 0
+#define RM_FILM_EHL 1
+/* friction.viscous_law */
+#define RM_VISCOUS_NEWTONIAN 0
+#define RM_VISCOUS_BARUS_LIMITED 1
+/* A friction direction (rm_mesh_loads' signs) meaning: the regularized direction
+ * clamp(v_s / v, -1, 1) of a pair whose friction sticks, v its stick speed (stepper.c). */
+#define RM_FRICTION_STICKING 2.0
+/* The least sliding speed [m/s] over which a sticking pair's friction turns (friction.c). */
+RM_INTERNAL extern const double RM_STICK_SPEED;
+
 RM_INTERNAL double rm_dry_fraction(double lam);
+/* The central film thickness [m] of a loaded elliptical EHL contact (Hamrock and Dowson
+ * 1977): entrainment speed u [m/s], load W > 0 [N], radii r_x (rolling direction) and r_y
+ * [m], contact modulus E* [Pa], viscosity eta [Pa.s] and pressure-viscosity coefficient
+ * alpha [1/Pa]. */
+RM_INTERNAL double rm_ehl_central_film(double u, double W, double r_x, double r_y,
+                                       double E_star, double eta, double alpha);
+/* The shear stress [Pa] of the film in the viscous term, friction.viscous_law `law`, at the
+ * pair's mean Hertz pressure p [Pa], shear speed U [m/s] and film thickness h > 0 [m]. */
+RM_INTERNAL double rm_viscous_stress(int law, double eta, double alpha, double tau_limit_0,
+                                     double tau_limit_slope, double p, double U, double h);
 RM_INTERNAL double rm_friction_force(int form, double psi, double A_e, double A, double tau_s,
-                                     double eta, double U, double h);
+                                     double tau_viscous);
+/* The regularized friction direction of a sticking pair at sliding speed v_s, turning over
+ * the stick speed v. */
+RM_INTERNAL double rm_stick_direction(double v_s, double v);
 
 /* ------------------------------------------------------------------ mesh.c */
 #define RM_DISSIPATION_NONE 0
 #define RM_DISSIPATION_RESTITUTION 1
 #define RM_DISSIPATION_FACTOR 2
+#define RM_DISSIPATION_SQUEEZE 3
+#define RM_DISSIPATION_RATIO 4
 
 /* The parameters of the mesh model (GearMeshRattle's, SI). */
 typedef struct {
@@ -352,9 +382,19 @@ typedef struct {
     double E_pinion, nu_pinion, E_wheel, nu_wheel, density, J_wheel;
     int hertz_law, dissipation, roughness;
     double restitution, restitution_speed, damping, asperity_density;
-    int friction_enabled, friction_form, shear_speed;
-    double tau_s, eta, sigma, gamma, rattle_time, h_max, h_comm_max;
+    double stokes_critical, restitution_dry, squeeze_fraction, damping_ratio;
+    int friction_enabled, friction_form, shear_speed, viscous_law, film;
+    double tau_s, eta, alpha_pv, tau_limit_0, tau_limit_slope, sigma, gamma, rattle_time, h_max,
+        h_comm_max;
 } RmMeshParams;
+
+/* The dissipation of the contact in progress, set at its onset (dissipation.c): the
+ * Hunt-Crossley factor d [s/m] on each pair's penetration rate, or (film) the pairs' squeeze
+ * films damping it, as after an impact that did not rebound (the squeeze-film law). */
+typedef struct {
+    double d;
+    int film;
+} RmContactDissipation;
 
 /* The mesh model: everything the stepper reads, built once per parameter set. */
 typedef struct {
@@ -415,13 +455,14 @@ typedef struct {
 
 RM_INTERNAL void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                double phi_p, double w_p, double phi_w, double w_w,
-                               double v_impact, const double* signs, int detail, RmLoads* out,
+                               double v_impact, RmContactDissipation diss, const double* signs,
+                               const double* stick_speeds, int detail, RmLoads* out,
                                double* pairs, size_t capacity);
 RM_INTERNAL double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                    double phi_p, double delta);
 RM_INTERNAL void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                   double phi_p, double w_p, double delta, double delta_dot,
-                                  double* k, double* c);
+                                  RmContactDissipation diss, double* k, double* c);
 RM_INTERNAL double rm_energy_balance_delta_max(const RmMesh* M, RmFail* f, RmPairCache* cache,
                                                int flank, double phi_p, double v_impact);
 
@@ -433,7 +474,34 @@ typedef struct {
     double v_drive, v_coast, v_last; /* approach speed at the last onset of each flank, any */
     int64_t n_drive, n_coast;        /* cumulative onsets */
     double rattle_index;             /* exponentially averaged impact energy per second [W] */
+    RmContactDissipation diss;       /* of the contact in progress (or the last one) */
 } RmWheel;
+
+/* ------------------------------------------------------------------ dissipation.c */
+/* The squeeze-film area [m^2] of a pair of radii r_x, r_y: F = 6 pi eta A (-dh/dt) / h. */
+RM_INTERNAL double rm_squeeze_pair_area(double r_x, double r_y);
+/* The squeeze-film area of `flank` at the pinion angle phi_p: the pairs that touch first. */
+RM_INTERNAL double rm_squeeze_area(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                                   double phi_p);
+/* The squeeze-film law's restitution at Stokes number St: e_dry (1 - St_c/St), 0 below. */
+RM_INTERNAL double rm_squeeze_restitution(const RmMeshParams* p, double St);
+/* The Stokes number of an impact at normal speed v on the squeeze-film area A. */
+RM_INTERNAL double rm_stokes_number(const RmMesh* M, double v, double area);
+/* The dissipation of a contact starting on `flank` at phi_p with approach speed v: 1 when
+ * the impact does not rebound (the squeeze-film law below its critical Stokes number; the
+ * stepper then takes the approach speed away), else 0. */
+RM_INTERNAL int rm_onset_dissipation(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
+                                     double phi_p, double v, RmContactDissipation* out);
+/* The dissipation of a contact at rest (a start in contact, or no impact speed). */
+RM_INTERNAL RmContactDissipation rm_resting_dissipation(const RmMesh* M);
+/* The viscous damping [N.s/m] on a touching pair's penetration rate (radii r_x, r_y, its
+ * linearized stiffness k_i = dW_i/d(pen)): its squeeze film in the film state, or its share of
+ * the mesh damping ratio's 2 zeta sqrt(k m) (scale from rm_ratio_scale); 0 otherwise. */
+RM_INTERNAL double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y,
+                                           double k_i, double ratio_scale);
+/* 2 zeta sqrt(m_n / k) over the touching pairs of a pair set at the flank penetration delta
+ * (0 without the mesh damping ratio or without a touching pair). */
+RM_INTERNAL double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta);
 
 /* The aggregates of the last step, and the pinion at its end. */
 typedef struct {

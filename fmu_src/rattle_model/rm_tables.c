@@ -5,9 +5,11 @@
 static const int MESH_CHOICES_15[] = {0, 1};
 static const int MESH_CHOICES_16[] = {0, 1, 2};
 static const int MESH_CHOICES_17[] = {0, 1};
-static const int MESH_CHOICES_19[] = {0, 1, 2};
-static const int MESH_CHOICES_24[] = {0, 1, 2};
-static const int MESH_CHOICES_25[] = {0, 1};
+static const int MESH_CHOICES_19[] = {0, 1, 2, 3, 4};
+static const int MESH_CHOICES_28[] = {0, 1, 2};
+static const int MESH_CHOICES_29[] = {0, 1};
+static const int MESH_CHOICES_30[] = {0, 1};
+static const int MESH_CHOICES_36[] = {0, 1};
 const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"gear.z_pinion", RM_INTEGER, RM_PARAMETER, "1", 20.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
     {"gear.z_wheel", RM_INTEGER, RM_PARAMETER, "1", 39.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
@@ -28,15 +30,24 @@ const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"contact.geometry", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_16, "one of 0 (crowned point contacts: each pair touches at the lowest point of its engaged contact line with its own crown offset (contact.crowning)), 1 (the paper's: every pair in the zone of action an equivalent ellipsoid at the shared rigid approach (no crown), r_x and r_y (eq. 6) at the centre of its engaged contact line, K by contact.hertz_law), 2 (unmodified flanks in line contact: every pair in the zone loaded along its engaged contact line, Palmgren's line-contact law)"},
     {"contact.roughness", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_17, "one of 0 (smooth flanks), 1 (Greenwood-Tripp asperity layer (surface.sigma, surface.gamma, surface.asperity_density) in series with the smooth law)"},
     {"surface.asperity_density", RM_REAL, RM_PARAMETER, "1/m2", 1000000000.0, NULL, 1, 1, 0, 0, 1000000.0, 100000000000000.0, 0, NULL, "[1e+06, 1e+14] 1/m2"},
-    {"contact.dissipation", RM_INTEGER, RM_PARAMETER, "1", 1.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_19, "one of 0 (none (the paper's equations: friction is the only loss)), 1 (Hunt-Crossley, factor from contact.restitution at contact.restitution_speed), 2 (Hunt-Crossley, factor contact.damping)"},
+    {"contact.dissipation", RM_INTEGER, RM_PARAMETER, "1", 1.0, NULL, 1, 1, 0, 0, 0.0, 4.0, 5, MESH_CHOICES_19, "one of 0 (none (the paper's equations: friction is the only loss)), 1 (Hunt-Crossley, factor from contact.restitution at contact.restitution_speed), 2 (Hunt-Crossley, factor contact.damping), 3 (squeeze film (Stokes number): each impact's restitution e = contact.restitution_dry (1 - St_c/St), St = m v / (6 pi eta phi A_sq), realized exactly by a Hunt-Crossley factor set at its onset; no rebound (the approach speed is lost) for St <= St_c, the contact then damped by the pairs' squeeze films), 4 (mesh damping ratio contact.damping_ratio: viscous, c = 2 zeta sqrt(k m) on the contact's linearized stiffness k = dW/d(delta) and the wheel's normal mass)"},
     {"contact.restitution", RM_REAL, RM_PARAMETER, "1", 0.8, NULL, 1, 1, 0, 0, 0.01, 1.0, 0, NULL, "[0.01, 1]"},
     {"contact.restitution_speed", RM_REAL, RM_PARAMETER, "m/s", 0.004, NULL, 1, 1, 0, 0, 1e-05, 10.0, 0, NULL, "[1e-05, 10] m/s"},
     {"contact.damping", RM_REAL, RM_PARAMETER, "s/m", 0.0, NULL, 1, 1, 0, 0, 0.0, 1000.0, 0, NULL, "[0, 1000] s/m"},
+    {"contact.stokes_critical", RM_REAL, RM_PARAMETER, "1", 10.0, NULL, 1, 1, 0, 0, 0.0, 1000.0, 0, NULL, "[0, 1000]"},
+    {"contact.restitution_dry", RM_REAL, RM_PARAMETER, "1", 0.97, NULL, 1, 1, 0, 0, 0.01, 1.0, 0, NULL, "[0.01, 1]"},
+    {"contact.squeeze_fraction", RM_REAL, RM_PARAMETER, "1", 0.03, NULL, 1, 1, 0, 0, 1e-06, 1.0, 0, NULL, "[1e-06, 1]"},
+    {"contact.damping_ratio", RM_REAL, RM_PARAMETER, "1", 0.05, NULL, 1, 1, 0, 0, 0.0, 1.0, 0, NULL, "[0, 1]"},
     {"friction.enabled", RM_BOOLEAN, RM_PARAMETER, "", 1.0, NULL, 0, 0, 0, 0, 0.0, 0.0, 0, NULL, "true or false"},
-    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_24, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
-    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_25, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
+    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_28, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
+    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_29, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
+    {"friction.viscous_law", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_30, "one of 0 (Newtonian, isoviscous: eta U / h (the paper)), 1 (piezoviscous (Barus) eta = eta exp(alpha p) with a limiting shear stress: tau_L (1 - exp(-eta exp(alpha p) U / (h tau_L))), tau_L = tau_L0 + gamma_L p, p the pair's mean Hertz pressure)"},
     {"friction.tau_s", RM_REAL, RM_PARAMETER, "Pa", 228000000.0, NULL, 1, 1, 0, 0, 0.0, 10000000000.0, 0, NULL, "[0, 1e+10] Pa"},
     {"lubricant.eta", RM_REAL, RM_PARAMETER, "Pa.s", 0.05, NULL, 1, 1, 0, 0, 1e-05, 1000.0, 0, NULL, "[1e-05, 1000] Pa.s"},
+    {"lubricant.alpha", RM_REAL, RM_PARAMETER, "1/Pa", 2e-08, NULL, 1, 1, 0, 0, 0.0, 1e-07, 0, NULL, "[0, 1e-07] 1/Pa"},
+    {"lubricant.tau_limit_0", RM_REAL, RM_PARAMETER, "Pa", 2000000.0, NULL, 1, 1, 0, 0, 1000.0, 1000000000000.0, 0, NULL, "[1000, 1e+12] Pa"},
+    {"lubricant.tau_limit_slope", RM_REAL, RM_PARAMETER, "1", 0.07, NULL, 1, 1, 0, 0, 0.0, 1.0, 0, NULL, "[0, 1]"},
+    {"lubricant.film", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_36, "one of 0 (eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)), 1 (the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair (Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha))"},
     {"surface.sigma", RM_REAL, RM_PARAMETER, "m", 4e-07, NULL, 1, 1, 0, 0, 1e-09, 0.001, 0, NULL, "[1e-09, 0.001] m"},
     {"surface.gamma", RM_REAL, RM_PARAMETER, "m", 0.0001, NULL, 1, 1, 0, 0, 1e-07, 1.0, 0, NULL, "[1e-07, 1] m"},
     {"rattle.time_constant", RM_REAL, RM_PARAMETER, "s", 1.0, NULL, 1, 1, 0, 0, 0.001, 10000.0, 0, NULL, "[0.001, 10000] s"},

@@ -60,8 +60,8 @@ static double equilibrium_residual(void* vctx, double delta)
     Residual* r = vctx;
     RmLoads L;
     double phi_w = wheel_angle(r->M, r->flank, r->phi_p, delta);
-    rm_mesh_loads(r->M, r->f, &r->cache, r->flank, r->phi_p, r->w_p, phi_w, r->w_w, 0.0, NULL, 0,
-                  &L, NULL, 0);
+    rm_mesh_loads(r->M, r->f, &r->cache, r->flank, r->phi_p, r->w_p, phi_w, r->w_w, 0.0,
+                  rm_resting_dissipation(r->M), NULL, NULL, 0, &L, NULL, 0);
     return L.tau_w - r->tau_load;
 }
 
@@ -100,6 +100,7 @@ int rm_equilibrium_start(const RmMesh* M, double phi_p, double w_p, double tau_l
 {
     double w_w = w_p * M->g.ratio;
     memset(wheel, 0, sizeof *wheel);
+    wheel->diss = rm_resting_dissipation(M);
     if (tau_load == 0.0) {
         wheel->phi = wheel_angle(M, RM_DRIVE, phi_p, 0.0);
         wheel->w = w_w;
@@ -131,6 +132,7 @@ int rm_free_start(const RmMesh* M, double phi_start, double w_start, double phi_
                   double tau_load, RmWheel* wheel, RmText* err)
 {
     memset(wheel, 0, sizeof *wheel);
+    wheel->diss = rm_resting_dissipation(M);
     wheel->phi = phi_start;
     wheel->w = w_start;
     wheel->flank = rm_contact_flank(M, phi_p, w_p, 0.0, tau_load, wheel);

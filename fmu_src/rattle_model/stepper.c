@@ -15,6 +15,12 @@
  *    point), both located by Brent's method on the RK4 step from the substep start, so that
  *    the events are consistent with the integrator.  Between reversals each pair's friction
  *    keeps its direction, so the right-hand side is smooth on every substep.
+ * Each onset sets the contact's dissipation from its approach speed (dissipation.c); an
+ * impact that does not rebound (the squeeze-film law below its critical Stokes number) loses
+ * its approach speed at once.  A pair whose friction would hold its sliding speed at zero
+ * (Filippov's sliding condition: either direction of the friction drives the sliding speed
+ * back through zero) sticks: its friction turns continuously over RM_STICK_SPEED instead of
+ * chattering between the directions.
  * A flank exactly touching and moving into contact -- or at rest and accelerated into it --
  * is an onset (exact touch).  Every time inside the step is a grid point or a located event
  * offset from one; no time is accumulated.  A refused step changes nothing.
@@ -61,6 +67,9 @@ const int64_t RM_MAX_CONTACT_SUBSTEPS = 200000;
  * number of grid substeps (an int64). */
 #define STALL_LIMIT 1000000
 #define MAX_GRID_SUBSTEPS 9.2e18
+/* Roll distance [m] of the forward difference that gives a contact point's roll rate (its
+ * roll coordinate is piecewise linear in the roll). */
+#define ROLL_STEP 1e-9
 
 typedef struct {
     const RmMesh* M;
@@ -75,6 +84,7 @@ typedef struct {
     /* the friction direction of each pair slot on the current substep, and the directions a
      * located reversal prescribes for the substep after it */
     double signs[RM_MAX_PAIR_SLOTS];
+    double stick_speeds[RM_MAX_PAIR_SLOTS]; /* of the pairs whose friction sticks */
     int has_reversed[RM_MAX_PAIR_SLOTS];
     double reversed[RM_MAX_PAIR_SLOTS];
     double rattle_time, rattle_gain;
@@ -110,10 +120,26 @@ static double event(Run* r, double t, int kind, int flank)
     return speed;
 }
 
+/* An impact that does not rebound: the wheel takes the pinion's speed on the tooth normal at
+ * once (its approach speed, and the kinetic energy 1/2 m_n v^2 on the normal, lost in the
+ * film); the impulse's reaction enters the pinion's torque. */
+static void stick(Run* r, double t)
+{
+    const RmMesh* M = r->M;
+    RmWheel* st = &r->st;
+    double w_old = st->w;
+    st->w = M->arm_pinion * run_w_p(r, t) / M->arm_wheel;
+    r->int_tau_pinion -= r->J * (st->w - w_old) * M->arm_pinion / M->arm_wheel;
+}
+
 static void onset(Run* r, double t, int flank)
 {
     RmWheel* st = &r->st;
     double v = event(r, t, RM_EVENT_ONSET, flank);
+    /* the contact's dissipation from this impact (dissipation.c) */
+    if (rm_onset_dissipation(r->M, r->f, &r->pairs, flank, run_phi_p(r, t), v, &st->diss)
+        && v > 0.0)
+        stick(r, t);
     if (v < 0.0) v = 0.0;
     st->v_last = v;
     /* the kinetic energy of the impact on the tooth normal, into the rattle index (an
@@ -192,7 +218,7 @@ static inline void rhs(Run* r, double t, double phi_w, double w_w, double* out)
     double v_imp = flank == RM_DRIVE ? st->v_drive : st->v_coast;
     RmLoads L;
     rm_mesh_loads(r->M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), phi_w, w_w,
-                  v_imp, r->signs, 0, &L, NULL, 0);
+                  v_imp, st->diss, r->signs, r->stick_speeds, 0, &L, NULL, 0);
     r->log->rhs_evaluations++;
     out[0] = (L.tau_w - r->tau_load) / r->J;
     out[1] = L.tau_p;
@@ -220,6 +246,36 @@ static void rk4(Run* r, double t, double h, double phi, double w, const double* 
     *q = h / 6.0 * (p1 + 2.0 * p2 + 2.0 * p3 + p4);
 }
 
+/* The rate [1/s] at which the regularized friction of the sticking pairs relaxes the wheel's
+ * speed, sum F rho_w^2 / (v J) with v their stick speeds, at the penetration `reach`: 0 when
+ * none sticks. */
+static double sticking_rate(Run* r, double t, double reach)
+{
+    const RmMesh* M = r->M;
+    const RmWheel* st = &r->st;
+    int any = 0;
+    for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++)
+        if (r->signs[k] == RM_FRICTION_STICKING) any = 1;
+    if (!any) return 0.0;
+    int flank = st->flank;
+    double phi_p = run_phi_p(r, t);
+    double phi_w = (M->arm_pinion * phi_p - (double)flank * (M->g.half_backlash + reach))
+                   / M->arm_wheel;
+    double rows[RM_PAIR_DETAIL * RM_MAX_PAIRS];
+    RmLoads L;
+    rm_mesh_loads(M, r->f, &r->pairs, flank, phi_p, run_w_p(r, t), phi_w, st->w,
+                  flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                  r->stick_speeds, 0, &L, rows, RM_MAX_PAIRS);
+    double rate = 0.0;
+    for (int i = 0; i < L.n_pairs; i++) {
+        const double* row = rows + RM_PAIR_DETAIL * (size_t)i;
+        if (r->signs[(int64_t)row[0]] != RM_FRICTION_STICKING) continue;
+        double rho_w = M->g.line_length - row[1];
+        rate += row[7] * rho_w * rho_w / (r->stick_speeds[(int64_t)row[0]] * r->J);
+    }
+    return rate;
+}
+
 /* The next contact substep's length: span divided into equal parts no longer than
  * CONTACT_RATE_SAFETY over the contact's fastest rate sqrt(k/m) + c/m, estimated at the
  * penetration the substep can reach, delta + max(d(delta)/dt, 0) span. */
@@ -232,10 +288,10 @@ static double resolved_substep(Run* r, double t, double span)
     double rate = rm_approach_rate(M, flank, run_w_p(r, t), st->w);
     double reach = rate > 0.0 ? delta + rate * span : delta;
     double k, c;
-    rm_contact_rates(M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), reach, rate, &k,
-                     &c);
+    rm_contact_rates(M, r->f, &r->pairs, flank, run_phi_p(r, t), run_w_p(r, t), reach, rate,
+                     st->diss, &k, &c);
     double mass = M->normal_mass;
-    double fastest = rm_sqrt_checked(r->f, k / mass) + c / mass;
+    double fastest = rm_sqrt_checked(r->f, k / mass) + c / mass + sticking_rate(r, t, reach);
     r->log->contact_substeps += 1;
     double safety = M->approach.rough ? CONTACT_RATE_SAFETY_ROUGH : CONTACT_RATE_SAFETY;
     if (fastest * span <= safety) return span;
@@ -244,6 +300,58 @@ static double resolved_substep(Run* r, double t, double span)
     if ((double)r->log->contact_substeps + parts > (double)RM_MAX_CONTACT_SUBSTEPS)
         rm_fail(r->f, RM_FAIL_TOO_STIFF, fastest, k, c, mass);
     return span / parts;
+}
+
+/* The rate [m/s] at which the contact point of the pair in `slot` (roll coordinate s) moves
+ * along the line of action: its roll coordinate's forward difference over the flank's roll,
+ * times the roll speed flank rb_p w_p (0 when the pair leaves the zone). */
+static double contact_roll_rate(Run* r, double t, int64_t slot, double s)
+{
+    const RmMesh* M = r->M;
+    int flank = r->st.flank;
+    double roll_speed = (double)flank * M->g.rb_pinion * run_w_p(r, t);
+    if (roll_speed == 0.0) return 0.0;
+    double du = roll_speed > 0.0 ? ROLL_STEP : -ROLL_STEP;
+    RmPairSet* ps = rm_pairs_at(M, r->f, &r->pairs,
+                                rm_flank_roll(&M->g, flank, run_phi_p(r, t)) + du);
+    for (int i = 0; i < ps->n; i++)
+        if (ps->slot[i] == slot) return (ps->s[i] - s) / du * roll_speed;
+    return 0.0;
+}
+
+/* Whether the friction of the n pairs in `slots` (roll coordinates s, sliding speeds about
+ * zero) sticks at t: with their friction either way, the wheel's acceleration drives every
+ * one's sliding speed v_s = w_p s - w_w (L - s) back through zero (Filippov's attractive
+ * sliding surface), d v_s/dt = a_p s + (w_p + w_w) ds/dt - (dw_w/dt) (L - s): negative with
+ * the direction +1 and positive with -1.  The other pairs keep their directions.  (Pairs
+ * sliding through zero together -- every pair when the pinion rests -- can hold the wheel
+ * together where none can alone.) */
+static int friction_sticks(Run* r, double t, int n, const int64_t* slots, const double* s)
+{
+    const RmMesh* M = r->M;
+    const RmWheel* st = &r->st;
+    int flank = st->flank;
+    double w_p = run_w_p(r, t);
+    double keep[RM_MAX_PAIRS];
+    double accel[2];
+    for (int i = 0; i < n; i++) keep[i] = r->signs[slots[i]];
+    for (int k = 0; k < 2; k++) {
+        RmLoads L;
+        for (int i = 0; i < n; i++) r->signs[slots[i]] = k == 0 ? 1.0 : -1.0;
+        rm_mesh_loads(M, r->f, &r->pairs, flank, run_phi_p(r, t), w_p, st->phi, st->w,
+                      flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                      r->stick_speeds, 0, &L, NULL, 0);
+        accel[k] = (L.tau_w - r->tau_load) / r->J;
+    }
+    for (int i = 0; i < n; i++) r->signs[slots[i]] = keep[i];
+    for (int i = 0; i < n; i++) {
+        double rho_w = M->g.line_length - s[i];
+        double roll_rate = contact_roll_rate(r, t, slots[i], s[i]);
+        double kinematic = r->a_p * s[i] + (w_p + st->w) * roll_rate;
+        if (!(kinematic - accel[0] * rho_w < 0.0 && kinematic - accel[1] * rho_w > 0.0))
+            return 0;
+    }
+    return 1;
 }
 
 /* Each pair's friction direction for the substep from t: the sign of its sliding speed, or
@@ -265,6 +373,57 @@ static void friction_directions(Run* r, double t)
         r->signs[slot] = v_s > 0.0 ? 1.0 : (v_s < 0.0 ? -1.0 : 0.0);
     }
     for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++) r->has_reversed[k] = 0;
+    if (!M->p.friction_enabled) return;
+    /* the pairs that slide slower than their stick speed (RM_STICK_SPEED, or the last
+     * substep's where they stuck), copied (the test evaluates other pair sets): those whose
+     * friction would hold them stick, all together or each alone */
+    int n = 0;
+    int64_t slots[RM_MAX_PAIRS];
+    double s_at[RM_MAX_PAIRS];
+    for (int i = 0; i < ps->n; i++) {
+        int64_t slot = ps->slot[i];
+        if (fabs(rm_sliding_speed(M, ps->s[i], w_p, st->w)) <= r->stick_speeds[slot]) {
+            slots[n] = slot;
+            s_at[n] = ps->s[i];
+            n++;
+        }
+        else
+            r->stick_speeds[slot] = RM_STICK_SPEED;
+    }
+    if (n == 0) return;
+    int sticking[RM_MAX_PAIRS];
+    int together = friction_sticks(r, t, n, slots, s_at);
+    int any = 0;
+    for (int i = 0; i < n; i++) {
+        sticking[i] = together || (n > 1 && friction_sticks(r, t, 1, slots + i, s_at + i));
+        any |= sticking[i];
+    }
+    if (!any) {
+        for (int i = 0; i < n; i++) r->stick_speeds[slots[i]] = RM_STICK_SPEED;
+        return;
+    }
+    for (int i = 0; i < n; i++) {
+        r->stick_speeds[slots[i]] = RM_STICK_SPEED;
+        if (sticking[i]) r->signs[slots[i]] = RM_FRICTION_STICKING;
+    }
+    /* each sticking pair's friction turns over RM_STICK_SPEED, or where that is wider over the
+     * speed at which it relaxes the wheel's speed at the rate the grid resolves,
+     * F rho_w^2 / (J v) = CONTACT_RATE_SAFETY / solver.h_max: sticking friction then does not
+     * shorten the substeps below the grid, and the regularization tends to exact sticking as
+     * solver.h_max -> 0 */
+    double rows[RM_PAIR_DETAIL * RM_MAX_PAIRS];
+    RmLoads L;
+    rm_mesh_loads(M, r->f, &r->pairs, st->flank, run_phi_p(r, t), w_p, st->phi, st->w,
+                  st->flank == RM_DRIVE ? st->v_drive : st->v_coast, st->diss, r->signs,
+                  r->stick_speeds, 0, &L, rows, RM_MAX_PAIRS);
+    for (int i = 0; i < L.n_pairs; i++) {
+        const double* row = rows + RM_PAIR_DETAIL * (size_t)i;
+        int64_t slot = (int64_t)row[0];
+        if (r->signs[slot] != RM_FRICTION_STICKING) continue;
+        double rho_w = M->g.line_length - row[1];
+        double wide = row[7] * rho_w * rho_w * M->p.h_max / (r->J * CONTACT_RATE_SAFETY);
+        r->stick_speeds[slot] = rm_max(RM_STICK_SPEED, wide);
+    }
 }
 
 typedef struct {
@@ -324,7 +483,7 @@ static int reversal_times(Run* r, double t, double h, double w_b, const double* 
     for (int i = 0; i < n; i++) {
         int64_t slot = slots[i];
         double sign = r->signs[slot];
-        if (flipped[slot] || sign == 0.0
+        if (flipped[slot] || sign == 0.0 || sign == RM_FRICTION_STICKING
             || sign * rm_sliding_speed(M, s_end[i], run_w_p(r, t + h), w_b) >= 0.0)
             continue;
         EventCtx c = {r, t, k1, flank, slot};
@@ -493,10 +652,16 @@ static double contact_substep(Run* r, double t)
     int hold_pairs = M->g.layout != RM_LAYOUT_CROWNED;
     if (hold_pairs)
         r->pairs.member = rm_flank_roll(&M->g, flank, run_phi_p(r, t + 0.5 * (t_end - t)));
+    friction_directions(r, t); /* (before the substep's length: sticking friction shortens it) */
     double h = resolved_substep(r, t, t_end - t);
     t_end = t + h;
-    if (hold_pairs) r->pairs.member = rm_flank_roll(&M->g, flank, run_phi_p(r, t + 0.5 * h));
-    friction_directions(r, t);
+    if (hold_pairs) {
+        double member = rm_flank_roll(&M->g, flank, run_phi_p(r, t + 0.5 * h));
+        if (member != r->pairs.member) { /* a shorter substep: its own middle's pairs */
+            r->pairs.member = member;
+            friction_directions(r, t);
+        }
+    }
     double delta_a = rm_penetration(M, flank, run_phi_p(r, t), st->phi);
     int flipped[RM_MAX_PAIR_SLOTS] = {0};
     double k1[3], phi_b, w_b, q, delta_b, dt_event;
@@ -604,6 +769,7 @@ int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h, doubl
     log->n_events = log->total_events = 0;
     for (int k = 0; k < RM_MAX_PAIR_SLOTS; k++) {
         run.signs[k] = 0.0;
+        run.stick_speeds[k] = RM_STICK_SPEED;
         run.has_reversed[k] = 0;
         run.reversed[k] = 0.0;
     }

@@ -70,11 +70,20 @@ int rm_mesh_params(const RmValue* values, RmMeshParams* p)
     p->restitution = R(RM_MESH_CONTACT_RESTITUTION);
     p->restitution_speed = R(RM_MESH_CONTACT_RESTITUTION_SPEED);
     p->damping = R(RM_MESH_CONTACT_DAMPING);
+    p->stokes_critical = R(RM_MESH_CONTACT_STOKES_CRITICAL);
+    p->restitution_dry = R(RM_MESH_CONTACT_RESTITUTION_DRY);
+    p->squeeze_fraction = R(RM_MESH_CONTACT_SQUEEZE_FRACTION);
+    p->damping_ratio = R(RM_MESH_CONTACT_DAMPING_RATIO);
     p->friction_enabled = B(RM_MESH_FRICTION_ENABLED);
     p->friction_form = (int)I(RM_MESH_FRICTION_FORM);
     p->shear_speed = (int)I(RM_MESH_FRICTION_SHEAR_SPEED);
+    p->viscous_law = (int)I(RM_MESH_FRICTION_VISCOUS_LAW);
+    p->film = (int)I(RM_MESH_LUBRICANT_FILM);
     p->tau_s = R(RM_MESH_FRICTION_TAU_S);
     p->eta = R(RM_MESH_LUBRICANT_ETA);
+    p->alpha_pv = R(RM_MESH_LUBRICANT_ALPHA);
+    p->tau_limit_0 = R(RM_MESH_LUBRICANT_TAU_LIMIT_0);
+    p->tau_limit_slope = R(RM_MESH_LUBRICANT_TAU_LIMIT_SLOPE);
     p->sigma = R(RM_MESH_SURFACE_SIGMA);
     p->gamma = R(RM_MESH_SURFACE_GAMMA);
     p->rattle_time = R(RM_MESH_RATTLE_TIME_CONSTANT);
@@ -276,7 +285,8 @@ static int all_outputs(const MeshModel* m, RmValue* out, int film_asked, RmText*
                     : RM_COAST;
     double v_imp = flank == RM_DRIVE ? st->v_drive : st->v_coast;
     RmLoads L;
-    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, st->phi, st->w, v_imp, NULL, 1, &L, NULL, 0);
+    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, st->phi, st->w, v_imp, st->diss, NULL, NULL, 1, &L,
+                  NULL, 0);
     double h = 0.0, lam = 0.0, psi = 0.0;
     int film = L.n_loaded > 0 || with_film;
     if (L.n_loaded > 0) { /* the film at the most loaded pair */
@@ -376,6 +386,8 @@ static void save(const void* model, RmWriter* w)
     rm_write_f64(w, l->pinion_phi);
     rm_write_f64(w, l->pinion_w);
     rm_boundary_save(&RM_MESH_CLASS, &m->boundary, w);
+    rm_write_f64(w, st->diss.d);
+    rm_write_i64(w, st->diss.film);
 }
 
 /* A saved count: an integer in [0, 2^53]. */
@@ -427,7 +439,16 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
          && read_count(r, "the last step's coast onsets", &l->onsets_coast, err)
          && rm_read_finite(r, "the pinion angle", 0, &l->pinion_phi, err)
          && rm_read_finite(r, "the pinion speed", 0, &l->pinion_w, err)
-         && rm_boundary_restore(&RM_MESH_CLASS, &m->boundary, r, err);
+         && rm_boundary_restore(&RM_MESH_CLASS, &m->boundary, r, err)
+         && rm_read_finite(r, "the contact's Hunt-Crossley factor", 1, &st->diss.d, err);
+    if (ok) {
+        int64_t film = rm_read_i64(r);
+        if (r->failed || film < 0 || film > 1) {
+            rm_printf(err, "the contact's film state = %lld: expected 0 or 1", (long long)film);
+            ok = 0;
+        }
+        st->diss.film = (int)film;
+    }
     if (!ok) {
         free(m);
         return NULL;
@@ -628,8 +649,11 @@ int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double phi_w,
     RmLoads L;
     rm_pair_cache_init(&cache);
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
-    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, phi_w, w_w, v_impact, NULL, 1, &L, pairs,
-                  capacity);
+    /* the contact's dissipation as an onset on this flank at v_impact would set it */
+    RmContactDissipation diss;
+    rm_onset_dissipation(M, &f, &cache, flank, phi_p, v_impact, &diss);
+    rm_mesh_loads(M, &f, &cache, flank, phi_p, w_p, phi_w, w_w, v_impact, diss, NULL, NULL, 1, &L,
+                  pairs, capacity);
     totals[0] = L.delta;
     totals[1] = L.tau_w;
     totals[2] = L.tau_p;
@@ -688,5 +712,25 @@ int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen, do
     out4[1] = k;
     out4[2] = rm_approach_energy(a, &f, K, W_r, pen);
     out4[3] = rm_approach_area(a, &f, kz, out4[0]);
+    return RM_OK;
+}
+
+int rm_probe_squeeze(RmUnit* u, int flank, double phi_p, double v, double* out5)
+{
+    const RmMesh* M;
+    if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
+    RmFail f;
+    RmPairCache cache;
+    rm_pair_cache_init(&cache);
+    if (setjmp(f.jb) != 0) return probe_failed(u, &f);
+    double area = rm_squeeze_area(M, &f, &cache, flank, phi_p);
+    double St = rm_stokes_number(M, v, area);
+    RmContactDissipation diss;
+    int stuck = rm_onset_dissipation(M, &f, &cache, flank, phi_p, v, &diss);
+    out5[0] = area;
+    out5[1] = St;
+    out5[2] = rm_squeeze_restitution(&M->p, St);
+    out5[3] = diss.d;
+    out5[4] = stuck ? 1.0 : 0.0;
     return RM_OK;
 }

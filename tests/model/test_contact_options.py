@@ -276,3 +276,18 @@ def test_steady_drive_kinematics_and_power_balance(changes):
     power_in = -np.mean(tau_p) * W_PINION
     power_out = np.mean(taus) * W_PINION * ratio
     assert power_out == pytest.approx(power_in, rel=1e-4)
+
+
+@pytest.mark.parametrize("changes, named", [
+    ({"dissipation": 3}, "contact.dissipation = 3 (squeeze film)"),
+    ({"film": 1}, "lubricant.film = 1 (EHL film)"),
+])
+def test_line_contact_refuses_the_point_contact_film_laws(changes, named):
+    # The squeeze-film area and the EHL film are point-contact laws: with the line contact
+    # they are refused, naming both parameters and what is allowed; with the paper's point
+    # contacts they are accepted.
+    with pytest.raises(ValueError) as err:
+        MeshParameters(contact_geometry=2, **changes)
+    message = str(err.value)
+    assert "'contact.geometry' = 2" in message and named in message and "allowed:" in message
+    MeshParameters(contact_geometry=1, **changes)

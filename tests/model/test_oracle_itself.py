@@ -115,7 +115,9 @@ def test_bad_arguments_are_refused():
     with pytest.raises(ValueError, match="alpha"):
         hertz.hunt_crossley_restitution(-1.0)
     with pytest.raises(ValueError, match="friction form 7"):
-        lubrication.friction_force(7, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
+        lubrication.friction_force(7, 1.0, 1.0, 1.0, 1.0, 1.0)
+    with pytest.raises(ValueError, match="viscous law 2"):
+        lubrication.viscous_stress(2, 1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0)
 
 
 @pytest.mark.parametrize(

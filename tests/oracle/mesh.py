@@ -9,10 +9,15 @@ The rigid-body approach along the tooth normal is common to all pairs of a flank
 
 Each pair in the zone of action touches at its own contact point with its own crown offset
 g_i (geometry.py; zero on unmodified flanks), so its penetration is delta_i = delta - g_i, and
-it carries the load of its load-approach law (approach.py) with Hunt-Crossley dissipation on
-its own penetration rate,
+it carries the load of its load-approach law (approach.py) with the contact's dissipation
+(squeeze.py: set by the onset at the last impact speed) on its own penetration rate,
+Hunt-Crossley
 
     W_i = W(delta_i) (1 + d ddelta_i/dt),   W_i >= 0,
+
+or viscous (the squeeze films after an impact that did not rebound, the mesh damping ratio)
+
+    W_i = W(delta_i) + c_i ddelta_i/dt,     W_i >= 0,
 
 W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
 radii (the crown's r_y, or eq. 6's for the paper's contact.geometry 1), Palmgren's line law
@@ -33,7 +38,7 @@ import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from . import hertz, lubrication, roots
+from . import hertz, lubrication, roots, squeeze
 from .approach import ApproachLaw
 from .geometry import DRIVE, LAYOUT_CROWNED, LAYOUT_LINE, LAYOUT_PAPER, HelicalPairGeometry
 
@@ -206,7 +211,13 @@ class MeshModel:
             return out
         delta_dot = self.approach_rate(flank, w_p, w_w)
         a = self.approach
-        for pl in self.pair_laws(flank, phi_p):
+        # the contact's dissipation as an onset on this flank at v_impact sets it
+        contact = squeeze.onset(self, flank, phi_p, v_impact)
+        pair_laws = self.pair_laws(flank, phi_p)
+        ratio = squeeze.ratio_dampings(self, [
+            a.stiffness(pl.K, pl.W_r, delta - pl.offset)
+            for pl in pair_laws if delta - pl.offset > 0.0])
+        for pl in pair_laws:
             slot, s, offset, dg = pl.slot, pl.s, pl.offset, pl.dg
             r_x, K, ka, kz = pl.r_x, pl.K, pl.ka, pl.kz
             pen = delta - offset
@@ -215,9 +226,14 @@ class MeshModel:
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             W = a.force(K, pl.W_r, pen)
-            if self.damping > 0.0:
-                W *= 1.0 + self.damping * (delta_dot - self.pair_rate(flank, w_p, dg))
+            c = (squeeze.film_damping(self, r_x, pl.r_y) if contact.sticks
+                 else ratio.pop(0) if ratio else 0.0)
+            if contact.d > 0.0:
+                W *= 1.0 + contact.d * (delta_dot - self.pair_rate(flank, w_p, dg))
                 W = max(W, 0.0)  # the flanks never pull on each other
+            elif c > 0.0:
+                W += c * (delta_dot - self.pair_rate(flank, w_p, dg))
+                W = max(W, 0.0)
             out.tau_wheel += flank * W * self.arm_wheel
             out.tau_pinion -= flank * W * self.arm_pinion
             out.W += W
@@ -230,12 +246,18 @@ class MeshModel:
                 A = a.area(kz, W)
                 d_max = a.film_delta_max(v_impact, K, r_x, ka, pl.length, p.density)
                 h = lubrication.film_thickness(-pen, d_max)
+                if p.film == lubrication.FILM_EHL:
+                    h = max(h, lubrication.central_film_thickness(
+                        u, W, r_x, pl.r_y, self.E_star, p.eta, p.alpha_pv))
                 lam = h / p.sigma
                 psi = lubrication.dry_fraction(lam)
                 if p.friction_enabled:
                     U = u if p.shear_speed == 0 else v_s
+                    tau_v = (lubrication.viscous_stress(
+                        p.viscous_law, p.eta, p.alpha_pv, p.tau_limit_0, p.tau_limit_slope,
+                        W / A, U, h) if psi < 1.0 else 0.0)
                     F = lubrication.friction_force(p.friction_form, psi, A_e, A, p.tau_s,
-                                                   p.eta, U, h)
+                                                   tau_v)
                     sgn = math.copysign(1.0, v_s) if v_s != 0.0 else 0.0
                     out.tau_wheel += sgn * F * rho_w
                     out.tau_pinion -= sgn * F * rho_p

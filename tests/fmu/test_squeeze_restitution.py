@@ -1,0 +1,62 @@
+"""The squeeze-film impact law (contact.dissipation = 3) through the built GearMeshRattle FMU:
+single impacts of the free wheel on a pinion at rest, from below the critical speed to
+100 mm/s, rebound as the law of tests/oracle/squeeze.py says."""
+
+import itertools
+
+import pytest
+
+from drive_rattle import DRIVE
+from drive_rattle_cosim.harness import Unit
+from tests.model.helpers import free_parameters
+from tests.oracle import squeeze
+from tests.oracle.mesh import MeshModel
+
+H = 1e-4
+
+
+def fmu_restitution(fmu, v: float, name: str) -> float:
+    """Release speed over approach speed of one impact at normal speed ``v`` [m/s] through the
+    FMU: the wheel started 20 nm short of the drive flank, the pinion held at rest, no load;
+    stepped until the flanks have parted after the onset (the wheel then flies at a constant
+    speed)."""
+    p = free_parameters(v, DRIVE, dissipation=3)
+    u = Unit(fmu, name)
+    try:
+        u.set({"contact.dissipation": 3, "init.in_contact": False, "friction.enabled": False,
+               "wheel.phi_start": p.phi_start, "wheel.w_start": p.w_start})
+        u.slave.setupExperiment(startTime=0.0)
+        u.slave.enterInitializationMode()
+        u.set({"pinion.phi": 0.0, "pinion.w": 0.0, "pinion.a": 0.0, "wheel.tau_load": 0.0})
+        u.slave.exitInitializationMode()
+        names = ["wheel.w", "mesh.W", "mesh.delta"]
+        vrs = [u.var(n).vr for n in names]
+        impacts = u.var("mesh.impacts_drive").vr
+        for k in range(2000):
+            u.slave.doStep(k * H, H)
+            w, W, delta = u.slave.getReal(vrs)
+            hit = u.slave.getInteger([impacts])[0]
+            if hit and W == 0.0 and delta == 0.0:
+                return w / -p.w_start
+        raise AssertionError(f"no release within {2000 * H} s at {v} m/s")
+    finally:
+        u.slave.terminate()
+        u.slave.freeInstance()
+
+
+def test_the_fmu_realizes_the_squeeze_film_law_from_sticking_to_100_mm_per_s(fmus):
+    p = free_parameters(1e-3, DRIVE, dissipation=3)
+    m = MeshModel(p)
+    v_c = squeeze.critical_speed(m, squeeze.flank_area(m, DRIVE, 0.0))
+    speeds = [0.3 * v_c, 0.6 * v_c, 0.95 * v_c, 1.02 * v_c, 1.2 * v_c, 1.6 * v_c, 2.5 * v_c,
+              4e-3 * 2, 15e-3, 30e-3, 60e-3, 100e-3]
+    assert speeds == sorted(speeds) and speeds[2] < v_c < speeds[3]
+    measured = [fmu_restitution(fmus["GearMeshRattle"], v, f"m{i}")
+                for i, v in enumerate(speeds)]
+    law = [squeeze.onset(m, DRIVE, 0.0, v).restitution for v in speeds]
+    for v, e, want in zip(speeds, measured, law, strict=True):
+        assert e == pytest.approx(want, abs=1e-3), (v, e, want)
+    # no rebound below the critical speed; above it the restitution rises with the speed
+    assert measured[:3] == [0.0, 0.0, 0.0]
+    assert all(b > a for a, b in itertools.pairwise(measured[2:]))
+    assert measured[-1] > 0.9
