@@ -565,6 +565,9 @@ RM_INTERNAL void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double
 RM_INTERNAL void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w);
 RM_INTERNAL int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r,
                                     RmText* err);
+/* 1 with the refusal "the record ends before <what>" when the reader ran past the record's
+ * end (a truncated record), else 0. */
+RM_INTERNAL int rm_read_ended(const RmReader* r, const char* what, RmText* err);
 /* A saved double that must be finite (and >= 0 with nonnegative): 1, or 0 with the refusal
  * naming `what`. */
 RM_INTERNAL int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out,

@@ -26,6 +26,8 @@
 /* Version of the record of rm_save (bumped when its fields change). */
 #define RECORD_MAGIC "RATLUNIT"
 #define RECORD_VERSION 1u
+/* The record's header: magic, version, kind, phase, motion flag, start time, time, count. */
+#define RECORD_HEADER_BYTES ((size_t)(8 + 4 * 4 + 2 * 8 + 4))
 
 static const char* const PHASE_NAMES[4] = {"instantiated", "initialization", "stepping",
                                            "terminated"};
@@ -917,13 +919,17 @@ double rm_read_f64(RmReader* r)
     return x;
 }
 
+int rm_read_ended(const RmReader* r, const char* what, RmText* err)
+{
+    if (!r->failed) return 0;
+    rm_printf(err, "the record ends before %s", what);
+    return 1;
+}
+
 int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out, RmText* err)
 {
     double x = rm_read_f64(r);
-    if (r->failed) {
-        rm_printf(err, "the record ends before %s", what);
-        return 0;
-    }
+    if (rm_read_ended(r, what, err)) return 0;
     if (!isfinite(x) || (nonnegative && !(x >= 0.0))) {
         rm_printf(err, "%s = ", what);
         rm_put_number(err, x);
@@ -949,7 +955,8 @@ int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmTe
                             err))
             return 0;
     uint32_t first = rm_read_u32(r), has_last = rm_read_u32(r);
-    if (r->failed || first > 1 || has_last > 1) {
+    if (rm_read_ended(r, "the first-step flags", err)) return 0;
+    if (first > 1 || has_last > 1) {
         rm_puts(err, "the record's first-step flags are not 0 or 1");
         return 0;
     }
@@ -957,7 +964,8 @@ int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmTe
     b->has_last_motion = (int)has_last;
     for (int k = 0; k < cls->n_motion; k++) {
         double x = rm_read_f64(r);
-        if (r->failed || (has_last && !isfinite(x))) {
+        if (rm_read_ended(r, "the motion inputs of the last step", err)) return 0;
+        if (has_last && !isfinite(x)) {
             rm_puts(err, "the record's motion inputs of the last step are not finite");
             return 0;
         }
@@ -1028,13 +1036,23 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         rm_puts(&err, "out of memory");
         goto done;
     }
+    if (size == 0) {
+        rm_puts(&err, "it is not a state of this model (the record is empty)");
+        goto done;
+    }
+    /* a record cut inside its magic is a truncated record; other bytes are no record */
     const unsigned char* magic = rm_read_bytes(&r, 8);
+    if (memcmp(buf, RECORD_MAGIC, size < 8 ? size : 8) != 0) {
+        rm_puts(&err, "it is not a state of this model (no record header)");
+        goto done;
+    }
     uint32_t version = rm_read_u32(&r), kind = rm_read_u32(&r), phase = rm_read_u32(&r);
     uint32_t motion_set = rm_read_u32(&r);
     double start_time = rm_read_f64(&r), time = rm_read_f64(&r);
     uint32_t n = rm_read_u32(&r);
-    if (r.failed || memcmp(magic, RECORD_MAGIC, 8) != 0) {
-        rm_puts(&err, "it is not a state of this model (no record header)");
+    if (magic == NULL || r.failed) {
+        rm_printf(&err, "the record ends before the end of its header (%zu bytes of %zu)", size,
+                  RECORD_HEADER_BYTES);
         goto done;
     }
     if (version != RECORD_VERSION) {
@@ -1102,8 +1120,9 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         }
     }
     uint32_t has_model = rm_read_u32(&r);
+    if (rm_read_ended(&r, "the flag of the model state", &err)) goto done;
     int model_expected = phase == RM_STEPPING || (phase == RM_TERMINATED && has_model == 1);
-    if (r.failed || has_model > 1 || model_expected != (int)has_model) {
+    if (has_model > 1 || model_expected != (int)has_model) {
         rm_printf(&err, "mode '%s' does not go with %s model state", PHASE_NAMES[phase],
                   has_model == 1 ? "a" : "no");
         goto done;
