@@ -482,9 +482,9 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
         if (n > 0) u->provisional_valid = 0;
     }
     rm_text_free(&err);
-    /* a call naming a motion input marks them set, whether it was accepted or not: a master
-     * that sets them holds nothing */
-    if (type == RM_REAL && !u->motion_set && vr != NULL)
+    /* an accepted call naming a motion input marks them set (a master that sets them holds
+     * nothing); a refused call changes nothing, this mark included */
+    if (type == RM_REAL && !u->motion_set && u->status != RM_ERROR)
         for (size_t i = 0; i < n; i++)
             for (int k = 0; k < u->cls->n_motion; k++)
                 if (vr[i] == u->cls->motion_vr[k]) u->motion_set = 1;
