@@ -121,7 +121,18 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds, do
     double angle = phi_0;
     for (size_t k = 0; k < n; k++) {
         if (!(isfinite(times[k]) && isfinite(speeds[k]))) {
-            rm_printf(err, "%s row %zu has a non-finite value", source, k + 1);
+            rm_printf(err, "%s row %zu: time ", source, k + 1);
+            rm_put_number(err, times[k]);
+            rm_puts(err, " s, speed ");
+            rm_put_number(err, speeds[k]);
+            rm_puts(err, " rad/s; allowed: finite numbers");
+            return 0;
+        }
+        if (!(fabs(times[k]) <= RM_MAX_TABLE_TIME)) {
+            rm_printf(err, "%s row %zu: time ", source, k + 1);
+            rm_put_number(err, times[k]);
+            rm_printf(err, " s is out of range; allowed: [%g, %g] s", -RM_MAX_TABLE_TIME,
+                      RM_MAX_TABLE_TIME);
             return 0;
         }
         if (k > 0 && !(times[k] > times[k - 1])) {

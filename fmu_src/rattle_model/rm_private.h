@@ -440,6 +440,10 @@ RM_INTERNAL int rm_check_speed_table(size_t n, const double* times, const double
 
 /* ------------------------------------------------------------------ speed_table.c */
 #define RM_MAX_SPEED_TABLE_BYTES (4u * 1024u * 1024u)
+/* The largest |time| [s] of a speed table's row: beyond every time a unit reaches (start
+ * times within +-1e9 s, runs of at most 4e9 s), and small enough that no span of the table
+ * overflows. */
+#define RM_MAX_TABLE_TIME 1e10
 #define RM_MAX_PATH_BYTES 4096
 /* The file a speed-table parameter names: a relative path in `resources` first (when it
  * exists there), else as given. */
