@@ -327,6 +327,14 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
              && rm_read_finite(r, "the shaft torque", 0, &d->tau_load, err)
              && rm_read_finite(r, "the driveline's time", 0, &d->time, err)
              && rm_read_finite(r, "the last communication step", 1, &d->last_step, err);
+    if (ok && d->last_step > d->p.h_comm_max) {
+        rm_puts(err, "the last communication step = ");
+        rm_put_number(err, d->last_step);
+        rm_puts(err, " s: expected within [0, solver.h_comm_max = ");
+        rm_put_number(err, d->p.h_comm_max);
+        rm_puts(err, "] s (a step the unit accepted)");
+        ok = 0;
+    }
     if (ok && d->time != u->time) {
         rm_puts(err, "the driveline's time ");
         rm_put_number(err, d->time);
