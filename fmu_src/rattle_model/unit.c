@@ -627,6 +627,7 @@ int rm_setup(RmUnit* u, double start_time)
         return u->status;
     }
     u->start_time = start_time;
+    u->time = start_time; /* the unit's time until its first step */
     return u->status;
 }
 
@@ -1070,13 +1071,15 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         goto done;
     }
     if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME && isfinite(time)
-          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME)) {
+          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME
+          && (phase >= RM_STEPPING || time == start_time))) {
         rm_puts(&err, "its start time ");
         rm_put_number(&err, start_time);
         rm_puts(&err, " s and time ");
         rm_put_number(&err, time);
         rm_printf(&err, " s do not go together; allowed: finite, |start time| <= %g s, start "
-                        "time <= time", MAX_START_TIME);
+                        "time <= time <= start time + %g s, time = start time before the "
+                        "first step", MAX_START_TIME, 4.0 * MAX_START_TIME);
         goto done;
     }
     for (size_t k = 0; k < u->n_variables; k++) {
