@@ -1,4 +1,5 @@
-"""Issue 12: no host crash, leak or half-applied call at the FMI boundary.
+"""Issues 12 and 20: no host crash, leak or half-applied call at the FMI boundary, and no
+fmi2OK with a non-finite output or state.
 
 Every row of the issue's table is a function of boundary_rows.py and the randomized boundary
 fuzzer is boundary_fuzz.py; both drive the built FMUs of both flavours (pythonfmu and native)
@@ -35,6 +36,7 @@ ROWS = {
     12: "corrupt, forged and foreign states refused",
     13: "counters saturate at the fmi2Integer limit",
     14: "non-UTF-8 unpack path; value references >= 2^31 reported unsigned",
+    15: "no OK with a non-finite output or state (issue 20)",
 }
 #: Examples per FMU and run: about 6000 calls per FMU, 5 to 20 s on the CI machine.
 FUZZ_EXAMPLES = 250
