@@ -34,8 +34,9 @@ class Shadow:
         self.lib = library.load(path)
         if isinstance(resources, Path):
             resources = bytes(resources)
-        self.unit = self.lib.rm_new(KINDS[identifier], resources)
-        assert self.unit, "rm_new failed"
+        unit = self.lib.rm_new(KINDS[identifier], resources)
+        assert unit, "rm_new failed"
+        self.unit = ctypes.c_void_p(unit)  # a raw pointer: LeakSanitizer sees it
 
     def free(self) -> None:
         if self.unit:

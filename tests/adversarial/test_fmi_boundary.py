@@ -43,8 +43,9 @@ FUZZ_EXAMPLES = 250
 
 
 def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(HERE), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    # (absolute: the child runs in this folder)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(HERE), *(
+        os.path.abspath(p) for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p)])}
     return subprocess.run([sys.executable, *map(str, args)], capture_output=True, text=True,
                           timeout=timeout, cwd=HERE, env=env)
 
