@@ -4,6 +4,8 @@ items).  The same cases through the built FMUs of both flavours: boundary_rows.p
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from drive_rattle.library import DRIVELINE, MESH, ModelError
@@ -98,3 +100,22 @@ def test_a_refused_set_of_a_motion_input_changes_nothing(kind, motion, other):
     unit.advance(1e-4)
     twin.advance(1e-4)
     assert unit.save() == twin.save() and unit.outputs() == twin.outputs()
+
+
+@pytest.mark.parametrize("value", [0.0, 0.5])
+def test_poisson_ratios_at_the_edges_of_their_range_are_accepted(value):
+    """material.nu_* is declared [0, 0.5]: both edges are legal (issue 20, minor item)."""
+    Unit(MESH, {"material.nu_pinion": value, "material.nu_wheel": value}).close()
+
+
+@pytest.mark.parametrize("value, text", [(float("inf"), "inf"), (float("-inf"), "-inf"),
+                                         (float("nan"), "nan"), (1e308, "1e+308")])
+def test_a_refusal_names_any_value_given(value, text):
+    """An infinite input is named in the refusal (the old kernel's message crashed on it)."""
+    unit = Unit(MESH)
+    record = unit.save()
+    unit.set({"wheel.tau_load": value})
+    with pytest.raises(ModelError, match=rf"input 'wheel.tau_load' = {re.escape(text)} is "):
+        unit.advance(1e-4)
+    unit.set({"wheel.tau_load": 0.15})
+    assert unit.time == 0.0 and unit.save()[:40] == record[:40]

@@ -86,12 +86,9 @@ def preload() -> str:
     """What a Python host must preload: gcc's AddressSanitizer runtime, and the C++ runtime
     (pythonfmu's wrapper throws C++ exceptions: the sanitizer intercepts __cxa_throw only when
     the C++ runtime is there when it starts)."""
-    names = []
-    for name in ("libasan.so", "libstdc++.so"):
-        proc = subprocess.run(["gcc", f"-print-file-name={name}"], capture_output=True,
-                              text=True, check=True)
-        names.append(os.path.realpath(proc.stdout.strip()))
-    return ":".join(names)
+    proc = subprocess.run(["gcc", "-print-file-name=libasan.so"], capture_output=True,
+                          text=True, check=True)
+    return f"{os.path.realpath(proc.stdout.strip())}:libstdc++.so.6"
 
 
 def python_environment(log_dir: Path, extra: dict | None = None) -> dict:
