@@ -283,7 +283,8 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
     free(cache.x);
     free(cache.e);
     if (!ok && !failed) {
-        rm_puts(err, "the exact Hertz law cannot be tabulated for ln(R/r) in [");
+        rm_puts(err, "parameter 'contact.hertz_law' = 0 (exact elliptical Hertz contact): the "
+                     "exact Hertz law cannot be tabulated for ln(R/r) in [");
         rm_put_g(err, lo, 4);
         rm_puts(err, ", ");
         rm_put_g(err, hi, 4);
@@ -291,7 +292,8 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
         rm_put_g(err, CHEBYSHEV_TOLERANCE, 6);
         rm_puts(err, " (reached ");
         rm_put_g(err, worst, 3);
-        rm_puts(err, "); use contact.hertz_law = 1");
+        rm_puts(err, "); allowed for this geometry: contact.hertz_law = 1 (equivalent "
+                     "sphere)");
     }
     return ok;
 }

@@ -114,6 +114,15 @@ void rm_driveline_release(RmDriveline* d)
     d->n_table = 0;
 }
 
+/* "<source> sample k (time t s)": a table's samples counted from 1, header and blank rows of
+ * its file not counted (the reader's own messages name the file's rows). */
+static void sample_at(RmText* err, const char* source, size_t k, double t)
+{
+    rm_printf(err, "%s sample %zu (time ", source, k + 1);
+    rm_put_number(err, t);
+    rm_puts(err, " s)");
+}
+
 int rm_check_speed_table(size_t n, const double* times, const double* speeds, double phi_0,
                          const char* source, RmText* err)
 {
@@ -124,17 +133,26 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds, do
     double angle = phi_0;
     for (size_t k = 0; k < n; k++) {
         if (!(isfinite(times[k]) && isfinite(speeds[k]))) {
-            rm_printf(err, "%s row %zu has a non-finite value", source, k + 1);
+            sample_at(err, source, k, times[k]);
+            rm_puts(err, ": speed ");
+            rm_put_number(err, speeds[k]);
+            rm_puts(err, " rad/s; allowed: finite numbers");
+            return 0;
+        }
+        if (!(fabs(times[k]) <= RM_MAX_TABLE_TIME)) {
+            sample_at(err, source, k, times[k]);
+            rm_printf(err, ": the time is out of range; allowed: [%g, %g] s", -RM_MAX_TABLE_TIME,
+                      RM_MAX_TABLE_TIME);
             return 0;
         }
         if (k > 0 && !(times[k] > times[k - 1])) {
-            rm_printf(err, "%s row %zu: time ", source, k + 1);
-            rm_put_number(err, times[k]);
-            rm_puts(err, " s does not increase");
+            sample_at(err, source, k, times[k]);
+            rm_puts(err, ": the time does not increase");
             return 0;
         }
         if (!(fabs(speeds[k]) <= RM_MAX_SPEED)) {
-            rm_printf(err, "%s row %zu: speed ", source, k + 1);
+            sample_at(err, source, k, times[k]);
+            rm_puts(err, ": speed ");
             rm_put_number(err, speeds[k]);
             rm_printf(err, " rad/s is out of range; allowed: [%g, %g] rad/s", -RM_MAX_SPEED,
                       RM_MAX_SPEED);
@@ -142,7 +160,8 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds, do
         }
         if (k > 0) angle += 0.5 * (times[k] - times[k - 1]) * (speeds[k] + speeds[k - 1]);
         if (!(fabs(angle) <= RM_MAX_ANGLE)) {
-            rm_printf(err, "%s row %zu: the input-shaft angle reaches ", source, k + 1);
+            sample_at(err, source, k, times[k]);
+            rm_puts(err, ": the input-shaft angle reaches ");
             rm_put_number(err, angle);
             rm_printf(err, " rad there; allowed: within [%g, %g] rad (a shorter table, or "
                            "pinion.phi_start nearer 0)", -RM_MAX_ANGLE, RM_MAX_ANGLE);

@@ -581,6 +581,10 @@ RM_INTERNAL int rm_check_speed_table(size_t n, const double* times, const double
 
 /* ------------------------------------------------------------------ speed_table.c */
 #define RM_MAX_SPEED_TABLE_BYTES (4u * 1024u * 1024u)
+/* The largest |time| [s] of a speed table's row: beyond every time a unit reaches (start
+ * times within +-1e9 s, runs of at most 4e9 s), and small enough that no span of the table
+ * overflows. */
+#define RM_MAX_TABLE_TIME 1e10
 #define RM_MAX_PATH_BYTES 4096
 /* The file a speed-table parameter names: a relative path in `resources` first (when it
  * exists there), else as given. */
@@ -706,6 +710,9 @@ RM_INTERNAL void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double
 RM_INTERNAL void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w);
 RM_INTERNAL int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r,
                                     RmText* err);
+/* 1 with the refusal "the record ends before <what>" when the reader ran past the record's
+ * end (a truncated record), else 0. */
+RM_INTERNAL int rm_read_ended(const RmReader* r, const char* what, RmText* err);
 /* A saved double that must be finite (and >= 0 with nonnegative): 1, or 0 with the refusal
  * naming `what`. */
 RM_INTERNAL int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out,

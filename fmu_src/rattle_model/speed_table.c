@@ -6,11 +6,12 @@
  * RM_MAX_PATH_BYTES; opened non-blocking and checked on the open descriptor, so that a FIFO or
  * a device is refused without blocking or reading it.  Paths are UTF-8 (on Windows converted to
  * the wide-character API).
- * The text: UTF-8; rows end with \n, \r\n or \r; fields are separated by ',' and may be
- * quoted with '"' ('""' inside quotes is one '"'); blank rows are skipped; a first row whose
- * first two fields are not numbers is a header; every other row has a time and a speed as
- * decimal numbers (further fields are ignored); times strictly increase; at least two rows.
- * Linear in the file's size.
+ * The text: UTF-8 (a leading byte-order mark is skipped); rows end with \n, \r\n or \r;
+ * fields are separated by ',' and may be quoted with '"' ('""' inside quotes is one '"');
+ * blank rows are skipped; the first other row is a header when its first field neither is
+ * nor begins like a number (an ASCII digit, or a sign or '.' and a digit); every other row
+ * has a time and a speed as decimal numbers in ASCII digits (further fields are ignored);
+ * times strictly increase; at least two rows.  Linear in the file's size.
  */
 #if !defined(_WIN32) && !defined(_GNU_SOURCE)
 #define _GNU_SOURCE /* O_CLOEXEC, O_NOCTTY under -std=c99 */
@@ -334,6 +335,18 @@ static size_t read_field(const char* s, size_t n, size_t i, RmText* field)
     return i;
 }
 
+/* Does a field begin like a number (after blanks and quotes: a digit, or a sign or '.' and a
+ * digit)?  A first row whose first field does is data, never a header, so that a typing error
+ * in it is refused instead of the row being dropped. */
+static int begins_like_number(const char* s, size_t n)
+{
+    size_t i = 0;
+    while (i < n && (s[i] == ' ' || s[i] == '\t' || s[i] == '"')) i++;
+    if (i < n && (s[i] == '+' || s[i] == '-')) i++;
+    if (i < n && s[i] == '.') i++;
+    return i < n && s[i] >= '0' && s[i] <= '9';
+}
+
 static int is_blank(const char* s, size_t n)
 {
     for (size_t i = 0; i < n; i++)
@@ -365,6 +378,8 @@ int rm_read_speed_table(const char* path, size_t* n_out, double** times_out,
     int ok = times != NULL && speeds != NULL;
     if (!ok) rm_puts(err, "reading the speed table: out of memory");
     size_t pos = 0, row = 0;
+    int first = 1; /* the first row that is not blank: it may be a header */
+    if (n >= 3 && memcmp(raw, "\xEF\xBB\xBF", 3) == 0) pos = 3; /* a byte-order mark */
     while (ok && pos < n) {
         size_t end = pos;
         while (end < n && raw[end] != '\n' && raw[end] != '\r') end++;
@@ -376,6 +391,8 @@ int rm_read_speed_table(const char* path, size_t* n_out, double** times_out,
         pos = next;
         row++;
         if (is_blank(line, len)) continue;
+        int may_be_header = first;
+        first = 0;
         size_t i = read_field(line, len, 0, &a);
         int two = i < len;
         if (two) read_field(line, len, i + 1, &b);
@@ -384,16 +401,26 @@ int rm_read_speed_table(const char* path, size_t* n_out, double** times_out,
                      && rm_parse_number(rm_text_str(&a), a.len, &t)
                      && rm_parse_number(rm_text_str(&b), b.len, &w);
         if (!parsed) {
-            if (row == 1 && count == 0) continue; /* a header */
+            if (may_be_header && !begins_like_number(line, len)) continue; /* a header */
             rm_printf(err, "speed table '%s' row %zu: expected two numbers (time [s], speed "
                            "[rad/s]), found ", path, row);
             rm_put_quoted(err, line, len > 80 ? 80 : len);
             if (len > 80) rm_printf(err, "... (%zu bytes)", len);
+            rm_puts(err, "; allowed: two decimal numbers in ASCII digits, e.g. 0.01,95.5");
             ok = 0;
             break;
         }
         if (!(isfinite(t) && isfinite(w))) {
-            rm_printf(err, "speed table '%s' row %zu has a non-finite value", path, row);
+            int time_bad = !isfinite(t);
+            const RmText* text = time_bad ? &a : &b;
+            rm_printf(err, "speed table '%s' row %zu: %s ", path, row, time_bad ? "time" : "speed");
+            rm_put_quoted(err, rm_text_str(text), text->len > 40 ? 40 : text->len);
+            if (text->len > 40) rm_printf(err, "... (%zu bytes)", text->len);
+            rm_puts(err, " reads as ");
+            rm_put_number(err, time_bad ? t : w);
+            rm_printf(err, "; allowed: finite numbers (times within [%g, %g] s, speeds within "
+                           "[%g, %g] rad/s)", -RM_MAX_TABLE_TIME, RM_MAX_TABLE_TIME,
+                      -RM_MAX_SPEED, RM_MAX_SPEED);
             ok = 0;
             break;
         }

@@ -26,6 +26,8 @@
 /* Version of the record of rm_save (bumped when its fields change). */
 #define RECORD_MAGIC "RATLUNIT"
 #define RECORD_VERSION 1u
+/* The record's header: magic, version, kind, phase, motion flag, start time, time, count. */
+#define RECORD_HEADER_BYTES ((size_t)(8 + 4 * 4 + 2 * 8 + 4))
 
 static const char* const PHASE_NAMES[4] = {"instantiated", "initialization", "stepping",
                                            "terminated"};
@@ -480,9 +482,9 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
         if (n > 0) u->provisional_valid = 0;
     }
     rm_text_free(&err);
-    /* a call naming a motion input marks them set, whether it was accepted or not: a master
-     * that sets them holds nothing */
-    if (type == RM_REAL && !u->motion_set && vr != NULL)
+    /* an accepted call naming a motion input marks them set (a master that sets them holds
+     * nothing); a refused call changes nothing, this mark included */
+    if (type == RM_REAL && !u->motion_set && u->status != RM_ERROR)
         for (size_t i = 0; i < n; i++)
             for (int k = 0; k < u->cls->n_motion; k++)
                 if (vr[i] == u->cls->motion_vr[k]) u->motion_set = 1;
@@ -625,6 +627,7 @@ int rm_setup(RmUnit* u, double start_time)
         return u->status;
     }
     u->start_time = start_time;
+    u->time = start_time; /* the unit's time until its first step */
     return u->status;
 }
 
@@ -917,13 +920,17 @@ double rm_read_f64(RmReader* r)
     return x;
 }
 
+int rm_read_ended(const RmReader* r, const char* what, RmText* err)
+{
+    if (!r->failed) return 0;
+    rm_printf(err, "the record ends before %s", what);
+    return 1;
+}
+
 int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out, RmText* err)
 {
     double x = rm_read_f64(r);
-    if (r->failed) {
-        rm_printf(err, "the record ends before %s", what);
-        return 0;
-    }
+    if (rm_read_ended(r, what, err)) return 0;
     if (!isfinite(x) || (nonnegative && !(x >= 0.0))) {
         rm_printf(err, "%s = ", what);
         rm_put_number(err, x);
@@ -949,7 +956,8 @@ int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmTe
                             err))
             return 0;
     uint32_t first = rm_read_u32(r), has_last = rm_read_u32(r);
-    if (r->failed || first > 1 || has_last > 1) {
+    if (rm_read_ended(r, "the first-step flags", err)) return 0;
+    if (first > 1 || has_last > 1) {
         rm_puts(err, "the record's first-step flags are not 0 or 1");
         return 0;
     }
@@ -957,7 +965,8 @@ int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmTe
     b->has_last_motion = (int)has_last;
     for (int k = 0; k < cls->n_motion; k++) {
         double x = rm_read_f64(r);
-        if (r->failed || (has_last && !isfinite(x))) {
+        if (rm_read_ended(r, "the motion inputs of the last step", err)) return 0;
+        if (has_last && !isfinite(x)) {
             rm_puts(err, "the record's motion inputs of the last step are not finite");
             return 0;
         }
@@ -1028,13 +1037,23 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         rm_puts(&err, "out of memory");
         goto done;
     }
+    if (size == 0) {
+        rm_puts(&err, "it is not a state of this model (the record is empty)");
+        goto done;
+    }
+    /* a record cut inside its magic is a truncated record; other bytes are no record */
     const unsigned char* magic = rm_read_bytes(&r, 8);
+    if (memcmp(buf, RECORD_MAGIC, size < 8 ? size : 8) != 0) {
+        rm_puts(&err, "it is not a state of this model (no record header)");
+        goto done;
+    }
     uint32_t version = rm_read_u32(&r), kind = rm_read_u32(&r), phase = rm_read_u32(&r);
     uint32_t motion_set = rm_read_u32(&r);
     double start_time = rm_read_f64(&r), time = rm_read_f64(&r);
     uint32_t n = rm_read_u32(&r);
-    if (r.failed || memcmp(magic, RECORD_MAGIC, 8) != 0) {
-        rm_puts(&err, "it is not a state of this model (no record header)");
+    if (magic == NULL || r.failed) {
+        rm_printf(&err, "the record ends before the end of its header (%zu bytes of %zu)", size,
+                  RECORD_HEADER_BYTES);
         goto done;
     }
     if (version != RECORD_VERSION) {
@@ -1052,13 +1071,15 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         goto done;
     }
     if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME && isfinite(time)
-          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME)) {
+          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME
+          && (phase >= RM_STEPPING || time == start_time))) {
         rm_puts(&err, "its start time ");
         rm_put_number(&err, start_time);
         rm_puts(&err, " s and time ");
         rm_put_number(&err, time);
         rm_printf(&err, " s do not go together; allowed: finite, |start time| <= %g s, start "
-                        "time <= time", MAX_START_TIME);
+                        "time <= time <= start time + %g s, time = start time before the "
+                        "first step", MAX_START_TIME, 4.0 * MAX_START_TIME);
         goto done;
     }
     for (size_t k = 0; k < u->n_variables; k++) {
@@ -1102,8 +1123,9 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         }
     }
     uint32_t has_model = rm_read_u32(&r);
+    if (rm_read_ended(&r, "the flag of the model state", &err)) goto done;
     int model_expected = phase == RM_STEPPING || (phase == RM_TERMINATED && has_model == 1);
-    if (r.failed || has_model > 1 || model_expected != (int)has_model) {
+    if (has_model > 1 || model_expected != (int)has_model) {
         rm_printf(&err, "mode '%s' does not go with %s model state", PHASE_NAMES[phase],
                   has_model == 1 ? "a" : "no");
         goto done;

@@ -20,6 +20,9 @@
 #define B(vr) (values[vr].i != 0)
 
 #define GROUP_ALL 1u
+/* The most rows a speed-table file can hold (each row at least "0,0\n"): a saved table of
+ * more rows came from no file. */
+#define MAX_TABLE_ROWS (RM_MAX_SPEED_TABLE_BYTES / 4u)
 
 typedef struct {
     RmDriveline d;
@@ -325,6 +328,14 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
              && rm_read_finite(r, "the shaft torque", 0, &d->tau_load, err)
              && rm_read_finite(r, "the driveline's time", 0, &d->time, err)
              && rm_read_finite(r, "the last communication step", 1, &d->last_step, err);
+    if (ok && d->last_step > d->p.h_comm_max) {
+        rm_puts(err, "the last communication step = ");
+        rm_put_number(err, d->last_step);
+        rm_puts(err, " s: expected within [0, solver.h_comm_max = ");
+        rm_put_number(err, d->p.h_comm_max);
+        rm_puts(err, "] s (a step the unit accepted)");
+        ok = 0;
+    }
     if (ok && d->time != u->time) {
         rm_puts(err, "the driveline's time ");
         rm_put_number(err, d->time);
@@ -335,8 +346,16 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
     }
     int64_t n = ok ? rm_read_i64(r) : 0;
     int uses_table = table_name(u)[0] != '\0';
-    if (ok && (r->failed || n < 0 || (uint64_t)n > (r->len - r->pos) / 16)) {
-        rm_puts(err, "the saved speed table's length does not fit the record");
+    if (ok && rm_read_ended(r, "the saved speed table's length", err)) ok = 0;
+    if (ok && (n < 0 || n > (int64_t)MAX_TABLE_ROWS)) {
+        rm_printf(err, "the saved speed table's length = %lld rows: expected an integer in [0, "
+                       "%lu] (what a table file of at most %u bytes can hold)", (long long)n,
+                  (unsigned long)MAX_TABLE_ROWS, RM_MAX_SPEED_TABLE_BYTES);
+        ok = 0;
+    }
+    if (ok && (uint64_t)n > (r->len - r->pos) / 16) {
+        rm_printf(err, "the record ends before the end of the saved speed table (%lld rows of "
+                       "16 bytes, %zu bytes left)", (long long)n, r->len - r->pos);
         ok = 0;
     }
     if (ok && uses_table != (n > 0)) {

@@ -394,7 +394,8 @@ static void save(const void* model, RmWriter* w)
 static int read_count(RmReader* r, const char* what, int64_t* out, RmText* err)
 {
     int64_t x = rm_read_i64(r);
-    if (r->failed || x < 0 || x > ((int64_t)1 << 53)) {
+    if (rm_read_ended(r, what, err)) return 0;
+    if (x < 0 || x > ((int64_t)1 << 53)) {
         rm_printf(err, "%s = %lld: expected an integer in [0, 2^53]", what, (long long)x);
         return 0;
     }
@@ -419,7 +420,9 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
              && rm_read_finite(r, "the wheel speed", 0, &st->w, err);
     if (ok) {
         flank = rm_read_i64(r);
-        if (r->failed || flank < -1 || flank > 1) {
+        if (rm_read_ended(r, "the flank in contact", err))
+            ok = 0;
+        else if (flank < -1 || flank > 1) {
             rm_printf(err, "the flank in contact = %lld: expected -1, 0 or 1", (long long)flank);
             ok = 0;
         }

@@ -2,28 +2,44 @@
 built FMU through raw ctypes (raw_fmi.py), in this process -- run it as a child process, so
 that a crash of the host is an exit code:
 
-    python boundary_fuzz.py <FMU> <examples> <seed>    -> last line: JSON summary
+    python boundary_fuzz.py <FMU> <examples> <seed> <work folder> [--no-shadow] [--no-shrink]
+        -> last line: JSON summary
 
 Each example instantiates the FMU, makes a drawn sequence of calls -- life cycle in any
 order, get/set of any value references (valid, of another type, hidden, unknown, >= 2^31)
 with any values (NaN, infinities, huge, invalid UTF-8, FIFO and device paths), steps of any
 size and communication point, FMU states got, reused, set, freed, serialized into short and
-long buffers and deserialized from damaged bytes, debug-logging categories, status queries,
-unsupported functions -- and frees it.  NULL and dangling pointers are left out (FMI does not
-allow them).  After every call it checks:
+long buffers, deserialized from damaged bytes and from edited records RE-SEALED (a valid
+envelope around a changed record, so that they reach the library's checks in rm_restore),
+debug-logging categories, status queries, unsupported functions -- and frees it.  NULL and
+dangling pointers are left out (FMI does not allow them).
 
-* the host is alive and the status is one the call may return in the instance's mode: never
-  fmi2Fatal, fmi2Discard or fmi2Pending (the FMUs refuse with fmi2Error); calls FMI does not
-  allow in the mode, and unknown value references, are refused; valid gets are fmi2OK;
-* a refused call (fmi2Error) logged a message, and changed nothing observable: every variable
-  of the modelDescription (one get per type) and the serialized FMU state are as before;
-* an accepted set stores exactly the values given (read back bit for bit).
+What makes a run fail:
+
+* **the expected answer** (the shadow, shadow.py): every call that reaches the model is made
+  on an in-process library unit too, and the FMU must give the same status, and afterwards
+  the same value of every variable (bit for bit) and the same state record, as the library
+  does; a refused call logs the library's message;
+* **what holds whatever the model** (also with ``--no-shadow``): the status is one the call may
+  return (never fmi2Fatal, fmi2Discard or fmi2Pending); calls FMI does not allow in the mode,
+  unknown value references, bad envelopes are refused; valid gets, own states, serializing
+  into a large enough buffer succeed; a master's valid call succeeds -- the initialization of
+  the default parameters and inputs, and every step of the default unit on its consistent
+  inputs (a "pristine" instance: nothing but that since); a refused call logged a message and
+  changed nothing observable (every variable and the serialized state); an accepted set
+  stores exactly the values given; **no call answers fmi2OK or fmi2Warning with a non-finite
+  output or model state**;
+* **enough of every state operation**: at least ``examples // 10`` (and 5) get, set, free,
+  serialize and deserialize calls, and as many set calls of re-sealed edited records, and
+  ``examples // 5`` pristine steps, per run.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import struct
 import sys
 from ctypes import c_void_p
 from pathlib import Path
@@ -43,20 +59,37 @@ from raw_fmi import (
     Model,
     state_payload,
     unpack,
+    with_payload,
 )
-from records import Record
+from records import MESH_MODEL, Record
+from shadow import TYPES, Shadow
 
 ALLOWED = {OK, WARNING, ERROR}  # what these FMUs may answer; FATAL/DISCARD/PENDING never
 MODES = ("instantiated", "initialization", "stepping", "terminated")  # the record's phases
 H = 1e-4
 SLOTS = 3
+#: Steps a pristine instance must accept (the default experiment's step and half of it).
+PRISTINE_STEPS = (H, 5e-5)
+#: The operations on FMU states whose counts a run must reach.
+STATE_OPS = ("get_state", "set_state", "free_state", "serialize", "deserialize",
+             "set_resealed")
+#: Refusals of a step that cost the stepper its whole budget (up to 200 000 contact substeps,
+#: about 0.3 s): after one of them an example makes no more steps (the run's time stays
+#: bounded; the same refusal again tells nothing new).
+COSTLY_REFUSALS = ("too stiff to resolve", "would penetrate")
+COSTLY_PER_EXAMPLE = 1
+#: Deserialize variants: the envelope intact (accepted) or damaged (refused).
+INTACT = ("as is", "pad", "reseal flip", "reseal truncate", "reseal field", "reseal extend")
+DAMAGED = ("flip", "truncate", "guid", "garbage")
 
-floats_any = st.one_of(
-    st.sampled_from([0.0, -0.0, 1.0, -1.0, 1e-4, 0.15, 44.57, 86.92, 300.0, 1e5, -1e5, 1e6,
-                     1e300, -1e300, 5e-324, math.nan, math.inf, -math.inf]),
-    st.floats(allow_nan=True, allow_infinity=True))
-ints_any = st.one_of(st.sampled_from([0, 1, -1, 2, 20, 39, 400, 2**31 - 1, -(2**31)]),
+interesting_floats = [0.0, -0.0, 1.0, -1.0, 1e-4, 0.15, 44.57, 86.92, 300.0, 1e5, -1e5, 1e6,
+                      1e9, 5e9, 1e15, 1e300, -1e300, 1.7e308, 5e-324, math.nan, math.inf,
+                      -math.inf]
+floats_any = st.one_of(st.sampled_from(interesting_floats),
+                       st.floats(allow_nan=True, allow_infinity=True))
+ints_any = st.one_of(st.sampled_from([0, 1, -1, 2, 3, 7, 20, 39, 400, 2**31 - 1, -(2**31)]),
                      st.integers(-(2**31), 2**31 - 1))
+wide_ints = st.one_of(ints_any, st.sampled_from([2**32, 2**53, 2**53 + 1, 2**62, -(2**62)]))
 strings_any = st.one_of(
     st.sampled_from([b"", b"x", b"/dev/zero", b"/nonexistent/table.csv", b"\xdcbersetzung",
                      b"ok\xc3", b"\xed\xa0\x80", "Übersetzung.csv".encode(), b"%s%n%d",
@@ -65,26 +98,24 @@ strings_any = st.one_of(
 
 
 class Fuzz:
-    """The FMU under test and the bookkeeping of one example."""
+    """The FMU under test, its expected model and the bookkeeping of one run."""
 
-    def __init__(self, model: Model, table: Path):
+    def __init__(self, model: Model, table: Path, use_shadow: bool = True):
         self.m = model
         self.table = table
+        self.use_shadow = use_shadow
         names = model.variables
         self.n_vars = len(names)
-        self.by_kind = {k: [model.vr(n) for n in model.names(k)]
-                        for k in ("Real", "Integer", "Boolean", "String")}
-        hidden = range(self.n_vars, self.n_vars + 3)  # the shim's hidden variables
-        self.bad_vrs = [*hidden, self.n_vars + 3, 4096, 2**31, 2**31 + 7, 2**32 - 1]
+        self.by_kind = {k: [model.vr(n) for n in model.names(k)] for k in TYPES}
+        self.outputs = {vr for n, (vr, _, c) in names.items() if c == "output"}
+        self.real_outputs = [vr for vr in self.by_kind["Real"] if vr in self.outputs]
+        self.hidden = set(range(self.n_vars, self.n_vars + 3))  # the shim's hidden variables
+        self.bad_vrs = [*self.hidden, self.n_vars + 3, 4096, 2**31, 2**31 + 7, 2**32 - 1]
         self.inputs = {n: vr for n, (vr, _, c) in names.items() if c == "input"}
-        #: the inputs that carry the partner's motion (inputs.continue_when_held)
-        self.motion_vrs = {vr for n, vr in self.inputs.items()
-                           if n in ("pinion.phi", "pinion.w", "pinion.a", "wheel.phi",
-                                    "wheel.w")}
         self.defaults = []  # (kind, vrs, start values) of the parameters
-        for kind in ("Real", "Integer", "Boolean", "String"):
-            params = [(vr, start) for n, (vr, k, c) in names.items()
-                      if k == kind and c == "parameter" for start in [model.starts[n]]]
+        for kind in TYPES:
+            params = [(vr, model.starts[n]) for n, (vr, k, c) in names.items()
+                      if k == kind and c == "parameter"]
             if params:
                 self.defaults.append((kind, [vr for vr, _ in params],
                                       [start for _, start in params]))
@@ -92,16 +123,66 @@ class Fuzz:
         self.refusals = 0
         self.by_status = {s: 0 for s in range(6)}
         self.by_op: dict[str, list[int]] = {}  # op -> [accepted, refused]
+        self.pristine_steps = 0
+        self.steps_skipped = 0  # steps not made after costly refusals (COSTLY_REFUSALS)
+        self.compared = 0  # calls whose answer was held against the shadow
 
-    # ------------------------------------------------------------------ observation
-    def observe(self, inst) -> tuple:
-        """Everything observable: all variables and the serialized FMU state."""
-        snap = inst.snapshot()
-        for kind, (status, _) in snap.items():
-            assert status == OK, ("a get of valid variables failed", kind, inst.log[-3:])
-        return snap, inst.serialized()
+    def count(self, op: str, status: int) -> None:
+        self.by_op.setdefault(op, [0, 0])[status == ERROR] += 1
 
 
+# ------------------------------------------------------------------ observation
+def snapshot(get, by_kind: dict) -> dict:
+    """Every variable by FMI type: {type: [(status, value as text) per variable]}, from
+    ``get(kind, vrs) -> (status, values)``; one call per type, one per variable where the
+    call is refused (an output that cannot be computed)."""
+    out = {}
+    for kind in TYPES:
+        vrs = by_kind[kind]
+        status, values = get(kind, vrs)
+        if status != OK:
+            pairs = [get(kind, [vr]) for vr in vrs]
+            out[kind] = [(s, _text(v[0]) if s == OK else None) for s, v in pairs]
+        else:
+            out[kind] = [(OK, _text(v)) for v in values]
+    return out
+
+
+def _text(value) -> str:
+    return value.hex() if isinstance(value, float) else repr(value)
+
+
+def observe(f: Fuzz, inst) -> tuple:
+    """The FMU's observable: every variable and the serialized state (its record)."""
+    snap = snapshot(inst.get, f.by_kind)
+    for kind, pairs in snap.items():
+        for vr, (status, _) in zip(f.by_kind[kind], pairs, strict=True):
+            assert status in ALLOWED, (kind, vr, status)
+            # a get of a valid variable is refused only for an output it cannot compute
+            assert status == OK or vr in f.outputs, ("a get of a valid variable failed", kind,
+                                                     vr, inst.log[-3:])
+    return snap, state_payload(inst.serialized())
+
+
+def check_finite(f: Fuzz, observed: tuple, call) -> None:
+    """No accepted call leaves a non-finite output (as an accepted get) or model state."""
+    snap, record = observed
+    for vr, (status, text) in zip(f.by_kind["Real"], snap["Real"], strict=True):
+        if vr in f.outputs and status == OK:
+            assert math.isfinite(float.fromhex(text)), ("an output is not finite", call, vr,
+                                                        text)
+    r = Record.decode(record, f.m.variables)
+    assert math.isfinite(r.start_time) and math.isfinite(r.time), ("state times", call, r)
+    if r.has_model and r.model:
+        for name, fmt in MESH_MODEL:
+            if fmt == "d":
+                assert math.isfinite(r.model[name]), ("mesh state not finite", call, name)
+    elif r.has_model:  # the Driveline: shaft angle, speed, torque, time, last step
+        for x in struct.unpack_from("<5d", r.rest, 0):
+            assert math.isfinite(x), ("driveline state not finite", call, r.rest[:40])
+
+
+# ------------------------------------------------------------------ calls
 def vr_lists(f: Fuzz, kind: str):
     own = f.by_kind[kind] or f.bad_vrs  # GearMeshRattle has no String variable
     other = [vr for k, vrs in f.by_kind.items() if k != kind for vr in vrs]
@@ -117,13 +198,12 @@ def value_strategy(kind: str):
 
 
 def call_strategy(f: Fuzz):
-    kinds = ("Real", "Integer", "Boolean", "String")
     sets = [vr_lists(f, k).flatmap(
         lambda vrs, k=k: st.tuples(st.just("set"), st.just(k), st.just(vrs),
                                    st.lists(value_strategy(k), min_size=len(vrs),
                                             max_size=len(vrs))))
-            for k in kinds]
-    gets = [st.tuples(st.just("get"), st.just(k), vr_lists(f, k)) for k in kinds]
+            for k in TYPES]
+    gets = [st.tuples(st.just("get"), st.just(k), vr_lists(f, k)) for k in TYPES]
     realistic_inputs = st.tuples(st.just("inputs"), st.sampled_from([0.0, 0.5, 1.0, 1.3]))
     step = st.tuples(st.just("step"),
                      st.one_of(st.just("next"), st.just("next"), st.just("next"), floats_any),
@@ -133,15 +213,16 @@ def call_strategy(f: Fuzz):
                             ("derivative",)])
     setup = st.tuples(st.just("setup"), floats_any, st.booleans(), floats_any)
     slot = st.integers(0, SLOTS - 1)
+    deserialize = st.tuples(st.just("deserialize"), slot, st.integers(0, 10**6),
+                            st.sampled_from([*INTACT, *INTACT, *DAMAGED]), floats_any,
+                            wide_ints)
     states = st.one_of(
         st.tuples(st.just("get_state"), slot),
         st.tuples(st.just("set_state"), slot),
         st.tuples(st.just("free_state"), slot),
         st.tuples(st.just("serialize"), slot,
                   st.sampled_from([0, 0, 1, 4096, -1, -HEADER, -10**6])),
-        st.tuples(st.just("deserialize"), slot, st.integers(0, 10**6),
-                  st.sampled_from(["as is", "as is", "flip", "truncate", "pad", "guid",
-                                   "garbage"])))
+        deserialize)
     logging = st.tuples(st.just("logging"), st.integers(-1, 2),
                         st.lists(st.one_of(st.sampled_from([b"logAll", b"logStatusError",
                                                             b"nonsense", None]),
@@ -152,24 +233,47 @@ def call_strategy(f: Fuzz):
     instantiate = st.tuples(st.just("instantiate"), st.sampled_from(
         ["model exchange", "latin-1 name", "blank name", "wrong guid", "unzip root",
          "http", "relative", "missing"]))
-    single = st.one_of(*sets, *gets, realistic_inputs, step, life, setup, states, logging,
-                       status, instantiate)
+    single = st.one_of(*sets, *gets, realistic_inputs, step, life, setup, states, states,
+                       states, logging, status, instantiate)
     # Sequences a master makes, so that the fuzz also reaches (and leaves) stepping.
     initialize = st.builds(lambda scale: [("setup", 0.0, False, 0.0), ("enter",),
                                           ("defaults",), ("inputs", scale), ("exit",)],
-                           st.sampled_from([0.0, 1.0, 1.3]))
+                           st.sampled_from([0.0, 1.0, 1.0, 1.3]))
     run = st.builds(lambda n, scale, h: [c for _ in range(n)
                                          for c in (("inputs", scale), ("step", "next", h))],
                     st.integers(1, 6), st.sampled_from([1.0, 1.0, 0.5]),
                     st.sampled_from([H, H, 5e-5, 1e-3]))
+    # A rollback: save, step on, restore, serialize; and an edited record re-sealed and set.
+    rollback = st.builds(lambda i, extra, free: [("get_state", i), ("inputs", 1.0),
+                                                 ("step", "next", H), ("set_state", i),
+                                                 ("serialize", i, extra)]
+                         + ([("free_state", i)] if free else []),
+                         slot, st.sampled_from([0, 0, 7]), st.booleans())
+    # A master's run of the default unit from its start (the pristine steps).
+    session = st.builds(lambda n, h: [("setup", 0.0, False, 0.0), ("enter",), ("defaults",),
+                                      ("inputs", 1.0), ("exit",)]
+                        + [c for _ in range(n) for c in (("inputs", 1.0), ("step", "next", h))],
+                        st.integers(1, 4), st.sampled_from(PRISTINE_STEPS))
+    resealed = st.builds(lambda d: [d, ("set_state", d[1])],
+                         st.tuples(st.just("deserialize"), slot, st.integers(0, 10**6),
+                                   st.sampled_from(INTACT[2:]), floats_any, wide_ints))
+    # A set whose last entry is refused (an output, another type, unknown): nothing of it may
+    # be stored.
+    settable = [vr for vr in f.by_kind["Real"] if vr not in f.outputs]
+    refused_entry = st.sampled_from([*sorted(f.outputs), *f.by_kind["Integer"], *f.bad_vrs])
+    mixed_set = st.builds(lambda vrs, bad: [*vrs, bad],
+                          st.lists(st.sampled_from(settable), min_size=1, max_size=3),
+                          refused_entry).flatmap(
+        lambda vrs: st.lists(floats_any, min_size=len(vrs), max_size=len(vrs)).map(
+            lambda values: [("set", "Real", vrs, values)]))
     one = single.map(lambda c: [c])
     # sampled_from weighs its choices evenly (one_of favours its first branches)
-    return st.sampled_from([one, one, one, one, initialize, run, run]).flatmap(lambda s: s)
+    return st.sampled_from([one, one, one, one, initialize, session, run, run, rollback,
+                            resealed, mixed_set]).flatmap(lambda s: s)
 
 
-def realistic(f: Fuzz, scale: float, k: int) -> dict:
-    """Consistent inputs at communication point k (scaled), so that steps do proceed."""
-    t = k * H
+def realistic(f: Fuzz, scale: float, t: float) -> dict:
+    """Inputs consistent with time t (scaled), so that steps do proceed."""
     if "pinion.w" in f.inputs:
         w = 86.92 * scale
         return {"pinion.phi": w * t, "pinion.w": w, "pinion.a": 0.0, "wheel.tau_load": 0.15}
@@ -191,171 +295,329 @@ def damaged(blob: bytes, how: str, at: int) -> bytes:
     return blob
 
 
-def run_example(f: Fuzz, calls: list) -> None:
-    m = f.m
-    inst = m.instantiate(b"fuzz")
-    assert inst is not None, m.pending_log
-    slots: list[c_void_p | None] = [None] * SLOTS
-    blobs: list[bytes] = []
-    try:
-        for call in calls:
-            f.calls += 1
-            print("CALL", repr(call)[:300], file=sys.stderr, flush=True)
-            before = f.observe(inst)
-            record = Record.decode(state_payload(before[1]), m.variables)
-            mode, next_t = MODES[record.phase], record.time
-            assert math.isfinite(next_t), record
-            k = round(next_t / H)  # for the realistic inputs
-            n_log = len(inst.log)
-            op = call[0]
-            expect_error = False
-            readback = None
-            if op == "set":
-                _, kind, vrs, values = call
-                own = set(f.by_kind[kind])
-                expect_error = any(vr not in own for vr in vrs) or (
-                    kind == "String" and any(_bad_utf8(v) for v in values))
-                status = inst.set(kind, vrs, values)
-                readback = (kind, vrs, values)
-            elif op == "get":
-                _, kind, vrs = call
-                status, _ = inst.get(kind, vrs)
-                own = set(f.by_kind[kind])
-                if all(vr in own for vr in vrs):
-                    assert status == OK, (call, inst.log[n_log:])
-                else:
-                    expect_error = True
-            elif op == "inputs":
-                status = inst.set_named(realistic(f, call[1], k))
-            elif op == "defaults":  # every parameter back to its start value
-                status = OK
-                if mode in ("instantiated", "initialization"):
-                    for kind, vrs, values in f.defaults:
-                        status = max(status, inst.set(kind, vrs, values))
-                    assert status == OK, inst.log[n_log:]
-            elif op == "step":
-                _, t, h = call
-                t = next_t if t == "next" else t
-                # docs/fmi.md: the communication point must continue the last step within
-                # 1e-9 of the step plus a few ulps (flagged here only well beyond that)
-                slack = 2 * (1e-9 * abs(h) + 16 * math.ulp(max(abs(t), abs(next_t))))
-                expect_error = mode != "stepping" or not math.isfinite(t) or not (
-                    abs(t - next_t) <= slack)
-                status = inst.step(t, h)
-                if status in (OK, WARNING):
-                    assert mode == "stepping"
-            elif op == "setup":
-                _, start, _, stop = call
-                expect_error = mode != "instantiated" or not math.isfinite(start)
-                status = inst.setup(start, stop=stop)
-            elif op in ("enter", "exit", "terminate", "reset"):
-                expect_error = {"enter": mode != "instantiated",
-                                "exit": mode != "initialization",
-                                "terminate": mode not in ("stepping", "initialization"),
-                                "reset": False}[op]
-                status = getattr(inst, op)()
-            elif op == "cancel":
-                status = m.lib.fmi2CancelStep(inst.c)
+def resealed(m: Model, blob: bytes, how: str, at: int, real: float, integer: int) -> bytes:
+    """``blob`` with its record edited and the envelope made valid again (length, checksum):
+    a byte changed, the record cut or extended, or one field of it set to a drawn value."""
+    payload = state_payload(blob)
+    if how == "reseal flip":
+        i = at % len(payload)
+        return with_payload(blob, payload[:i] + bytes([payload[i] ^ (1 + at % 255)])
+                            + payload[i + 1:])
+    if how == "reseal truncate":
+        return with_payload(blob, payload[:at % len(payload)])
+    if how == "reseal extend":
+        return with_payload(blob, payload + bytes((at * 13 + i) % 256
+                                                  for i in range(1 + at % 64)))
+    r = Record.decode(payload, m.variables)
+    fields = (["phase", "motion_set", "start_time", "time", "has_model"]
+              + [("value", n) for n in r.values] + [("model", n) for n in r.model]
+              + ([("rest", k) for k in range(5)] if r.has_model and not r.model else []))
+    choice = fields[at % len(fields)]
+    if choice in ("phase", "motion_set", "has_model"):
+        setattr(r, choice, integer % 2**32)
+    elif choice in ("start_time", "time"):
+        setattr(r, choice, real)
+    elif choice[0] == "value":
+        old = r.values[choice[1]]
+        r.values[choice[1]] = (real if isinstance(old, float) else str(integer)
+                               if isinstance(old, str) else max(-(2**63), min(2**63 - 1,
+                                                                              integer)))
+    elif choice[0] == "model":
+        old = r.model[choice[1]]
+        r.model[choice[1]] = real if isinstance(old, float) else max(-(2**63),
+                                                                   min(2**63 - 1, integer))
+    else:  # one of the Driveline's five leading doubles
+        rest = bytearray(r.rest)
+        struct.pack_into("<d", rest, 8 * choice[1], real)
+        r.rest = bytes(rest)
+    return with_payload(blob, r)
+
+
+class Example:
+    """One example: the FMU instance, its shadow, the state slots and what is known."""
+
+    def __init__(self, f: Fuzz):
+        self.f = f
+        self.inst = f.m.instantiate(b"fuzz")
+        assert self.inst is not None, f.m.pending_log
+        self.shadow = (Shadow(f.m.identifier, f.m.root / "resources") if f.use_shadow
+                       else None)
+        self.slots: list[c_void_p | None] = [None] * SLOTS
+        self.records: list[bytes | None] = [None] * SLOTS  # the shadow's view of each slot
+        self.own: list[bool] = [False] * SLOTS  # a state of this instance, not edited
+        self.slot_pristine: list[bool] = [False] * SLOTS
+        self.blobs: list[tuple[bytes, bool]] = []  # serialized states, pristine or not
+        self.pristine = False
+        self.init_progress = 0
+        self.motion_fresh = False  # consistent inputs set for the coming step
+        self.costly = 0  # costly refusals of steps so far
+        self.observed = observe(f, self.inst)
+        self.compare()
+
+    def compare(self, call=None) -> None:
+        """The FMU's observable is the shadow's."""
+        if self.shadow is None:
+            return
+        expected = (snapshot(self.shadow.get, self.f.by_kind), self.shadow.save())
+        assert self.observed[0] == expected[0], ("the FMU's values are not the library's",
+                                                 call, _diff(self.observed[0], expected[0]))
+        assert self.observed[1] == expected[1], ("the FMU's state is not the library's", call)
+
+    def close(self) -> None:
+        for state in self.slots:
+            if state is not None and state.value is not None and self.f.calls % 2:
+                self.inst.free_state(state)  # every other example leaves them to FreeInstance
+        self.inst.free()
+        if self.shadow is not None:
+            self.shadow.free()
+
+    # -- state slots
+    def get_state(self, i: int, implicit: bool = False) -> int:
+        status, state = self.inst.get_state(into=self.slots[i])
+        assert status in (OK, WARNING), ("getFMUstate refused", self.inst.log[-3:])
+        self.slots[i] = state
+        self.records[i] = self.observed[1]  # the record of the current state
+        self.own[i], self.slot_pristine[i] = True, self.pristine
+        if implicit:
+            self.f.count("get_state", status)
+        return status
+
+    def run(self, call) -> None:
+        f, inst, shadow = self.f, self.inst, self.shadow
+        m = f.m
+        f.calls += 1
+        print("CALL", repr(call)[:300], file=sys.stderr, flush=True)
+        before = self.observed
+        record = Record.decode(before[1], m.variables)
+        mode, next_t = MODES[record.phase], record.time
+        n_log = len(inst.log)
+        op = call[0]
+        expect_error = False
+        must_succeed = False
+        expected = None  # the shadow's status for calls that reach the model
+        face_refusal = False  # refused by the face before the model (its own message)
+        readback = None
+        keeps_pristine = False
+        if op == "step" and self.costly >= COSTLY_PER_EXAMPLE:
+            f.steps_skipped += 1
+            return
+        if op in ("set_state", "free_state", "serialize") and self.slots[call[1]] is None:
+            self.get_state(call[1], implicit=True)  # a state op always acts on a state
+        if op == "set":
+            _, kind, vrs, values = call
+            own = set(f.by_kind[kind])
+            expect_error = any(vr not in own for vr in vrs) or (
+                kind == "String" and any(_bad_utf8(v) for v in values))
+            face_refusal = bool(f.hidden.intersection(vrs)) or (
+                kind == "String" and any(_bad_utf8(v) for v in values))
+            status = inst.set(kind, vrs, values)
+            if shadow is not None:
+                expected = shadow.set(kind, vrs, values)
+            readback = (kind, vrs, values)
+        elif op == "get":
+            _, kind, vrs = call
+            status, _ = inst.get(kind, vrs)
+            own = set(f.by_kind[kind])
+            valid = all(vr in own for vr in vrs)
+            must_succeed = valid and not any(vr in f.outputs for vr in vrs)
+            expect_error = not valid
+            face_refusal = bool(f.hidden.intersection(vrs))
+            if shadow is not None:
+                expected = shadow.get(kind, vrs)[0]
+            keeps_pristine = True
+        elif op == "inputs":
+            values = realistic(f, call[1], next_t)
+            status = inst.set_named(values)
+            if shadow is not None:
+                expected = OK
+                for name, value in values.items():
+                    expected = max(expected, shadow.set("Real", [m.vr(name)], [value]))
+            keeps_pristine = call[1] == 1.0
+            self.motion_fresh = status == OK
+        elif op == "defaults":  # every parameter back to its start value
+            status = OK
+            if mode in ("instantiated", "initialization"):
+                for kind, vrs, values in f.defaults:
+                    status = max(status, inst.set(kind, vrs, values))
+                    if shadow is not None:
+                        shadow.set(kind, vrs, values)
+                assert status == OK, inst.log[n_log:]
+        elif op == "step":
+            _, t, h = call
+            t = next_t if t == "next" else t
+            # docs/fmi.md: the communication point must continue the last step within
+            # 1e-9 of the step plus a few ulps (flagged here only well beyond that)
+            slack = 2 * (1e-9 * abs(h) + 16 * math.ulp(max(abs(t), abs(next_t))))
+            expect_error = mode != "stepping" or not math.isfinite(t) or not (
+                abs(t - next_t) <= slack)
+            # the default unit on consistent inputs steps on: a master's valid step
+            must_succeed = (self.pristine and mode == "stepping" and call[1] == "next"
+                            and h in PRISTINE_STEPS)
+            status = inst.step(t, h)
+            if shadow is not None:
+                expected = shadow.step(t, h)
+            if status in (OK, WARNING):
+                assert mode == "stepping"
+            if must_succeed:
+                f.pristine_steps += 1
+            if status == ERROR and any(reason in m for m in inst.messages(n_log, ERROR)
+                                       for reason in COSTLY_REFUSALS):
+                self.costly += 1
+            keeps_pristine = must_succeed
+        elif op == "setup":
+            _, start, _, stop = call
+            expect_error = mode != "instantiated" or not math.isfinite(start)
+            status = inst.setup(start, stop=stop)
+            if shadow is not None:
+                expected = shadow.setup(start)
+        elif op in ("enter", "exit", "terminate", "reset"):
+            expect_error = {"enter": mode != "instantiated",
+                            "exit": mode != "initialization",
+                            "terminate": mode not in ("stepping", "initialization"),
+                            "reset": False}[op]
+            # the default parameters and consistent inputs initialize
+            must_succeed = op == "exit" and self.init_progress == 4
+            status = getattr(inst, op)()
+            if shadow is not None:
+                expected = getattr(shadow, op)()
+        elif op == "cancel":
+            status = m.lib.fmi2CancelStep(inst.c)
+            expect_error = keeps_pristine = True
+        elif op == "derivative":
+            status = inst.L.fmi2GetDirectionalDerivative(inst.c, None, 0, None, 0, None, None)
+            expect_error = keeps_pristine = True
+        elif op == "get_state":
+            status = self.get_state(call[1])
+            keeps_pristine = True
+        elif op == "set_state":
+            i = call[1]
+            state = self.slots[i]
+            must_succeed = self.own[i]
+            status = inst.set_state(state)
+            if shadow is not None:
+                expected = shadow.restore(self.records[i])
+            if not self.own[i]:
+                f.count("set_resealed", status)
+            keeps_pristine = self.own[i] and self.slot_pristine[i]
+        elif op == "free_state":
+            state = self.slots[call[1]]
+            status = inst.free_state(state)
+            assert status == OK and state.value is None
+            self.slots[call[1]] = self.records[call[1]] = None
+            keeps_pristine = True
+        elif op == "serialize":
+            _, i, extra = call
+            status, data = inst.serialize(self.slots[i], extra=extra)
+            expect_error = extra < 0
+            must_succeed = extra >= 0
+            if status == OK:
+                size = inst.state_size(self.slots[i])[1]
+                assert data[size:] == bytes(len(data) - size)
+                if shadow is not None:
+                    assert state_payload(data) == self.records[i], (
+                        "the serialized state is not the record the library saved", call)
+                self.blobs.append((data, self.own[i] and self.slot_pristine[i]))
+            keeps_pristine = True
+        elif op == "deserialize":
+            _, i, at, how, real, integer = call
+            source, pristine = (self.blobs[at % len(self.blobs)] if self.blobs
+                                else (inst.serialized(), self.pristine))
+            data = (resealed(m, source, how, at, real, integer) if how.startswith("reseal")
+                    else damaged(source, how, at))
+            status, state = inst.deserialize(data, into=self.slots[i])
+            if how in DAMAGED and data != source:
                 expect_error = True
-            elif op == "derivative":
-                status = inst.L.fmi2GetDirectionalDerivative(inst.c, None, 0, None, 0, None,
-                                                             None)
-                expect_error = True
-            elif op == "get_state":
-                into = slots[call[1]]
-                status, state = inst.get_state(into=into)
-                assert status in (OK, WARNING), (call, inst.log[n_log:])
-                slots[call[1]] = state
-            elif op == "set_state":
-                state = slots[call[1]]
-                if state is None:
-                    continue
-                status = inst.set_state(state)
-                assert status in (OK, WARNING), ("own state refused", inst.log[n_log:])
-            elif op == "free_state":
-                state = slots[call[1]]
-                if state is None:
-                    continue
-                status = inst.free_state(state)
-                assert status == OK and state.value is None
-                slots[call[1]] = None
-            elif op == "serialize":
-                _, i, extra = call
-                if slots[i] is None:
-                    continue
-                status, data = inst.serialize(slots[i], extra=extra)
-                expect_error = extra < 0
-                if status == OK:
-                    size = inst.state_size(slots[i])[1]
-                    assert data[size:] == bytes(len(data) - size)
-                    blobs.append(data)
-            elif op == "deserialize":
-                _, i, at, how = call
-                source = blobs[at % len(blobs)] if blobs else before[1]
-                data = damaged(source, how, at)
-                into = slots[i]
-                status, state = inst.deserialize(data, into=into)
-                if how in ("guid", "garbage", "flip") or (
-                        how == "truncate" and len(data) < len(source)):
-                    expect_error = True
-                if status in (OK, WARNING):
-                    slots[i] = state
-            elif op == "logging":
-                _, on, cats = call
-                expect_error = any(c is None or _bad_utf8(c) for c in cats)
-                status = inst.logging(on, cats)
-            elif op == "status":
-                _, which, kind = call
-                status = _status_call(inst, which, kind)
-                expect_error = not (which == "Boolean" and kind == 3) and not (
-                    which == "Real" and kind == 2 and mode in ("stepping", "terminated"))
-            elif op == "instantiate":
-                before_inst = _bad_instantiate(m, call[1])
-                assert before_inst is None, call
-                assert any(s >= ERROR for s, _, _ in m.pending_log), m.pending_log
-                continue
             else:
-                raise AssertionError(call)
-            f.by_status[status] = f.by_status.get(status, 0) + 1
-            f.by_op.setdefault(op, [0, 0])[status == ERROR] += 1
-            assert status in ALLOWED, (call, status, inst.log[n_log:])
-            if expect_error:
-                assert status == ERROR, (call, mode, status, inst.log[n_log:])
-            if status == ERROR:
-                f.refusals += 1
-                assert inst.messages(n_log, ERROR), ("refused without a message", call)
-                if op in ("get_state", "free_state"):
-                    continue
-                after = f.observe(inst)
-                assert after[0] == before[0], ("a refused call changed variables", call)
-                if op == "set" and kind == "Real" and f.motion_vrs.intersection(vrs):
-                    # the library's rule: a set naming a motion input marks the inputs set
-                    # (the master holds nothing), accepted or not -- the record says so
-                    after = (after[0], _motion_set(m, after[1], record.motion_set))
-                assert after[1] == before[1], ("a refused call changed the state", call)
-            elif readback is not None:
-                kind, vrs, values = readback
-                st_, got = inst.get(kind, vrs)
-                assert st_ == OK
-                last = {}
-                for vr, v in zip(vrs, values, strict=True):
-                    last[vr] = v
-                for vr, g in zip(vrs, got, strict=True):
-                    assert _same(kind, g, last[vr]), (call, vr, g, last[vr])
-    finally:
-        for state in slots:
-            if state is not None and state.value is not None and f.calls % 2:
-                inst.free_state(state)  # every other example leaves them to fmi2FreeInstance
-        inst.free()
+                must_succeed = True  # a valid envelope: its content is checked at set
+            if status in (OK, WARNING):
+                self.slots[i] = state
+                self.records[i] = state_payload(data)
+                self.own[i] = how in ("as is", "pad")
+                self.slot_pristine[i] = self.own[i] and pristine
+            keeps_pristine = True
+        elif op == "logging":
+            _, on, cats = call
+            expect_error = any(c is None or _bad_utf8(c) for c in cats)
+            status = inst.logging(on, cats)
+            keeps_pristine = True
+        elif op == "status":
+            _, which, kind = call
+            status = _status_call(inst, which, kind)
+            expect_error = not (which == "Boolean" and kind == 3) and not (
+                which == "Real" and kind == 2 and mode in ("stepping", "terminated"))
+            keeps_pristine = True
+        elif op == "instantiate":
+            assert _bad_instantiate(m, call[1]) is None, call
+            assert any(s >= ERROR for s, _, _ in m.pending_log), m.pending_log
+            return
+        else:
+            raise AssertionError(call)
+        # -- what the call answered
+        self.track_initialization(call, status)
+        if op == "exit" and must_succeed:
+            self.pristine = status == OK
+        elif op == "set_state" and status != ERROR:  # restored: as pristine as the state was
+            self.pristine = self.own[call[1]] and self.slot_pristine[call[1]]
+        else:
+            self.pristine = self.pristine and keeps_pristine and status != ERROR
+        f.by_status[status] = f.by_status.get(status, 0) + 1
+        f.count(op, status)
+        # the library's answer first (what a model predicts), then what holds whatever the
+        # model (also without the shadow)
+        if expected is not None:
+            f.compared += 1
+            assert status == expected, ("the FMU's status is not the library's", call, status,
+                                        expected, inst.log[n_log:],
+                                        shadow.message() if expected else "")
+            if status == ERROR and not face_refusal:
+                assert shadow.message() in inst.messages(n_log, ERROR), (
+                    "the FMU's message is not the library's", call, shadow.message(),
+                    inst.log[n_log:])
+        assert status in ALLOWED, (call, status, inst.log[n_log:])
+        if expect_error:
+            assert status == ERROR, (call, mode, status, inst.log[n_log:])
+        if must_succeed:
+            assert status in (OK, WARNING), ("a valid call was refused", call, mode,
+                                             inst.log[n_log:])
+        if status == ERROR:
+            f.refusals += 1
+            assert inst.messages(n_log, ERROR), ("refused without a message", call)
+        if op in ("free_state",):
+            return
+        after = observe(f, inst)
+        self.observed = after
+        self.compare(call)
+        if status == ERROR and op not in ("get_state",):
+            assert after[0] == before[0], ("a refused call changed variables", call)
+            assert after[1] == before[1], ("a refused call changed the state", call)
+        if status in (OK, WARNING):
+            check_finite(f, after, call)
+        if readback is not None and status != ERROR:
+            kind, vrs, values = readback
+            st_, got = inst.get(kind, vrs)
+            assert st_ == OK
+            last = {}
+            for vr, v in zip(vrs, values, strict=True):
+                last[vr] = v
+            for vr, g in zip(vrs, got, strict=True):
+                assert _same(kind, g, last[vr]), (call, vr, g, last[vr])
+
+    def track_initialization(self, call, status: int) -> None:
+        """Progress through setup(0) -> enter -> defaults -> inputs(1.0) -> exit."""
+        steps = {0: ("setup",), 1: ("enter",), 2: ("defaults",), 3: ("inputs",)}
+        op = call[0]
+        expected_ops = steps.get(self.init_progress)
+        if (status == OK and expected_ops is not None and op == expected_ops[0]
+                and (op != "setup" or call[1] == 0.0) and (op != "inputs" or call[1] == 1.0)):
+            self.init_progress += 1
+        else:
+            self.init_progress = 1 if (op == "setup" and status == OK and call[1] == 0.0) else 0
 
 
-def _motion_set(m: Model, blob: bytes, flag: int) -> bytes:
-    """``blob`` (a serialized state) with the record's motion_set flag set to ``flag``."""
-    from raw_fmi import with_payload
-
-    record = Record.decode(state_payload(blob), m.variables)
-    record.motion_set = flag
-    return with_payload(blob, record)
+def _diff(a: dict, b: dict) -> list:
+    return [(kind, i, x, y) for kind in a for i, (x, y) in enumerate(zip(a[kind], b[kind],
+                                                                         strict=True))
+            if x != y][:5]
 
 
 def _bad_utf8(value) -> bool:
@@ -411,12 +673,28 @@ def _bad_instantiate(m: Model, how: str):
     }[how]()
 
 
-def main(fmu: Path, examples: int, seed_value: int, work: Path) -> dict:
+def run_example(f: Fuzz, calls: list) -> None:
+    example = Example(f)
+    try:
+        for call in calls:
+            example.run(call)
+    finally:
+        example.close()
+
+
+def minimum_counts(examples: int) -> dict:
+    """What a run must have made at least: each state operation, pristine steps."""
+    n = max(5, examples // 10)
+    return {**{op: n for op in STATE_OPS}, "pristine steps": max(5, examples // 5)}
+
+
+def main(fmu: Path, examples: int, seed_value: int, work: Path, use_shadow: bool = True,
+         shrink: bool = True) -> dict:
     model = Model(unpack(fmu, work / fmu.stem))
     assert CO_SIMULATION == 1
     table = work / "speed.csv"
     table.write_text("time,speed\n0,80\n0.5,95\n1,85\n")
-    f = Fuzz(model, table)
+    f = Fuzz(model, table, use_shadow)
     extra_strings = st.sampled_from([str(table).encode()])
     global strings_any
     strings_any = st.one_of(strings_any, extra_strings)
@@ -424,20 +702,32 @@ def main(fmu: Path, examples: int, seed_value: int, work: Path) -> dict:
     @seed(seed_value)
     @settings(max_examples=examples, deadline=None, database=None,
               suppress_health_check=list(HealthCheck),
-              phases=[Phase.generate, Phase.shrink])
+              phases=[Phase.generate, Phase.shrink] if shrink else [Phase.generate])
     @given(st.lists(call_strategy(f), min_size=3, max_size=14))
     def fuzz(segments):
         run_example(f, [call for segment in segments for call in segment])
 
     fuzz()
-    return {"fmu": fmu.stem, "examples": examples, "seed": seed_value, "calls": f.calls,
-            "refused": f.refusals, "by_call": f.by_op,
-            "statuses": {name: f.by_status.get(s, 0) for s, name in
-                         ((OK, "OK"), (WARNING, "Warning"), (DISCARD, "Discard"),
-                          (ERROR, "Error"), (FATAL, "Fatal"), (PENDING, "Pending"))}}
+    counts = {op: sum(f.by_op.get(op, [0, 0])) for op in STATE_OPS}
+    counts["pristine steps"] = f.pristine_steps
+    summary = {"fmu": fmu.stem, "examples": examples, "seed": seed_value, "calls": f.calls,
+               "refused": f.refusals, "compared with the library": f.compared,
+               "counts": counts, "steps skipped after costly refusals": f.steps_skipped,
+               "by_call": f.by_op,
+               "statuses": {name: f.by_status.get(s, 0) for s, name in
+                            ((OK, "OK"), (WARNING, "Warning"), (DISCARD, "Discard"),
+                             (ERROR, "Error"), (FATAL, "Fatal"), (PENDING, "Pending"))}}
+    short = {op: (counts[op], n) for op, n in minimum_counts(examples).items()
+             if counts[op] < n}
+    assert not short, f"too few of these calls (made, needed): {short}; {summary}"
+    return summary
 
 
 if __name__ == "__main__":
-    fmu_path, n_examples, seed_arg, folder = sys.argv[1:5]
-    summary = main(Path(fmu_path), int(n_examples), int(seed_arg), Path(folder))
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    fmu_path, n_examples, seed_arg, folder = args[:4]
+    summary = main(Path(fmu_path), int(n_examples), int(seed_arg), Path(folder),
+                   use_shadow="--no-shadow" not in sys.argv and
+                   os.environ.get("RATTLE_FUZZ_SHADOW", "1") != "0",
+                   shrink="--no-shrink" not in sys.argv)
     print(json.dumps(summary))

@@ -40,6 +40,19 @@ class Callbacks(ctypes.Structure):
                 ("stepFinished", c_void_p), ("componentEnvironment", c_void_p)]
 
 
+#: Every model loaded in this process (free_all).
+_MODELS: list = []
+
+
+def free_all() -> None:
+    """Free every instance still alive, of every model loaded (before a leak check: what the
+    host did not free is the host's leak, not the FMU's)."""
+    for model in _MODELS:
+        for inst in list(model._instances.values()):
+            if inst.c:
+                inst.free()
+
+
 def _decode(b: bytes | None) -> str:
     return b.decode("utf-8", "replace") if b is not None else ""
 
@@ -73,6 +86,7 @@ class Model:
         self._instances: dict[int, Instance] = {}
         self._logger = LOGGER(self._log)
         self._env_counter = 0
+        _MODELS.append(self)
 
     def _declare(self) -> None:
         L = self.lib

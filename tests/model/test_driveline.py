@@ -73,7 +73,7 @@ def test_a_speed_table_is_integrated_exactly(tmp_path):
     ("0,1\n", "needs at least two rows"),
     ("", "needs at least two rows"),
     ("0,1\n1,x\n", "row 2: expected two numbers"),
-    ("0,1\n1,nan\n", "row 2 has a non-finite value"),
+    ("0,1\n1,nan\n", "row 2: speed 'nan' reads as nan; allowed: finite numbers"),
 ])
 def test_bad_speed_tables_are_refused_naming_the_table_and_row(tmp_path, content, fragment):
     f = tmp_path / "bad.csv"

@@ -6,6 +6,7 @@ face, from the sources the FMU ships).  Any report makes the program exit non-ze
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 from collections.abc import Sequence
 from pathlib import Path
@@ -66,3 +67,63 @@ def build_fmu_binary(model: str, folder: Path, flags: Sequence[str]) -> tuple[Pa
 def reports(text: str) -> list[str]:
     """The lines of a sanitizer report in a program's output."""
     return [line for line in text.splitlines() if any(m in line for m in REPORT_MARKS)]
+
+
+# ------------------------------------------------------------------ Python hosts
+#: The project's C files: a leak whose memory one of them allocated is the project's.
+OWN_SOURCES = re.compile(r"/(rattle_model|fmi2|sources|library)/[A-Za-z0-9_]+\.c:\d+|"
+                         r"\b(unit|unit_mesh|unit_driveline|speed_table|driveline|stepper|"
+                         r"mesh|contact|friction|geometry|start|system|text|refusals|roots|"
+                         r"rm_tables|fmi2_functions|rattle_fmi_common|rattle_fmi_shim)\.c:\d+")
+#: A report of a memory error, undefined behaviour or the sanitizer's own failure.
+ERROR_MARK = re.compile(r"ERROR: AddressSanitizer|AddressSanitizer: CHECK failed|runtime error:|"
+                        r"UndefinedBehaviorSanitizer|Sanitizer:DEADLYSIGNAL")
+#: Frames of the sanitizer's own interceptors (malloc, strdup, realpath, ...).
+RUNTIME_FRAME = re.compile(r"libsanitizer|/libasan|/libubsan|\(/lib/x86_64-linux-gnu/libc\.")
+
+
+def preload() -> str:
+    """What a Python host must preload: gcc's AddressSanitizer runtime, and the C++ runtime
+    (pythonfmu's wrapper throws C++ exceptions: the sanitizer intercepts __cxa_throw only when
+    the C++ runtime is there when it starts)."""
+    proc = subprocess.run(["gcc", "-print-file-name=libasan.so"], capture_output=True,
+                          text=True, check=True)
+    return f"{os.path.realpath(proc.stdout.strip())}:libstdc++.so.6"
+
+
+def python_environment(log_dir: Path, extra: dict | None = None) -> dict:
+    """The environment of a Python host whose loaded C runs under the sanitizers: the
+    runtime preloaded, every report written to ``log_dir`` (also from the processes the host
+    starts) and fatal, Python's allocations made with malloc (so that LeakSanitizer sees the
+    pointers Python objects hold)."""
+    log_dir = Path(log_dir)
+    log_dir.mkdir(parents=True, exist_ok=True)
+    return {**os.environ, **(extra or {}),
+            "LD_PRELOAD": preload(),
+            "PYTHONMALLOC": "malloc",
+            "RATTLE_SANITIZED": "1",
+            "ASAN_OPTIONS": ("detect_leaks=1:halt_on_error=1:abort_on_error=1:"
+                             "detect_stack_use_after_return=0:"
+                             f"log_path={log_dir / 'asan'}"),
+            "UBSAN_OPTIONS": ("halt_on_error=1:abort_on_error=1:print_stacktrace=1:"
+                              f"log_path={log_dir / 'ubsan'}")}
+
+
+def python_reports(log_dir: Path) -> list[str]:
+    """The sanitizer reports the processes wrote to ``log_dir`` that are the project's: every
+    memory error and undefined behaviour, and the leaks of memory that the project's C
+    allocated (the first frame that is not the sanitizer's interceptor is in its sources;
+    the interpreter's and pythonfmu's own allocations are theirs)."""
+    found = []
+    for path in sorted(Path(log_dir).glob("*")):
+        text = path.read_text(errors="replace")
+        for line in text.splitlines():
+            if ERROR_MARK.search(line):
+                found.append(f"{path.name}: {line}\n{text[:6000]}")
+                break
+        for block in re.split(r"\n(?=(?:Direct|Indirect) leak of )", text)[1:]:
+            frames = [ln for ln in block.splitlines() if re.match(r"\s+#\d+ ", ln)]
+            first = next((ln for ln in frames if not RUNTIME_FRAME.search(ln)), "")
+            if OWN_SOURCES.search(first):
+                found.append(f"{path.name}: {block.strip()[:3000]}")
+    return found
