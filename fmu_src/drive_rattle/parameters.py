@@ -15,6 +15,7 @@ are metadata for the FMI layer only.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
@@ -28,7 +29,9 @@ class ParameterSpec:
     """Declaration of one parameter.
 
     ``minimum``/``maximum`` are inclusive unless ``min_exclusive``/``max_exclusive``.
-    ``choices`` maps the allowed integer codes of an enumeration parameter to their meaning.
+    ``choices`` maps the allowed integer codes of an enumeration parameter to their meaning,
+    ``choice_names`` each code to the short identifier tools show for it (the item name of
+    the FMI enumeration type): one name per code, unique.
     """
 
     name: str
@@ -41,6 +44,17 @@ class ParameterSpec:
     max_exclusive: bool = False
     display_unit: str | None = None
     choices: Mapping[int, str] | None = None
+    choice_names: Mapping[int, str] | None = None
+
+    def __post_init__(self) -> None:
+        if self.choices is None:
+            return
+        names = self.choice_names or {}
+        if sorted(names) != sorted(self.choices) or len(set(names.values())) != len(names) \
+                or not all(re.fullmatch(r"[a-z][a-z0-9_]*", n) for n in names.values()):
+            raise ValueError(f"parameter spec '{self.name}': choice_names {names!r} must name "
+                             f"every code of {sorted(self.choices)} once, as identifiers "
+                             "[a-z][a-z0-9_]*")
 
     @property
     def fmi_type(self) -> str:
@@ -170,11 +184,13 @@ FRICTION_FORMS = {
     1: "apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)",
     2: "as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h)",
 }
+FRICTION_FORMS_NAMES = {0: "load_sharing", 1: "apparent_area", 2: "as_printed"}
 #: contact.hertz_law codes
 HERTZ_LAWS = {
     0: "exact elliptical Hertz contact (Johnson 1985, complete elliptic integrals)",
     1: "equivalent sphere of eq. 2, K = 4/3 E* (r_x r_y)^(1/4)",
 }
+HERTZ_LAWS_NAMES = {0: "exact_elliptical", 1: "equivalent_sphere"}
 #: contact.geometry codes (docs/model.md section 2)
 CONTACT_GEOMETRIES = {
     0: "crowned point contacts: each pair touches at the lowest point of its engaged contact "
@@ -185,12 +201,15 @@ CONTACT_GEOMETRIES = {
     2: "unmodified flanks in line contact: every pair in the zone loaded along its engaged "
        "contact line, Palmgren's line-contact law",
 }
+CONTACT_GEOMETRIES_NAMES = {0: "crowned_points", 1: "paper_shared_approach",
+                            2: "line_contact"}
 #: contact.roughness codes (docs/model.md section 3)
 ROUGHNESS_MODELS = {
     0: "smooth flanks",
     1: "Greenwood-Tripp asperity layer (surface.sigma, surface.gamma, "
        "surface.asperity_density) in series with the smooth law",
 }
+ROUGHNESS_MODELS_NAMES = {0: "smooth", 1: "greenwood_tripp"}
 #: contact.dissipation codes
 DISSIPATION_MODELS = {
     0: "none (the paper's equations: friction is the only loss)",
@@ -203,8 +222,11 @@ DISSIPATION_MODELS = {
     4: "mesh damping ratio contact.damping_ratio: viscous, c = 2 zeta sqrt(k m) on the "
        "contact's linearized stiffness k = dW/d(delta) and the wheel's normal mass",
 }
+DISSIPATION_MODELS_NAMES = {0: "none", 1: "hunt_crossley_restitution", 2: "hunt_crossley_damping",
+                            3: "squeeze_film", 4: "damping_ratio"}
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
+SHEAR_SPEEDS_NAMES = {0: "entrainment", 1: "sliding"}
 #: vehicle.model codes (see docs/model.md section 6)
 VEHICLE_MODELS = {
     0: "output shaft: spring-damper shaft.k, shaft.c to the reflected vehicle inertia vehicle.J "
@@ -212,12 +234,14 @@ VEHICLE_MODELS = {
     1: "constant load torque on the wheel, wheel.tau_load = vehicle.drag (the paper's M_res; "
        "the shaft, vehicle.J and vehicle.drag_viscous unused)",
 }
+VEHICLE_MODELS_NAMES = {0: "output_shaft", 1: "constant_load"}
 #: lubricant.film codes
 FILM_MODELS = {
     0: "eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)",
     1: "the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair "
        "(Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha)",
 }
+FILM_MODELS_NAMES = {0: "eq11_gap", 1: "ehl_central"}
 #: friction.viscous_law codes
 VISCOUS_LAWS = {
     0: "Newtonian, isoviscous: eta U / h (the paper)",
@@ -225,6 +249,7 @@ VISCOUS_LAWS = {
        "tau_L (1 - exp(-eta exp(alpha p) U / (h tau_L))), tau_L = tau_L0 + gamma_L p, "
        "p the pair's mean Hertz pressure",
 }
+VISCOUS_LAWS_NAMES = {0: "isoviscous", 1: "barus_limiting_shear"}
 
 
 @dataclass(frozen=True)
@@ -293,15 +318,18 @@ class MeshParameters(ParameterSet):
         "contact.hertz_law", 0, "1", "load-approach law of each elliptical point contact "
         "(contact.geometry 0 and 1): "
         + "; ".join(f"{k} = {v}" for k, v in HERTZ_LAWS.items()),
-        minimum=0, maximum=1, choices=HERTZ_LAWS)
+        minimum=0, maximum=1, choices=HERTZ_LAWS,
+        choice_names=HERTZ_LAWS_NAMES)
     contact_geometry: int = declare(
         "contact.geometry", 0, "1", "which tooth pairs carry load and how (docs/model.md "
         "section 2): " + "; ".join(f"{k} = {v}" for k, v in CONTACT_GEOMETRIES.items()),
-        minimum=0, maximum=2, choices=CONTACT_GEOMETRIES)
+        minimum=0, maximum=2, choices=CONTACT_GEOMETRIES,
+        choice_names=CONTACT_GEOMETRIES_NAMES)
     roughness: int = declare(
         "contact.roughness", 0, "1", "load-approach law below a few surface.sigma (docs/model.md "
         "section 3): " + "; ".join(f"{k} = {v}" for k, v in ROUGHNESS_MODELS.items()),
-        minimum=0, maximum=1, choices=ROUGHNESS_MODELS)
+        minimum=0, maximum=1, choices=ROUGHNESS_MODELS,
+        choice_names=ROUGHNESS_MODELS_NAMES)
     asperity_density: float = declare(
         "surface.asperity_density", 1e9, "1/m2",
         "areal density of asperity summits of the flanks (Greenwood-Tripp, contact.roughness = "
@@ -311,7 +339,8 @@ class MeshParameters(ParameterSet):
     dissipation: int = declare(
         "contact.dissipation", 1, "1", "contact dissipation: "
         + "; ".join(f"{k} = {v}" for k, v in DISSIPATION_MODELS.items()),
-        minimum=0, maximum=4, choices=DISSIPATION_MODELS)
+        minimum=0, maximum=4, choices=DISSIPATION_MODELS,
+        choice_names=DISSIPATION_MODELS_NAMES)
     restitution: float = declare(
         "contact.restitution", 0.8, "1",
         "coefficient of restitution of a single lubricated tooth impact at "
@@ -352,15 +381,18 @@ class MeshParameters(ParameterSet):
     friction_form: int = declare(
         "friction.form", 0, "1", "reading of eq. 12 (see docs/model.md): "
         + "; ".join(f"{k} = {v}" for k, v in FRICTION_FORMS.items()),
-        minimum=0, maximum=2, choices=FRICTION_FORMS)
+        minimum=0, maximum=2, choices=FRICTION_FORMS,
+        choice_names=FRICTION_FORMS_NAMES)
     shear_speed: int = declare(
         "friction.shear_speed", 0, "1", "speed in the viscous term eta*U/h: "
         + "; ".join(f"{k} = {v}" for k, v in SHEAR_SPEEDS.items()),
-        minimum=0, maximum=1, choices=SHEAR_SPEEDS)
+        minimum=0, maximum=1, choices=SHEAR_SPEEDS,
+        choice_names=SHEAR_SPEEDS_NAMES)
     viscous_law: int = declare(
         "friction.viscous_law", 0, "1", "shear stress of the film in the viscous term: "
         + "; ".join(f"{k} = {v}" for k, v in VISCOUS_LAWS.items()),
-        minimum=0, maximum=1, choices=VISCOUS_LAWS)
+        minimum=0, maximum=1, choices=VISCOUS_LAWS,
+        choice_names=VISCOUS_LAWS_NAMES)
     tau_s: float = declare(
         "friction.tau_s", 2.28e8, "Pa",
         "boundary shear strength of the asperity junctions (default gives a boundary "
@@ -387,7 +419,8 @@ class MeshParameters(ParameterSet):
     film: int = declare(
         "lubricant.film", 0, "1", "film thickness h of the film parameter lambda = h/sigma: "
         + "; ".join(f"{k} = {v}" for k, v in FILM_MODELS.items()),
-        minimum=0, maximum=1, choices=FILM_MODELS)
+        minimum=0, maximum=1, choices=FILM_MODELS,
+        choice_names=FILM_MODELS_NAMES)
     sigma: float = declare(
         "surface.sigma", 0.4e-6, "m", "composite RMS roughness of the flanks",
         minimum=1e-9, maximum=1e-3, display_unit="um")
@@ -528,7 +561,8 @@ class DrivelineParameters(ParameterSet):
     vehicle_model: int = declare(
         "vehicle.model", 0, "1", "what loads the wheel: "
         + "; ".join(f"{k} = {v}" for k, v in VEHICLE_MODELS.items()),
-        minimum=0, maximum=1, choices=VEHICLE_MODELS)
+        minimum=0, maximum=1, choices=VEHICLE_MODELS,
+        choice_names=VEHICLE_MODELS_NAMES)
     h_max: float = declare(
         "solver.h_max", 1e-4, "s", "largest integration substep of the output shaft",
         minimum=1e-8, maximum=1.0)

@@ -44,20 +44,6 @@ LOG_CATEGORIES = {
 ABOUT = {"author": "drive-rattle developers", "version": "0.1.0", "license": "MIT"}
 
 
-#: Item names of the enumerations, by parameter and code: short identifiers a tool shows
-#: instead of the number.  A code with no name here gets one derived from its description
-#: (:func:`derived_item_name`), so an integer code added to the specs gets its enumeration
-#: without a change here; a name is used only while each of its words still occurs in the
-#: code's description, so that a code whose meaning changed never keeps a wrong name.
-ITEM_NAMES = {
-    "contact.hertz_law": {0: "exact_elliptical", 1: "equivalent_sphere"},
-    "contact.dissipation": {0: "none", 1: "hunt_crossley_restitution",
-                            2: "hunt_crossley_damping"},
-    "friction.form": {0: "load_sharing", 1: "apparent_area", 2: "as_printed"},
-    "friction.shear_speed": {0: "entrainment", 1: "sliding"},
-}
-
-
 class Item(NamedTuple):
     name: str
     value: int
@@ -71,43 +57,16 @@ class Enumeration(NamedTuple):
     items: list[Item]
 
 
-def _words(text: str) -> list[str]:
-    return re.findall(r"[a-z0-9]+", text.lower())
-
-
-def derived_item_name(description: str) -> str:
-    """A short identifier from a code's description: its first (at most three) words before
-    the first parenthesis, colon, comma, semicolon or '='; ``""`` when there is none."""
-    words = _words(re.split(r"[(:,;=]", description, maxsplit=1)[0])[:3]
-    name = "_".join(words)
-    return name if re.fullmatch(r"[a-z][a-z0-9_]*", name) else ""
-
-
-def item_name(parameter: str, code: int, description: str) -> str:
-    """The item name of ``code`` of ``parameter`` (``ITEM_NAMES``, or derived)."""
-    name = ITEM_NAMES.get(parameter, {}).get(code)
-    if name is not None and set(name.split("_")) <= set(_words(description)):
-        return name
-    return derived_item_name(description) or f"code_{code}"
-
-
 def enumeration(spec) -> Enumeration | None:
     """The enumeration type of an integer variable with ``choices`` (else None): named after
-    the parameter (``contact.hertz_law`` -> ``ContactHertzLaw``), one item per code, its
-    description the code's meaning from the specs; unique item names (a repeated one gets
-    its code appended)."""
+    the parameter (``contact.hertz_law`` -> ``ContactHertzLaw``), one item per code named by
+    the specs' ``choice_names``, its description the code's meaning from the specs."""
     choices = getattr(spec, "choices", None)  # parameters have them; a signal may
     if spec.fmi_type != "Integer" or not choices:
         return None
     type_name = "".join(part[:1].upper() + part[1:] for part in re.split(r"[._]", spec.name))
-    items, seen = [], set()
-    for code, text in sorted(choices.items()):
-        name = item_name(spec.name, code, text)
-        if name in seen:
-            name = f"{name}_{code}"
-        seen.add(name)
-        items.append(Item(name, int(code), text))
-    return Enumeration(type_name, items)
+    return Enumeration(type_name, [Item(spec.choice_names[code], int(code), text)
+                                   for code, text in sorted(choices.items())])
 
 
 def _fmt(value) -> str:

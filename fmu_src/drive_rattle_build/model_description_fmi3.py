@@ -10,7 +10,8 @@ What FMI 3.0 adds or names differently:
 * the FMI 3.0 types: Real -> ``<Float64>``, Integer -> ``<Int32>``, Boolean, String (its
   start a ``<Start value=...>`` child); an Integer whose spec has ``choices`` (code ->
   description) becomes an ``<Enumeration declaredType=...>`` of an ``<EnumerationType>`` in
-  ``<TypeDefinitions>`` with a named item per code (:func:`enumeration_items`);
+  ``<TypeDefinitions>`` with a named item per code (the FMI 2.0 face's types,
+  ``model_description.enumeration``: the specs' ``choice_names``);
 * the independent variable ``time`` (FMI 3.0 requires exactly one), a Float64 in s at the value
   reference after the unit's variables (``time_value_reference``), first in the list;
 * ``<CoSimulation>`` with FMI 3.0's capability flags (:data:`CAPABILITIES`): no event mode, no
@@ -26,14 +27,12 @@ exposes.
 from __future__ import annotations
 
 import datetime
-import re
 from xml.etree.ElementTree import Element, SubElement
 
 from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DEFAULT_EXPERIMENT
 
-from .compiler import BuildError
-from .model_description import ABOUT, _fmt, unit_definitions, variable_rows
+from .model_description import ABOUT, _fmt, enumeration, unit_definitions, variable_rows
 from .unit_definitions import check_display_unit
 
 #: <CoSimulation>'s attributes after modelIdentifier, in the schema's order.
@@ -68,8 +67,6 @@ TYPES = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean", "String": 
 ENUMERATION = "Enumeration"
 #: The independent variable.
 TIME_NAME, TIME_UNIT = "time", "s"
-#: Where an item's name may end: before the first of these in the choice's description.
-_NAME_ENDS = re.compile(r":|,| \(")
 
 
 def is_enumeration(spec) -> bool:
@@ -81,35 +78,6 @@ def is_enumeration(spec) -> bool:
 def fmi3_type(spec) -> str:
     """The FMI 3.0 element of ``spec``'s variables."""
     return ENUMERATION if is_enumeration(spec) else TYPES[spec.fmi_type]
-
-
-def enumeration_items(choices) -> list[tuple[str, int, str]]:
-    """``(name, value, description)`` of every code of ``choices`` (code -> description), in
-    code order.  The name is the shortest leading part of the description that ends at ``:``,
-    ``,`` or `` (`` and tells the codes apart ("load sharing", "apparent area", "none"), the
-    whole description where no shorter part does; the description is the whole text.
-    BuildError when two codes have the same description."""
-    descriptions = {int(code): str(text).strip() for code, text in sorted(choices.items())}
-    if len(set(descriptions.values())) != len(descriptions):
-        raise BuildError(f"choices {dict(choices)!r}: two codes have the same description; "
-                         "an enumeration needs a distinct name per code")
-
-    def prefixes(text: str) -> list[str]:
-        return [text[:m.start()].strip() for m in _NAME_ENDS.finditer(text)] + [text]
-
-    names = {}
-    for code, text in descriptions.items():
-        others = [t for c, t in descriptions.items() if c != code]
-        names[code] = next(p for p in prefixes(text)
-                           if p and not any(o == p or o.startswith(p + c)
-                                            for o in others for c in (":", ",", " (")))
-    return [(names[code], code, text) for code, text in descriptions.items()]
-
-
-def enumeration_type_name(spec) -> str:
-    """The declared type of an enumeration parameter: the parameter's own name (one type per
-    parameter, named as it is)."""
-    return spec.name
 
 
 def time_value_reference(model: str) -> int:
@@ -141,10 +109,11 @@ def render(model: str, token: str, generation_tool: str, generation_time: str | 
         types = SubElement(root, "TypeDefinitions")
         for spec in enumerations:
             # no description on the type (the variable has it): fmpy 0.3.19 cannot read one
-            t = SubElement(types, "EnumerationType", {"name": enumeration_type_name(spec)})
-            for name, value, description in enumeration_items(spec.choices):
-                SubElement(t, "Item", {"name": name, "value": str(value),
-                                       "description": description})
+            declared = enumeration(spec)  # the FMI 2.0 face's types: one source
+            t = SubElement(types, "EnumerationType", {"name": declared.type_name})
+            for item in declared.items:
+                SubElement(t, "Item", {"name": item.name, "value": str(item.value),
+                                       "description": item.description})
     categories = SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES.items():
         SubElement(categories, "Category", {"name": name, "description": text})
@@ -164,7 +133,7 @@ def render(model: str, token: str, generation_tool: str, generation_time: str | 
         if causality == "parameter":
             attrs["initial"] = "exact"
         if element == ENUMERATION:
-            attrs["declaredType"] = enumeration_type_name(spec)
+            attrs["declaredType"] = enumeration(spec).type_name
         if element == "Float64":
             check_display_unit(spec.unit, spec.display_unit)
             attrs["unit"] = spec.unit

@@ -446,7 +446,9 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
          && rm_read_finite(r, "the contact's Hunt-Crossley factor", 1, &st->diss.d, err);
     if (ok) {
         int64_t film = rm_read_i64(r);
-        if (r->failed || film < 0 || film > 1) {
+        if (rm_read_ended(r, "the contact's film state", err))
+            ok = 0;
+        else if (film < 0 || film > 1) {
             rm_printf(err, "the contact's film state = %lld: expected 0 or 1", (long long)film);
             ok = 0;
         }

@@ -155,11 +155,15 @@ def parameter_cases(fmu: Path) -> list[dict]:
                         "kind": "beyond", "status": status_of(c.u.slave.exitInitializationMode),
                         "message": c.message()})
             c.close()
-        if v.causality != "parameter" or v.type not in ("Real", "Integer"):
+        if v.causality != "parameter" or v.type not in ("Real", "Integer", "Enumeration"):
             continue
         cast = float if v.type == "Real" else int
         trials = []
-        for bound, side in ((v.min, -1), (v.max, +1)):
+        lo, hi = v.min, v.max
+        if v.type == "Enumeration" and lo is None and hi is None:  # the codes are its items
+            codes = [int(item.value) for item in v.declaredType.items]
+            lo, hi = min(codes), max(codes)
+        for bound, side in ((lo, -1), (hi, +1)):
             if bound is None:
                 continue
             b = cast(bound)

@@ -71,7 +71,8 @@ class Model:
         self.starts = {}  # start values, as the setters take them
         for sv in md.find("ModelVariables"):
             child = next(iter(sv))
-            kind = child.tag
+            # an Enumeration is an Integer to the C API (fmi2Get/SetInteger)
+            kind = "Integer" if child.tag == "Enumeration" else child.tag
             self.variables[sv.get("name")] = (int(sv.get("valueReference")), kind,
                                               sv.get("causality"))
             start = child.get("start")

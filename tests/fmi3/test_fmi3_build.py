@@ -31,7 +31,6 @@ from drive_rattle_build.fmi3 import (
     source_files,
     template_path,
 )
-from drive_rattle_build.model_description_fmi3 import enumeration_items
 from drive_rattle_build.native import (
     CONFIG_HEADER,
     RESOURCE_MARKER,
@@ -95,13 +94,16 @@ def test_interface_is_the_fmi2_interface(fmi3_fmus, model):
         v = mine.pop(name)
         for attr in ("valueReference", "description", "causality", "variability", "initial"):
             assert v.get(attr) == sv.get(attr), (name, attr)
-        if typed.tag == "Integer" and name in choices:
-            assert v.tag == "Enumeration" and v.get("declaredType") == name
+        if typed.tag == "Enumeration":  # the FMI 2.0 type, item for item
+            assert name in choices
+            declared = typed.get("declaredType")
+            assert v.tag == "Enumeration" and v.get("declaredType") == declared
             items = [(i.get("name"), int(i.get("value")), i.get("description"))
-                     for i in type_of[name]]
-            assert items == enumeration_items(choices[name])
+                     for i in type_of[declared]]
+            fmi2_type = next(t for t in fmi2.find("TypeDefinitions") if t.get("name") == declared)
+            assert items == [(i.get("name"), int(i.get("value")), i.get("description"))
+                             for i in fmi2_type.find("Enumeration")]
             assert [i[1] for i in items] == sorted(choices[name])
-            assert len({i[0] for i in items}) == len(items)
         else:
             assert v.tag == {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean",
                              "String": "String"}[typed.tag], name
@@ -204,17 +206,3 @@ def test_windows_binary_exports_every_fmi3_function_and_imports_only_the_c_runti
     table = headers.stdout.split("[Ordinal/Name Pointer] Table")[1].split("\n\n")[0]
     exported = set(re.findall(r"\]\s+(\w+)", table))
     assert exported == set(header_functions())
-
-
-def test_enumeration_items_are_named_from_the_choices():
-    """An item's name is the shortest leading part of its description that tells the codes
-    apart; codes with the same description cannot be named."""
-    assert enumeration_items({0: "load sharing: a", 1: "apparent area: b"}) == [
-        ("load sharing", 0, "load sharing: a"), ("apparent area", 1, "apparent area: b")]
-    assert [n for n, _, _ in enumeration_items(
-        {0: "none (x)", 1: "Hunt-Crossley, factor from e", 2: "Hunt-Crossley, factor d"})] == [
-        "none", "Hunt-Crossley, factor from e", "Hunt-Crossley, factor d"]
-    from drive_rattle_build.compiler import BuildError
-
-    with pytest.raises(BuildError, match="same description"):
-        enumeration_items({0: "a", 1: "a"})

@@ -12,7 +12,7 @@ from fmpy import read_model_description, simulate_fmu
 from drive_rattle import MESH, MeshParameters, MeshUnit, input_starts
 from drive_rattle.catalog import UNITS
 from drive_rattle.parameters import ParameterSpec, specs
-from drive_rattle_build.model_description import ITEM_NAMES, enumeration, item_name
+from drive_rattle_build.model_description import enumeration
 from drive_rattle_cosim.harness import time_grid
 
 
@@ -41,26 +41,26 @@ def test_every_integer_code_is_an_enumeration(flavour_fmus, model):
     assert model != "GearMeshRattle" or variables["gear.z_pinion"].type == "Integer"
 
 
-def test_the_curated_names_are_in_use_and_not_stale():
-    """Each name of ITEM_NAMES names a code of its parameter and still matches its text (a
-    code whose meaning changed would fall back to a derived name: then update ITEM_NAMES)."""
+def test_the_names_come_from_the_specs():
+    """The item names are the specs' ``choice_names`` (one source for both FMI versions)."""
     by_name = {s.name: s for model in UNITS for s in coded(model)}
-    for parameter, names in ITEM_NAMES.items():
-        spec = by_name[parameter]
-        for code, name in names.items():
-            assert item_name(parameter, code, spec.choices[code]) == name, (parameter, code)
+    for spec in by_name.values():
+        e = enumeration(spec)
+        assert [(i.name, i.value) for i in e.items] == sorted(
+            ((spec.choice_names[k], k) for k in spec.choices), key=lambda x: x[1])
     assert [i.name for i in enumeration(by_name["contact.hertz_law"]).items] == [
         "exact_elliptical", "equivalent_sphere"]
+    assert enumeration(by_name["contact.hertz_law"]).type_name == "ContactHertzLaw"
 
 
-def test_a_new_integer_code_gets_an_enumeration_without_a_change_of_the_build():
-    spec = ParameterSpec("load.model", 0, "1", "driveline load", minimum=0, maximum=3,
-                         choices={0: "constant torque", 1: "viscous (c w)",
-                                  2: "viscous, quadratic", 3: "= 3"})
-    e = enumeration(spec)
-    assert e.type_name == "LoadModel"
-    assert [(i.name, i.value) for i in e.items] == [
-        ("constant_torque", 0), ("viscous", 1), ("viscous_2", 2), ("code_3", 3)]
+def test_a_spec_without_a_name_for_every_code_is_refused():
+    with pytest.raises(ValueError, match="choice_names"):
+        ParameterSpec("load.model", 0, "1", "driveline load", minimum=0, maximum=1,
+                      choices={0: "constant torque", 1: "viscous"}, choice_names={0: "constant"})
+    with pytest.raises(ValueError, match="choice_names"):
+        ParameterSpec("load.model", 0, "1", "driveline load", minimum=0, maximum=1,
+                      choices={0: "constant torque", 1: "viscous"},
+                      choice_names={0: "Constant torque", 1: "viscous"})
 
 
 def test_fmpy_sets_an_enumeration_by_number(flavour_fmus):
