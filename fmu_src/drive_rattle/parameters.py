@@ -337,7 +337,8 @@ class MeshParameters(ParameterSet):
         "default surfaces (0.03-0.05 measured by Greenwood and Williamson 1966)",
         minimum=1e6, maximum=1e14)
     dissipation: int = declare(
-        "contact.dissipation", 1, "1", "contact dissipation: "
+        "contact.dissipation", 3, "1", "contact dissipation (default: the squeeze-film law of "
+        "lubricated impacts, docs/model.md section 3.3): "
         + "; ".join(f"{k} = {v}" for k, v in DISSIPATION_MODELS.items()),
         minimum=0, maximum=4, choices=DISSIPATION_MODELS,
         choice_names=DISSIPATION_MODELS_NAMES)
@@ -369,7 +370,8 @@ class MeshParameters(ParameterSet):
         "film (starvation) parameter phi of the squeeze-film law (contact.dissipation = 3): "
         "the fraction of the flooded Reynolds squeeze-film force the flanks' oil film "
         "develops, 1 = flooded; with the critical Stokes number it sets the critical impact "
-        "speed (docs/model.md section 3)", minimum=1e-6, maximum=1.0)
+        "speed; no published value for a gear mesh: the default 0.03 is a calibration, its "
+        "plausible range 0.01-0.1 (docs/model.md section 3.3)", minimum=1e-6, maximum=1.0)
     damping_ratio: float = declare(
         "contact.damping_ratio", 0.05, "1",
         "mesh damping ratio zeta (contact.dissipation = 4): viscous damping "
