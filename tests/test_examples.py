@@ -22,8 +22,8 @@ def test_paper_scenario_example(tmp_path, fmus):
     result = mod.run(stop_time=0.5, transient=0.1, window=0.2, out_dir=tmp_path,
                      fmu_dir=fmus["GearMeshRattle"].parent)
     names = {f.name for f in result["files"]}
-    assert names == {"comparison.md", "cosim.csv", "fig3_wheel_speed.png", "fig4_pair_force.png",
-                     "fig5_force_spectrum.png"}
+    assert names == {"comparison.md", "models.md", "cosim.csv", "fig3_wheel_speed.png",
+                     "fig4_pair_force.png", "fig5_force_spectrum.png"}
     for f in result["files"]:
         assert f.stat().st_size > (5000 if f.suffix == ".png" else 300)
     ws = result["statistics"]
@@ -33,6 +33,19 @@ def test_paper_scenario_example(tmp_path, fmus):
     report = (tmp_path / "comparison.md").read_text()
     row = next(r for r in report.splitlines() if r.startswith("| mean wheel speed [rad/s] |"))
     assert " ± " in row and "| 44.5 |" in row  # this run with its scatter, the paper's figure
+    # The two models side by side, each cell "mean ± scatter [band]"; the default model at its
+    # defaults is the FMUs' run: the same statistic (the compiled loop gives their numbers)
+    models = result["models"]
+    assert [m.model.name for m in models] == ["default model", "paper's contact model"]
+    assert models[0].central.statistics.scatter("max_penetration").mean == \
+        ws.scatter("max_penetration").mean
+    assert len(models[1].band) == 3
+    table = result["models_table"]
+    pairs = next(r for r in table.splitlines() if r.startswith("| pairs loaded"))
+    cells = [c.strip() for c in pairs.strip("|").split("|")]
+    assert all(" ± " in c and c.endswith("]") for c in cells[1:3]) and "3–4" in cells[3]
+    text = (tmp_path / "models.md").read_text()
+    assert "hypothesis" in text and "381.4 Hz" in text
     with pytest.raises(ValueError, match="transient"):
         mod.run(stop_time=0.5, transient=0.4, window=0.2, out_dir=tmp_path,
                 fmu_dir=fmus["GearMeshRattle"].parent)

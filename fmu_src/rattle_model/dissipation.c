@@ -40,8 +40,25 @@ double rm_squeeze_pair_area(double r_x, double r_y)
     return 2.0 * (r_x * r_y) * g / (r_x + r_y);
 }
 
+/* The squeeze-film area of an unmodified pair in line contact (contact.geometry 2), as the
+ * point contacts' law uses it.  A cylinder of radius R and length L at the gap
+ * h = h0 + x^2/(2R) closing at the rate -dh0/dt carries the same Reynolds pressure
+ * p = 6 eta R (-dh0/dt) / h^2 (d/dx(h^3 dp/dx) = 12 eta dh0/dt), whose resultant is
+ * F = 3 sqrt(2) pi eta L R^(3/2) (-dh0/dt) / h0^(3/2): from the film's edge down to the
+ * roughness h_c = sigma the approach loses m dv = 6 sqrt(2) pi eta phi L R^(3/2) / sqrt(sigma)
+ * (the edge's h0 drops out), where a point contact loses 6 pi eta phi A ln(h0/h_c) =
+ * 6 pi eta phi A St_c.  So a line pair enters the law e = e_dry (1 - St_c/St) with the area
+ * A = sqrt(2) L R^(3/2) / (St_c sqrt(sigma)): its critical speed does not depend on St_c (0
+ * without a film loss, St_c = 0). */
+static double line_pair_area(const RmMeshParams* p, double r_x, double length)
+{
+    if (!(p->stokes_critical > 0.0)) return 0.0;
+    return sqrt(2.0) * length * r_x * sqrt(r_x) / (p->stokes_critical * sqrt(p->sigma));
+}
+
 /* The pairs of `flank` whose crown offset is below the roughness touch first and squeeze
- * their films down to it; the others keep a gap of at least their offset. */
+ * their films down to it; the others keep a gap of at least their offset.  (Unmodified flanks:
+ * every pair in the zone, at its line's area for contact.geometry 2.) */
 double rm_squeeze_area(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p)
 {
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
@@ -49,7 +66,9 @@ double rm_squeeze_area(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank
     for (int i = 0; i < ps->n; i++) {
         if (!(ps->offset[i] < M->p.sigma)) continue;
         rm_pair_coefficients(M, f, ps, i);
-        area += rm_squeeze_pair_area(ps->r_x[i], ps->r_y[i]); /* the crown's or eq. 6's r_y */
+        area += M->g.layout == RM_LAYOUT_LINE
+                    ? line_pair_area(&M->p, ps->r_x[i], ps->length[i])
+                    : rm_squeeze_pair_area(ps->r_x[i], ps->r_y[i]); /* the crown's or eq. 6's */
     }
     return area;
 }
@@ -124,13 +143,16 @@ double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta)
  * linearized stiffness from its load-approach law (3/2 K pen^(1/2) for smooth Hertz) -- so
  * small oscillations about any loaded state have the damping ratio zeta, and a single Hertz
  * impact's restitution depends on zeta alone, not on its speed. */
-double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y, double k_i,
-                               double ratio_scale)
+double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y,
+                               double length, double k_i, double ratio_scale)
 {
     const RmMeshParams* p = &M->p;
-    if (film)
-        return 6.0 * RM_PI * p->eta * p->squeeze_fraction * rm_squeeze_pair_area(r_x, r_y)
-               / p->sigma;
+    if (film) {
+        double scale = 6.0 * RM_PI * p->eta * p->squeeze_fraction;
+        if (M->g.layout == RM_LAYOUT_LINE) /* 3 sqrt(2) pi eta phi L R^(3/2) / sigma^(3/2) */
+            return 0.5 * sqrt(2.0) * scale * length * r_x * sqrt(r_x) / (p->sigma * sqrt(p->sigma));
+        return scale * rm_squeeze_pair_area(r_x, r_y) / p->sigma;
+    }
     if (ratio_scale > 0.0) return ratio_scale * k_i;
     return 0.0;
 }

@@ -30,18 +30,13 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
 {
     m->p = *p;
     if (!rm_geometry(&p->gear, &m->g, err)) return 0;
-    /* the squeeze film's area and the EHL film are those of point contacts (dissipation.c,
-     * friction.c): a line contact squeezes and films by other laws, not in this model */
-    if (m->g.layout == RM_LAYOUT_LINE
-        && (p->dissipation == RM_DISSIPATION_SQUEEZE || p->film == RM_FILM_EHL)) {
+    /* the EHL film is Hamrock and Dowson's point-contact film (friction.c): a line contact's
+     * film follows another law, not in this model */
+    if (m->g.layout == RM_LAYOUT_LINE && p->film == RM_FILM_EHL) {
         rm_printf(err, "parameter 'contact.geometry' = %d (line contact of unmodified flanks) "
-                       "with %s: the law is derived for point contacts; allowed: "
-                       "contact.geometry = 0 or 1 with it, or %s with the line contact",
-                  p->gear.layout,
-                  p->dissipation == RM_DISSIPATION_SQUEEZE ? "contact.dissipation = 3 (squeeze film)"
-                                                          : "lubricant.film = 1 (EHL film)",
-                  p->dissipation == RM_DISSIPATION_SQUEEZE ? "contact.dissipation = 0, 1, 2 or 4"
-                                                          : "lubricant.film = 0");
+                       "with lubricant.film = 1 (EHL film): the film law is derived for point "
+                       "contacts; allowed: contact.geometry = 0 or 1 with it, or "
+                       "lubricant.film = 0 with the line contact", p->gear.layout);
         return 0;
     }
     m->E_star = rm_effective_modulus(p->E_pinion, p->nu_pinion, p->E_wheel, p->nu_wheel);
@@ -212,8 +207,8 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             double k_i = 0.0, c_i;
             if (ratio_scale > 0.0)
                 rm_approach_rates(&M->approach, f, K, ps->W_r[i], pen, 0.0, &k_i, &c_i);
-            double c = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i], k_i,
-                                               ratio_scale);
+            double c = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
+                                               ps->length[i], k_i, ratio_scale);
             W += c * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0;
         }
@@ -326,8 +321,8 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
             if (factor > 0.0) k_sum += k_i * factor;
             c_sum += c_i;
             if (d == 0.0) /* the viscous dampings (none with Hunt-Crossley) */
-                c_sum += rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i], k_i,
-                                                 ratio_scale);
+                c_sum += rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
+                                                 ps->length[i], k_i, ratio_scale);
         }
     }
     *k = k_sum;

@@ -494,11 +494,12 @@ RM_INTERNAL int rm_onset_dissipation(const RmMesh* M, RmFail* f, RmPairCache* ca
                                      double phi_p, double v, RmContactDissipation* out);
 /* The dissipation of a contact at rest (a start in contact, or no impact speed). */
 RM_INTERNAL RmContactDissipation rm_resting_dissipation(const RmMesh* M);
-/* The viscous damping [N.s/m] on a touching pair's penetration rate (radii r_x, r_y, its
- * linearized stiffness k_i = dW_i/d(pen)): its squeeze film in the film state, or its share of
+/* The viscous damping [N.s/m] on a touching pair's penetration rate (radii r_x, r_y, contact
+ * line length, linearized stiffness k_i = dW_i/d(pen)): its squeeze film in the film state (a
+ * point contact's, or a line's for contact.geometry 2), or its share of
  * the mesh damping ratio's 2 zeta sqrt(k m) (scale from rm_ratio_scale); 0 otherwise. */
 RM_INTERNAL double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y,
-                                           double k_i, double ratio_scale);
+                                           double length, double k_i, double ratio_scale);
 /* 2 zeta sqrt(m_n / k) over the touching pairs of a pair set at the flank penetration delta
  * (0 without the mesh damping ratio or without a touching pair). */
 RM_INTERNAL double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta);

@@ -36,7 +36,7 @@ def test_built_fmus_pass_their_references(fmus, model):
     ("GearMeshRattle", "gear.backlash", 0.10e-3 * 1.01),
     ("GearMeshRattle", "wheel.J", 1.3e-3 * 1.01),
     ("GearMeshRattle", "contact.crowning", MeshParameters().crowning * 1.01),
-    ("GearMeshRattle", "contact.restitution", MeshParameters().restitution * 1.01),
+    ("GearMeshRattle", "contact.squeeze_fraction", MeshParameters().squeeze_fraction * 1.01),
     ("Driveline", "shaft.k", DrivelineParameters().k_shaft * 1.01),
     ("Driveline", "vehicle.drag", DrivelineParameters().drag * 1.01),
 ])

@@ -17,10 +17,11 @@ import pytest
 
 from drive_rattle import COAST, DRIVE, DrivelineParameters, MeshParameters, MeshUnit, ModelError
 from drive_rattle.units import DrivelineUnit, coupled_start_inputs, run_coupled
-from tests.oracle import hertz
+from tests.oracle import hertz, squeeze
 from tests.oracle.mesh import MeshModel
 
 from .helpers import Probe, free_parameters, run_impact
+from .test_dissipation import squeeze_probe
 
 PAPER = {"contact_geometry": 1}
 LINE = {"contact_geometry": 2}
@@ -120,7 +121,7 @@ def test_paper_scenario_loads_three_to_four_pairs_under_the_paper_option(hertz_l
     t, s = coupled_run({**PAPER, "hertz_law": hertz_law})
     n = s["mesh.n_contact"][t > 1.0]
     loaded = n[n > 0]
-    assert loaded.size > 10000  # (in contact about a fifth of the time)
+    assert loaded.size > 2000  # (in contact a tenth to a fifth of the time, by the dissipation)
     assert set(np.unique(loaded)) <= {3.0, 4.0}
     eps_gamma = MeshParameters().derived()["eps_gamma"]
     assert abs(np.mean(loaded) - eps_gamma) <= 0.05, np.mean(loaded)
@@ -278,16 +279,29 @@ def test_steady_drive_kinematics_and_power_balance(changes):
     assert power_out == pytest.approx(power_in, rel=1e-4)
 
 
-@pytest.mark.parametrize("changes, named", [
-    ({"dissipation": 3}, "contact.dissipation = 3 (squeeze film)"),
-    ({"film": 1}, "lubricant.film = 1 (EHL film)"),
-])
-def test_line_contact_refuses_the_point_contact_film_laws(changes, named):
-    # The squeeze-film area and the EHL film are point-contact laws: with the line contact
-    # they are refused, naming both parameters and what is allowed; with the paper's point
-    # contacts they are accepted.
+def test_line_contact_refuses_the_point_contact_ehl_film():
+    # Hamrock and Dowson's film is a point-contact law: with the line contact it is refused,
+    # naming both parameters and what is allowed; with the paper's point contacts accepted.
     with pytest.raises(ValueError) as err:
-        MeshParameters(contact_geometry=2, **changes)
+        MeshParameters(contact_geometry=2, film=1)
     message = str(err.value)
-    assert "'contact.geometry' = 2" in message and named in message and "allowed:" in message
-    MeshParameters(contact_geometry=1, **changes)
+    assert ("'contact.geometry' = 2" in message and "lubricant.film = 1 (EHL film)" in message
+            and "allowed:" in message)
+    MeshParameters(contact_geometry=1, film=1)
+
+
+def test_line_contact_squeeze_film_is_the_cylinders():
+    # The squeeze-film law on the line contact: the area it uses is the cylinder's
+    # sqrt(2) L R^(3/2) / (St_c sqrt(sigma)) per pair (the oracle's, within 1e-12), so its
+    # critical speed 6 pi eta phi A St_c / m_n does not depend on St_c.
+    speeds = []
+    for st_c in (5.0, 10.0, 20.0):
+        p = MeshParameters(contact_geometry=2, stokes_critical=st_c)
+        probe = Probe(p)
+        m = MeshModel(p)
+        onset = squeeze_probe(probe, DRIVE, 0.0, 1e-3)
+        assert onset.area == pytest.approx(squeeze.flank_area(m, DRIVE, 0.0), rel=1e-12)
+        assert onset.area > 0.0
+        speeds.append(squeeze.critical_speed(m, onset.area))
+    assert speeds[0] == pytest.approx(speeds[1], rel=1e-12) == pytest.approx(speeds[2],
+                                                                               rel=1e-12)

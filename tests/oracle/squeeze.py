@@ -32,6 +32,7 @@ import math
 from typing import NamedTuple
 
 from . import hertz
+from .geometry import LAYOUT_LINE
 
 DISSIPATION_SQUEEZE = 3
 DISSIPATION_RATIO = 4
@@ -46,11 +47,24 @@ def pair_area(r_x: float, r_y: float) -> float:
     return 2.0 * (r_x * r_y) ** 1.5 / (r_x + r_y)
 
 
+def line_pair_area(params, r_x: float, length: float) -> float:
+    """The squeeze-film area of a pair in line contact as the law uses it: a cylinder of radius
+    R, length L at the gap h0 + x^2/(2R) carries F = 3 sqrt(2) pi eta L R^(3/2) (-dh0/dt) /
+    h0^(3/2), so the approach loses 6 sqrt(2) pi eta phi L R^(3/2) / sqrt(sigma) down to the
+    roughness, which is the point law's 6 pi eta phi A St_c for A = sqrt(2) L R^(3/2) /
+    (St_c sqrt(sigma)) (0 for St_c = 0: no film loss)."""
+    if not params.stokes_critical > 0.0:
+        return 0.0
+    return math.sqrt(2.0) * length * r_x**1.5 / (params.stokes_critical * math.sqrt(params.sigma))
+
+
 def flank_area(model, flank: int, phi_p: float) -> float:
     """Squeeze-film area of ``flank`` at the pinion angle ``phi_p``: the pairs whose crown
     offset is below the roughness sigma (they touch first), each with its own r_y (the
-    crown's, or eq. 6's)."""
-    return sum(pair_area(pl.r_x, pl.r_y) for pl in model.pair_laws(flank, phi_p)
+    crown's, or eq. 6's), or its line's area for the line contact."""
+    line = model.geometry.layout == LAYOUT_LINE
+    return sum(line_pair_area(model.params, pl.r_x, pl.length) if line
+               else pair_area(pl.r_x, pl.r_y) for pl in model.pair_laws(flank, phi_p)
                if pl.offset < model.params.sigma)
 
 
@@ -100,10 +114,15 @@ def onset(model, flank: int, phi_p: float, v: float) -> Onset:
     return Onset(area, St, e, hertz.hunt_crossley_factor(e, v), False)
 
 
-def film_damping(model, r_x: float, r_y: float) -> float:
-    """Squeeze-film damping [N.s/m] of a touching pair (radii r_x, r_y) after an impact that
-    did not rebound: 6 pi eta phi A / sigma (its film at the roughness gap)."""
+def film_damping(model, r_x: float, r_y: float, length: float = 0.0) -> float:
+    """Squeeze-film damping [N.s/m] of a touching pair (radii r_x, r_y; contact line
+    ``length`` for the line contact) after an impact that did not rebound: its film at the
+    roughness gap, 6 pi eta phi A / sigma, or for a line 3 sqrt(2) pi eta phi L R^(3/2) /
+    sigma^(3/2)."""
     p = model.params
+    if model.geometry.layout == LAYOUT_LINE:
+        return (3.0 * math.sqrt(2.0) * math.pi * p.eta * p.squeeze_fraction * length
+                * r_x**1.5 / p.sigma**1.5)
     return 6.0 * math.pi * p.eta * p.squeeze_fraction * pair_area(r_x, r_y) / p.sigma
 
 
