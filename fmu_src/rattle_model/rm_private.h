@@ -731,4 +731,7 @@ RM_INTERNAL int rm_driveline_start_outputs(RmUnit* u, double start_time, double 
 RM_INTERNAL int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
                                     RmText* err);
 
+/* Offset of the first byte of s[0..n) that is not valid UTF-8 (RFC 3629), or (size_t)-1. */
+RM_INTERNAL size_t rm_utf8_error_at(const unsigned char* s, size_t n);
+
 #endif

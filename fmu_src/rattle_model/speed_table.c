@@ -267,44 +267,6 @@ void rm_resolve_speed_table(const char* resources, const char* name, RmText* out
 }
 
 /* ------------------------------------------------------------------ the CSV text */
-/* Offset of the first byte that is not valid UTF-8 (RFC 3629), or (size_t)-1. */
-static size_t utf8_error_at(const unsigned char* s, size_t n)
-{
-    size_t i = 0;
-    while (i < n) {
-        unsigned c = s[i];
-        size_t len;
-        unsigned cp;
-        if (c < 0x80) {
-            i++;
-            continue;
-        }
-        if ((c & 0xE0) == 0xC0) {
-            len = 2;
-            cp = c & 0x1F;
-        }
-        else if ((c & 0xF0) == 0xE0) {
-            len = 3;
-            cp = c & 0x0F;
-        }
-        else if ((c & 0xF8) == 0xF0) {
-            len = 4;
-            cp = c & 0x07;
-        }
-        else
-            return i;
-        if (i + len > n) return i;
-        for (size_t k = 1; k < len; k++) {
-            if ((s[i + k] & 0xC0) != 0x80) return i;
-            cp = (cp << 6) | (s[i + k] & 0x3F);
-        }
-        if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000)
-            || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
-            return i;
-        i += len;
-    }
-    return (size_t)-1;
-}
 
 /* A field of a row: its text, unquoted, into `field` (reused); the position after it. */
 static size_t read_field(const char* s, size_t n, size_t i, RmText* field)
@@ -360,7 +322,7 @@ int rm_read_speed_table(const char* path, size_t* n_out, double** times_out,
     size_t n = 0;
     char* raw = read_bounded_file(path, &n, err);
     if (raw == NULL) return 0;
-    size_t bad = utf8_error_at((const unsigned char*)raw, n);
+    size_t bad = rm_utf8_error_at((const unsigned char*)raw, n);
     if (bad == (size_t)-1 && memchr(raw, '\0', n) != NULL) bad = (size_t)((char*)memchr(raw, '\0', n) - raw);
     if (bad != (size_t)-1) {
         name_file(err, path);

@@ -25,7 +25,7 @@
 #define MAX_START_TIME 1e9
 /* Version of the record of rm_save (bumped when its fields change). */
 #define RECORD_MAGIC "RATLUNIT"
-#define RECORD_VERSION 1u
+#define RECORD_VERSION 2u /* 2: the contact, dissipation and friction options of issue 19 */
 /* The record's header: magic, version, kind, phase, motion flag, start time, time, count. */
 #define RECORD_HEADER_BYTES ((size_t)(8 + 4 * 4 + 2 * 8 + 4))
 
@@ -136,43 +136,6 @@ static int set_defaults(RmUnit* u)
     return 1;
 }
 
-/* UTF-8 as RFC 3629 has it; the offset of the first bad byte or (size_t)-1. */
-static size_t utf8_error_at(const char* text)
-{
-    const unsigned char* s = (const unsigned char*)text;
-    size_t i = 0;
-    while (s[i] != 0) {
-        unsigned c = s[i], cp;
-        size_t len;
-        if (c < 0x80) {
-            i++;
-            continue;
-        }
-        if ((c & 0xE0) == 0xC0) {
-            len = 2;
-            cp = c & 0x1F;
-        }
-        else if ((c & 0xF0) == 0xE0) {
-            len = 3;
-            cp = c & 0x0F;
-        }
-        else if ((c & 0xF8) == 0xF0) {
-            len = 4;
-            cp = c & 0x07;
-        }
-        else
-            return i;
-        for (size_t k = 1; k < len; k++) {
-            if ((s[i + k] & 0xC0) != 0x80) return i;
-            cp = (cp << 6) | (s[i + k] & 0x3F);
-        }
-        if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000)
-            || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
-            return i;
-        i += len;
-    }
-    return (size_t)-1;
-}
 
 /* The range and choice checks of every parameter (in declaration order): 1, or 0 with the
  * refusal. */
@@ -441,7 +404,7 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
                 rm_printf(&err, "value %zu ('%s') is NULL", i, v->name);
                 refused = 1;
             }
-            else if ((bad = utf8_error_at(s)) != (size_t)-1) {
+            else if ((bad = rm_utf8_error_at((const unsigned char*)s, strlen(s))) != (size_t)-1) {
                 rm_printf(&err, "value %zu ('%s') is not valid UTF-8 (byte 0x%02X at offset "
                                 "%zu)", i, v->name, (unsigned)(unsigned char)s[bad], bad);
                 refused = 1;
@@ -1099,7 +1062,8 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
             }
             memcpy(x->s, s, len);
             x->s[len] = '\0';
-            if (strlen(x->s) != len || utf8_error_at(x->s) != (size_t)-1) {
+            if (strlen(x->s) != len
+                || rm_utf8_error_at((const unsigned char*)x->s, len) != (size_t)-1) {
                 rm_printf(&err, "variable '%s' is not UTF-8 text without NUL characters",
                           v->name);
                 goto done;

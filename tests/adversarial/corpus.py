@@ -155,8 +155,9 @@ def write_corpus(folder: Path) -> dict[str, Item]:
         for cut in (0, 7, 8, 43, 44, 60, len(record) // 2, len(record) - 1):
             variants[f"{name} cut at {cut}"] = (kind, record[:cut])
         variants[f"{name} extended"] = (kind, record + b"\0" * 8)
-        variants[f"{name} version 2"] = (kind, record[:8] + (2).to_bytes(4, "little")
-                                         + record[12:])
+        newer = int.from_bytes(record[8:12], "little") + 1  # a version this build cannot read
+        variants[f"{name} newer version"] = (kind, record[:8] + newer.to_bytes(4, "little")
+                                             + record[12:])
         variants[f"{name} start 1e308"] = (kind, _with_time(record, 1e308, 0.0))
         variants[f"{name} time nan"] = (kind, _with_time(record, 0.0, float("nan")))
     variants["mesh record as driveline"] = (DRIVELINE, records["mesh stepping"][1])
