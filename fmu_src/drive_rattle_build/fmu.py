@@ -36,7 +36,7 @@ from .documentation import HOW_TO_RUN, html_page
 from .icon import add_icon
 from .identity import fmu_guid
 from .paths import DIST, RUNTIME_PACKAGES, SOURCE, slave_module
-from .shim import COMMON_SOURCE, FMI2_COMMON_SOURCE, SHIM_SOURCE, install_shim
+from .shim import COMMON_SOURCE, FMI2_COMMON_SOURCE, PORTABLE_SOURCE, SHIM_SOURCE, install_shim
 
 #: What is never copied from a runtime package: caches and a library built in place (the
 #: FMU gets its own, compiled for each platform).
@@ -101,7 +101,8 @@ def glue_sources(name: str) -> list[Path]:
     face = sorted((SOURCE / "drive_rattle_fmi").glob("*.py"))
     return [slave_module(name), *face, SHIM_SOURCE, COMMON_SOURCE,
             COMMON_SOURCE.with_suffix(".h"), FMI2_COMMON_SOURCE,
-            FMI2_COMMON_SOURCE.with_suffix(".h")]
+            FMI2_COMMON_SOURCE.with_suffix(".h"), PORTABLE_SOURCE,
+            PORTABLE_SOURCE.with_name("rm_portable.h")]
 
 
 def glue_id(name: str) -> str:

@@ -88,7 +88,7 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from .compiler import compile_library
-from .paths import FMI2_SOURCE
+from .paths import FMI2_SOURCE, MODEL_SOURCE
 
 #: The C source of the shim.
 SHIM_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_shim.c"
@@ -96,6 +96,9 @@ SHIM_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_shim.c"
 COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_common.c"
 #: What the shim shares with the native FMI 2.0 face (fmi2Instantiate's checks, logging).
 FMI2_COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi2_common.c"
+#: The model library's operating-system layer (UTF-8, files), which rattle_fmi_common.c uses:
+#: the one part of the library the shim compiles in.
+PORTABLE_SOURCE: Path = MODEL_SOURCE / "portable.c"
 
 
 def fmi2_headers() -> Path:
@@ -146,7 +149,7 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         _check_vr("vr_last_successful_time", vr_last_successful_time)
     flags = [
         "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
-        "-I", str(fmi2_headers()), "-I", str(FMI2_SOURCE),
+        "-I", str(fmi2_headers()), "-I", str(FMI2_SOURCE), "-I", str(MODEL_SOURCE),
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",
@@ -156,7 +159,8 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         *([f'-DRATTLE_MODEL_IDENTIFIER="{model_identifier}"']
           if model_identifier is not None else []),
     ]
-    return compile_library(cc, flags, [SHIM_SOURCE, COMMON_SOURCE, FMI2_COMMON_SOURCE],
+    return compile_library(cc, flags, [SHIM_SOURCE, COMMON_SOURCE, FMI2_COMMON_SOURCE,
+                                       PORTABLE_SOURCE],
                            Path(out_path),
                            SHIM_SOURCE.name, libs=["-ldl"])
 

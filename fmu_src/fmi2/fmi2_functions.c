@@ -254,7 +254,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         if (categories[i] == NULL)
             return refuse(inst, function, "category %zu of %zu is NULL; nothing changed", i,
                           nCategories);
-        bad = rattle_utf8_error_at(categories[i]);
+        bad = rm_utf8_string_error_at(categories[i]);
         if (bad != (size_t)-1)
             return refuse(inst, function, "category %zu is not valid UTF-8 (offset %zu); "
                           "nothing changed", i, bad);

@@ -1,6 +1,6 @@
 /* rattle_fmi_common.c - see rattle_fmi_common.h. */
 #if !defined(_WIN32) && !defined(_GNU_SOURCE)
-#define _GNU_SOURCE /* realpath, O_CLOEXEC, O_NOCTTY under -std=c99 */
+#define _GNU_SOURCE /* realpath under -std=c99 */
 #endif
 #if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
 #define __USE_MINGW_ANSI_STDIO 1
@@ -9,18 +9,12 @@
 #include "rattle_fmi_common.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <sys/types.h>
 
 #if defined(_WIN32)
-#include <io.h>
 #include <windows.h>
-#else
-#include <unistd.h>
 #endif
 
 /* ------------------------------------------------------------------ the state envelope */
@@ -149,66 +143,12 @@ int rattle_state_open(const unsigned char* in, size_t size, const char* guid, ui
 }
 
 /* ------------------------------------------------------------------ UTF-8 */
-size_t rattle_utf8_decode(const unsigned char* s, size_t n, unsigned* cp, int surrogates)
-{
-    unsigned c = s[0];
-    size_t len;
-    unsigned min, v;
-    if (c < 0x80) {
-        *cp = c;
-        return 1;
-    }
-    if (c >= 0xC2 && c <= 0xDF) {
-        len = 2;
-        min = 0x80;
-        v = c & 0x1F;
-    }
-    else if (c >= 0xE0 && c <= 0xEF) {
-        len = 3;
-        min = 0x800;
-        v = c & 0x0F;
-    }
-    else if (c >= 0xF0 && c <= 0xF4) {
-        len = 4;
-        min = 0x10000;
-        v = c & 0x07;
-    }
-    else
-        return 0;
-    if (len > n) return 0;
-    for (size_t k = 1; k < len; k++) {
-        if ((s[k] & 0xC0) != 0x80) return 0;
-        v = (v << 6) | (s[k] & 0x3F);
-    }
-    if (v < min || v > 0x10FFFF || (!surrogates && v >= 0xD800 && v <= 0xDFFF)) return 0;
-    *cp = v;
-    return len;
-}
-
-size_t rattle_utf8_error_at_n(const char* text, size_t n)
-{
-    const unsigned char* s = (const unsigned char*)text;
-    size_t i = 0;
-    while (i < n) {
-        unsigned cp;
-        size_t len = rattle_utf8_decode(s + i, n - i, &cp, 0);
-        if (len == 0) return i;
-        i += len;
-    }
-    return (size_t)-1;
-}
-
-size_t rattle_utf8_error_at(const char* text)
-{
-    return rattle_utf8_error_at_n(text, strlen(text));
-}
-
 void rattle_printable(char* out, size_t size, const char* text)
 {
     size_t j = 0;
     const char* p = text;
     while (*p != '\0' && j + 1 < size) {
-        size_t bad = rattle_utf8_error_at(p);
+        size_t bad = rm_utf8_string_error_at(p);
         if (bad == 0) {
             out[j++] = '?';
             p++;
@@ -335,195 +275,60 @@ char* rattle_location_to_path(const char* location, char* why, size_t why_size)
 }
 
 /* ------------------------------------------------------------------ files */
-#if defined(_WIN32)
-/* UTF-8 -> UTF-16 (malloc'ed), NULL if not convertible. */
-static wchar_t* widen(const char* s)
-{
-    int n = MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, s, -1, NULL, 0);
-    wchar_t* w;
-    if (n <= 0) return NULL;
-    w = malloc((size_t)n * sizeof *w);
-    if (w == NULL) return NULL;
-    MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, s, -1, w, n);
-    return w;
-}
-
-static char* narrow(const wchar_t* w)
-{
-    int n = WideCharToMultiByte(CP_UTF8, 0, w, -1, NULL, 0, NULL, NULL);
-    char* s;
-    if (n <= 0) return NULL;
-    s = malloc((size_t)n);
-    if (s == NULL) return NULL;
-    WideCharToMultiByte(CP_UTF8, 0, w, -1, s, n, NULL, NULL);
-    return s;
-}
-
-typedef struct _stat64 FileInfo;
-static int file_info(const char* path, FileInfo* st)
-{
-    wchar_t* w = widen(path);
-    int r;
-    if (w == NULL) {
-        errno = ENOENT;
-        return -1;
-    }
-    r = _wstat64(w, st);
-    free(w);
-    return r;
-}
-#define IS_REGULAR(m) (((m) & _S_IFMT) == _S_IFREG)
-#define IS_DIR(m) (((m) & _S_IFMT) == _S_IFDIR)
-#define close_file _close
-#else
-typedef struct stat FileInfo;
-static int file_info(const char* path, FileInfo* st) { return stat(path, st); }
-#define IS_REGULAR(m) S_ISREG(m)
-#define IS_DIR(m) S_ISDIR(m)
-#define close_file close
-#endif
-
-/* The reason of an errno, without strerror's shared buffer (several instances may be created
- * from several threads at once). */
-static const char* errno_reason(int e)
-{
-    switch (e) {
-    case ENOENT: return "no such file or directory";
-    case EACCES: return "permission denied";
-    case ENOTDIR: return "a part of the path is not a folder";
-    case ENAMETOOLONG: return "file name too long";
-    case ELOOP: return "too many symbolic links";
-    case ENOMEM: return "out of memory";
-    case EISDIR: return "is a folder";
-    default: return "cannot be accessed";
-    }
-}
-
-static const char* file_kind(unsigned mode)
-{
-#if defined(_WIN32)
-    if (IS_DIR(mode)) return "a folder";
-    if ((mode & _S_IFMT) == _S_IFCHR) return "a character device";
-    if ((mode & _S_IFMT) == _S_IFIFO) return "a FIFO";
-#else
-    if (S_ISDIR(mode)) return "a folder";
-    if (S_ISFIFO(mode)) return "a FIFO";
-    if (S_ISCHR(mode)) return "a character device";
-    if (S_ISBLK(mode)) return "a block device";
-    if (S_ISSOCK(mode)) return "a socket";
-#endif
-    return "not a regular file";
-}
-
 char* rattle_canonical_path(const char* path, char* why, size_t why_size)
 {
 #if defined(_WIN32)
-    wchar_t* w = widen(path);
+    wchar_t* w = rm_widen(path);
     wchar_t* full;
-    char* out;
-    FileInfo st;
+    char* out = NULL;
+    int n;
     if (w == NULL) {
-        snprintf(why, why_size, "cannot be opened: %s", errno_reason(ENOENT));
+        snprintf(why, why_size, "cannot be opened: %s", rm_errno_reason(ENOENT));
         return NULL;
     }
     full = _wfullpath(NULL, w, 0);
     free(w);
     if (full == NULL) {
-        snprintf(why, why_size, "cannot be opened: %s", errno_reason(errno));
+        snprintf(why, why_size, "cannot be opened: %s", rm_errno_reason(errno));
         return NULL;
     }
-    out = narrow(full);
+    n = WideCharToMultiByte(CP_UTF8, 0, full, -1, NULL, 0, NULL, NULL);
+    if (n > 0 && (out = malloc((size_t)n)) != NULL)
+        WideCharToMultiByte(CP_UTF8, 0, full, -1, out, n, NULL, NULL);
     free(full);
-    if (out == NULL || file_info(out, &st) != 0) {
-        snprintf(why, why_size, "cannot be opened: %s", errno_reason(out == NULL ? ENOENT : errno));
+    if (out == NULL || rm_path_kind(out) == RM_PATH_MISSING) {
+        snprintf(why, why_size, "cannot be opened: %s", rm_errno_reason(ENOENT));
         free(out);
         return NULL;
     }
     return out;
 #else
     char* real = realpath(path, NULL);
-    if (real == NULL) snprintf(why, why_size, "cannot be opened: %s", errno_reason(errno));
+    if (real == NULL) snprintf(why, why_size, "cannot be opened: %s", rm_errno_reason(errno));
     return real;
 #endif
 }
 
-int rattle_is_dir(const char* path)
-{
-    FileInfo st;
-    return file_info(path, &st) == 0 && IS_DIR(st.st_mode);
-}
+int rattle_is_dir(const char* path) { return rm_path_kind(path) == RM_PATH_DIRECTORY; }
 
-int rattle_is_regular_file(const char* path)
-{
-    FileInfo st;
-    return file_info(path, &st) == 0 && IS_REGULAR(st.st_mode);
-}
+int rattle_is_regular_file(const char* path) { return rm_path_kind(path) == RM_PATH_REGULAR; }
 
 int rattle_read_marker(const char* path, char* out, size_t size, char* why, size_t why_size)
 {
-    FileInfo st;
-    int fd, r;
-    size_t total = 0;
+    RmFileProblem problem;
+    size_t n;
+    char* text = rm_read_small_file(path, size - 1, 1, &n, &problem);
     out[0] = '\0';
-    if (file_info(path, &st) != 0) {
-        if (errno == ENOENT) return RATTLE_MARKER_MISSING;
-        snprintf(why, why_size, "cannot be read: %s", errno_reason(errno));
+    if (text == NULL) {
+        if (problem.problem == RM_FILE_MISSING) return RATTLE_MARKER_MISSING;
+        if (problem.problem == RM_FILE_NOT_REGULAR)
+            snprintf(why, why_size, "is %s, not a regular file", problem.reason);
+        else
+            snprintf(why, why_size, "cannot be read: %s", problem.reason);
         return RATTLE_MARKER_BAD;
     }
-    if (!IS_REGULAR(st.st_mode)) {
-        snprintf(why, why_size, "is %s, not a regular file", file_kind((unsigned)st.st_mode));
-        return RATTLE_MARKER_BAD;
-    }
-#if defined(_WIN32)
-    {
-        wchar_t* w = widen(path);
-        fd = w != NULL ? _wopen(w, _O_RDONLY | _O_BINARY) : -1;
-        free(w);
-    }
-#else
-    fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-#endif
-    if (fd < 0) {
-        snprintf(why, why_size, "cannot be read: %s", errno_reason(errno));
-        return RATTLE_MARKER_BAD;
-    }
-    {
-        /* checked again on the open descriptor: it cannot have been swapped for a FIFO */
-#if defined(_WIN32)
-        struct _stat64 fst;
-        r = _fstat64(fd, &fst);
-#else
-        struct stat fst;
-        r = fstat(fd, &fst);
-#endif
-        if (r != 0 || !IS_REGULAR(fst.st_mode)) {
-            if (r != 0)
-                snprintf(why, why_size, "cannot be read: %s", errno_reason(errno));
-            else
-                snprintf(why, why_size, "is %s, not a regular file",
-                         file_kind((unsigned)fst.st_mode));
-            close_file(fd);
-            return RATTLE_MARKER_BAD;
-        }
-    }
-    while (total + 1 < size) {
-#if defined(_WIN32)
-        int got = _read(fd, out + total, (unsigned)(size - 1 - total));
-#else
-        ssize_t got = read(fd, out + total, size - 1 - total);
-#endif
-        if (got < 0) {
-            if (errno == EINTR) continue;
-            snprintf(why, why_size, "cannot be read: %s", errno_reason(errno));
-            close_file(fd);
-            out[0] = '\0';
-            return RATTLE_MARKER_BAD;
-        }
-        if (got == 0) break;
-        total += (size_t)got;
-    }
-    close_file(fd);
-    out[total] = '\0';
+    memcpy(out, text, n + 1);
+    free(text);
     out[strcspn(out, "\r\n")] = '\0';
     return RATTLE_MARKER_OK;
 }
@@ -540,7 +345,7 @@ int rattle_check_instance_name(const char* instanceName, const char* rule, char*
         return 0;
     }
     rattle_printable(name, name_size, instanceName);
-    bad = rattle_utf8_error_at(instanceName);
+    bad = rm_utf8_string_error_at(instanceName);
     if (bad != (size_t)-1) {
         snprintf(why, why_size, "instanceName '%s' is not valid UTF-8 (byte 0x%02X at offset "
                  "%zu); allowed: UTF-8 text", name, (unsigned)(unsigned char)instanceName[bad],

@@ -2,7 +2,8 @@
  * rattle_fmi_common.h - what every FMI layer of these FMUs does the same way, of no FMI version,
  * written once: the status shim of the pythonfmu FMUs (rattle_fmi_shim.c), the FMI 2.0 face
  * (fmi2_functions.c, with what FMI 2.0 layers share: rattle_fmi2_common.c) and the FMI 3.0
- * face (fmu_src/fmi3/fmi3_functions.c) compile rattle_fmi_common.c.  It includes no FMI
+ * face (fmu_src/fmi3/fmi3_functions.c) compile rattle_fmi_common.c, with the model library's
+ * operating-system layer (rattle_model/portable.c: UTF-8, files).  It includes no FMI
  * header: the words of a message that differ between FMI versions (the names of the calls,
  * the standard's section) are the caller's.
  *
@@ -23,6 +24,8 @@
 
 #include <stddef.h>
 #include <stdint.h>
+
+#include "rm_portable.h" /* UTF-8 and files: the model library's, compiled in */
 
 /* Internal to the FMU's binary: never exported to the host (nor interposed by a namesake). */
 #if defined(__GNUC__) && !defined(_WIN32)
@@ -73,15 +76,6 @@ RATTLE_INTERNAL void rattle_state_seal(unsigned char* out, size_t size, size_t n
 RATTLE_INTERNAL int rattle_state_open(const unsigned char* in, size_t size, const char* guid,
                                      uint64_t* n, char* why, size_t why_size);
 
-/* UTF-8 as Python's decoder accepts it (RFC 3629: no overlong forms, no surrogates, at most
- * U+10FFFF).  rattle_utf8_decode decodes one code point at s (n bytes available) and returns
- * its length, 0 if not UTF-8; `surrogates` accepts the 3-byte forms of U+D800..U+DFFF (WTF-8,
- * used internally for the lone surrogates json.loads can produce). */
-RATTLE_INTERNAL size_t rattle_utf8_decode(const unsigned char* s, size_t n, unsigned* cp,
-                                          int surrogates);
-/* Offset of the first byte that is not valid UTF-8, or (size_t)-1 if all are. */
-RATTLE_INTERNAL size_t rattle_utf8_error_at_n(const char* text, size_t n);
-RATTLE_INTERNAL size_t rattle_utf8_error_at(const char* text);
 /* A copy of `text` for messages: bytes that are not UTF-8 become '?', at most `size` - 1. */
 RATTLE_INTERNAL void rattle_printable(char* out, size_t size, const char* text);
 
@@ -106,8 +100,8 @@ RATTLE_INTERNAL int rattle_check_instance_name(const char* instanceName, const c
 RATTLE_INTERNAL int rattle_check_token(const char* given, const char* expected,
                                        const char* what, char* why, size_t why_size);
 
-/* The file system, for the resources folder (paths are UTF-8; on Windows converted to the
- * wide-character API). */
+/* The file system, for the resources folder (paths are UTF-8; the reading is rm_portable.h's,
+ * the library's own). */
 /* The canonical absolute path of an existing file or folder (malloc'ed), or NULL with the
  * reason ("no such file or directory", ...) in why. */
 RATTLE_INTERNAL char* rattle_canonical_path(const char* path, char* why, size_t why_size);

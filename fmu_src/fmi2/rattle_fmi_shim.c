@@ -607,7 +607,7 @@ static char* resolve_resources(const char* location, int* fd, char* why, size_t 
         free(real);
         return NULL;
     }
-    if (strstr(real, "%20") == NULL && rattle_utf8_error_at(real) == (size_t)-1) return real;
+    if (strstr(real, "%20") == NULL && rm_utf8_string_error_at(real) == (size_t)-1) return real;
 
     *fd = open(real, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     free(real);
@@ -1008,7 +1008,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
         if (categories[i] == NULL)
             return refuse(s, "fmi2SetDebugLogging", "category %zu of %zu is NULL; nothing "
                           "changed", i, nCategories);
-        bad = rattle_utf8_error_at(categories[i]);
+        bad = rm_utf8_string_error_at(categories[i]);
         if (bad != (size_t)-1)
             return refuse(s, "fmi2SetDebugLogging", "category %zu is not valid UTF-8 (offset "
                           "%zu); nothing changed", i, bad);
@@ -1115,7 +1115,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         if (value[i] == NULL)
             return refuse(s, "fmi2SetString", "value %zu (value reference %u) is NULL; nothing "
                           "of this call was stored", i, (unsigned)vr[i]);
-        bad = rattle_utf8_error_at(value[i]);
+        bad = rm_utf8_string_error_at(value[i]);
         if (bad != (size_t)-1)
             return refuse(s, "fmi2SetString", "value %zu (value reference %u) is not valid "
                           "UTF-8 (byte 0x%02X at offset %zu); nothing of this call was stored",

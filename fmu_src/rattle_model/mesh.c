@@ -208,7 +208,7 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             if (ratio_scale > 0.0)
                 rm_approach_rates(&M->approach, f, K, ps->W_r[i], pen, 0.0, &k_i, &c_i);
             double c = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
-                                               ps->length[i], k_i, ratio_scale);
+                                               ps->length[i], k_i, ratio_scale, pen);
             W += c * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0;
         }
@@ -320,9 +320,16 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (factor > 0.0) k_sum += k_i * factor;
             c_sum += c_i;
-            if (d == 0.0) /* the viscous dampings (none with Hunt-Crossley) */
-                c_sum += rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
-                                                 ps->length[i], k_i, ratio_scale);
+            if (d == 0.0) { /* the viscous dampings (none with Hunt-Crossley) */
+                double c_v = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
+                                                     ps->length[i], k_i, ratio_scale, pen);
+                c_sum += c_v;
+                /* a film still engaging adds c_v rate / pen to the stiffness */
+                double engaging = RM_FILM_ENGAGEMENT * M->p.sigma;
+                if (diss.film && pen < engaging)
+                    k_sum += c_v / pen
+                             * fabs(delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
+            }
         }
     }
     *k = k_sum;

@@ -46,6 +46,7 @@
 #include <stdint.h>
 
 #include "rattle_model.h"
+#include "rm_portable.h" /* UTF-8 and files, shared with the FMI faces */
 #include "rm_tables.h"
 
 #define RM_PI 3.141592653589793
@@ -495,11 +496,16 @@ RM_INTERNAL int rm_onset_dissipation(const RmMesh* M, RmFail* f, RmPairCache* ca
 /* The dissipation of a contact at rest (a start in contact, or no impact speed). */
 RM_INTERNAL RmContactDissipation rm_resting_dissipation(const RmMesh* M);
 /* The viscous damping [N.s/m] on a touching pair's penetration rate (radii r_x, r_y, contact
- * line length, linearized stiffness k_i = dW_i/d(pen)): its squeeze film in the film state (a
- * point contact's, or a line's for contact.geometry 2), or its share of
- * the mesh damping ratio's 2 zeta sqrt(k m) (scale from rm_ratio_scale); 0 otherwise. */
+ * line length, linearized stiffness k_i = dW_i/d(pen), penetration pen > 0): its squeeze film
+ * in the film state (a point contact's, or a line's for contact.geometry 2, engaged over the
+ * first RM_FILM_ENGAGEMENT sigma of the pair's penetration), or its share of the mesh damping
+ * ratio's 2 zeta sqrt(k m) (scale from rm_ratio_scale); 0 otherwise. */
 RM_INTERNAL double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y,
-                                           double length, double k_i, double ratio_scale);
+                                           double length, double k_i, double ratio_scale,
+                                           double pen);
+/* The penetration [m] over which a pair's squeeze-film damping engages, as a fraction of the
+ * composite roughness sigma. */
+RM_INTERNAL extern const double RM_FILM_ENGAGEMENT;
 /* 2 zeta sqrt(m_n / k) over the touching pairs of a pair set at the flank penetration delta
  * (0 without the mesh damping ratio or without a touching pair). */
 RM_INTERNAL double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta);
@@ -730,8 +736,5 @@ RM_INTERNAL int rm_driveline_start_outputs(RmUnit* u, double start_time, double 
                                            double w_w, double* out, RmText* err);
 RM_INTERNAL int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
                                     RmText* err);
-
-/* Offset of the first byte of s[0..n) that is not valid UTF-8 (RFC 3629), or (size_t)-1. */
-RM_INTERNAL size_t rm_utf8_error_at(const unsigned char* s, size_t n);
 
 #endif

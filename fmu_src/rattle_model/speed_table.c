@@ -13,96 +13,10 @@
  * has a time and a speed as decimal numbers in ASCII digits (further fields are ignored);
  * times strictly increase; at least two rows.  Linear in the file's size.
  */
-#if !defined(_WIN32) && !defined(_GNU_SOURCE)
-#define _GNU_SOURCE /* O_CLOEXEC, O_NOCTTY under -std=c99 */
-#endif
-#if defined(_WIN32) && !defined(__USE_MINGW_ANSI_STDIO)
-#define __USE_MINGW_ANSI_STDIO 1
-#endif
-
-#include <errno.h>
-#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <sys/types.h>
-#if defined(_WIN32)
-#include <io.h>
-#include <windows.h>
-#else
-#include <unistd.h>
-#endif
 
 #include "rm_private.h"
-
-/* ------------------------------------------------------------------ the file system */
-#if defined(_WIN32)
-static wchar_t* widen(const char* s)
-{
-    int n = MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, s, -1, NULL, 0);
-    if (n <= 0) return NULL;
-    wchar_t* w = malloc((size_t)n * sizeof *w);
-    if (w == NULL) return NULL;
-    MultiByteToWideChar(CP_UTF8, MB_ERR_INVALID_CHARS, s, -1, w, n);
-    return w;
-}
-
-typedef struct _stat64 FileInfo;
-static int file_info(const char* path, FileInfo* st)
-{
-    wchar_t* w = widen(path);
-    if (w == NULL) {
-        errno = ENOENT;
-        return -1;
-    }
-    int r = _wstat64(w, st);
-    free(w);
-    return r;
-}
-#define IS_REGULAR(m) (((m) & _S_IFMT) == _S_IFREG)
-#define IS_DIR(m) (((m) & _S_IFMT) == _S_IFDIR)
-#define close_file _close
-#else
-typedef struct stat FileInfo;
-static int file_info(const char* path, FileInfo* st) { return stat(path, st); }
-#define IS_REGULAR(m) S_ISREG(m)
-#define IS_DIR(m) S_ISDIR(m)
-#define close_file close
-#endif
-
-/* The reason of an errno, without strerror's shared buffer. */
-static const char* reason(int e)
-{
-    switch (e) {
-    case ENOENT: return "no such file or directory";
-    case EACCES: return "permission denied";
-    case ENOTDIR: return "a part of the path is not a directory";
-    case ENAMETOOLONG: return "file name too long";
-    case EISDIR: return "is a directory";
-#if defined(ELOOP)
-    case ELOOP: return "too many levels of symbolic links";
-#endif
-    case ENOMEM: return "out of memory";
-    case EINVAL: return "invalid argument";
-    default: return "the system refused it";
-    }
-}
-
-static const char* file_kind(unsigned mode)
-{
-#if defined(_WIN32)
-    if (IS_DIR(mode)) return "a directory";
-    if ((mode & _S_IFMT) == _S_IFCHR) return "a character device";
-    if ((mode & _S_IFMT) == _S_IFIFO) return "a FIFO";
-#else
-    if (S_ISDIR(mode)) return "a directory";
-    if (S_ISFIFO(mode)) return "a FIFO";
-    if (S_ISCHR(mode)) return "a character device";
-    if (S_ISBLK(mode)) return "a block device";
-    if (S_ISSOCK(mode)) return "a socket";
-#endif
-    return "not a regular file";
-}
 
 /* "parameter 'engine.speed_table' = '<path, at most 80 bytes shown>'" */
 static void name_file(RmText* err, const char* path)
@@ -129,106 +43,28 @@ static void allowed(RmText* err)
  * NULL with the refusal. */
 static char* read_bounded_file(const char* path, size_t* n, RmText* err)
 {
-    const size_t limit = RM_MAX_SPEED_TABLE_BYTES;
-    FileInfo st;
-    int fd;
-    size_t total = 0;
+    RmFileProblem why;
     if (strlen(path) > (size_t)RM_MAX_PATH_BYTES) {
         name_file(err, path);
         rm_puts(err, " is too long a path");
         allowed(err);
         return NULL;
     }
-    if (file_info(path, &st) != 0) {
-        int e = errno;
-        name_file(err, path);
-        rm_printf(err, " cannot be read: %s", reason(e));
-        allowed(err);
-        return NULL;
+    char* buf = rm_read_small_file(path, RM_MAX_SPEED_TABLE_BYTES, 0, n, &why);
+    if (buf != NULL) return buf;
+    name_file(err, path);
+    switch (why.problem) {
+    case RM_FILE_NOT_REGULAR: rm_printf(err, " is not a regular file (%s)", why.reason); break;
+    case RM_FILE_TOO_LARGE:
+        if (why.size >= 0)
+            rm_printf(err, " has %lld bytes", why.size);
+        else /* it grew while being read */
+            rm_printf(err, " has more than %u bytes", RM_MAX_SPEED_TABLE_BYTES);
+        break;
+    default: rm_printf(err, " cannot be read: %s", why.reason);
     }
-    if (!IS_REGULAR(st.st_mode)) {
-        name_file(err, path);
-        rm_printf(err, " is not a regular file (%s)", file_kind((unsigned)st.st_mode));
-        allowed(err);
-        return NULL;
-    }
-#if defined(_WIN32)
-    {
-        wchar_t* w = widen(path);
-        fd = w != NULL ? _wopen(w, _O_RDONLY | _O_BINARY) : -1;
-        free(w);
-    }
-#else
-    fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-#endif
-    if (fd < 0) {
-        int e = errno;
-        name_file(err, path);
-        rm_printf(err, " cannot be read: %s", reason(e));
-        allowed(err);
-        return NULL;
-    }
-#if defined(_WIN32)
-    struct _stat64 fst;
-    int r = _fstat64(fd, &fst);
-#else
-    struct stat fst;
-    int r = fstat(fd, &fst);
-#endif
-    /* checked again on the open descriptor: it cannot have been swapped for a FIFO */
-    if (r != 0 || !IS_REGULAR(fst.st_mode)
-        || (unsigned long long)fst.st_size > (unsigned long long)limit) {
-        int e = errno;
-        name_file(err, path);
-        if (r != 0)
-            rm_printf(err, " cannot be read: %s", reason(e));
-        else if (!IS_REGULAR(fst.st_mode))
-            rm_printf(err, " is not a regular file (%s)", file_kind((unsigned)fst.st_mode));
-        else
-            rm_printf(err, " has %lld bytes", (long long)fst.st_size);
-        allowed(err);
-        close_file(fd);
-        return NULL;
-    }
-    char* buf = malloc(limit + 2);
-    if (buf == NULL) {
-        name_file(err, path);
-        rm_puts(err, " cannot be read: out of memory");
-        close_file(fd);
-        return NULL;
-    }
-    while (total <= limit) {
-        size_t want = limit + 1 - total;
-        if (want > (1u << 20)) want = 1u << 20;
-#if defined(_WIN32)
-        int got = _read(fd, buf + total, (unsigned)want);
-#else
-        ssize_t got = read(fd, buf + total, want);
-#endif
-        if (got < 0) {
-            int e = errno;
-            if (e == EINTR) continue;
-            name_file(err, path);
-            rm_printf(err, " cannot be read: %s", reason(e));
-            allowed(err);
-            free(buf);
-            close_file(fd);
-            return NULL;
-        }
-        if (got == 0) break;
-        total += (size_t)got;
-    }
-    close_file(fd);
-    if (total > limit) { /* it grew while being read */
-        name_file(err, path);
-        rm_printf(err, " has more than %zu bytes", limit);
-        allowed(err);
-        free(buf);
-        return NULL;
-    }
-    buf[total] = '\0';
-    *n = total;
-    return buf;
+    if (why.problem != RM_FILE_NO_MEMORY) allowed(err);
+    return NULL;
 }
 
 static int is_absolute(const char* path)
@@ -246,7 +82,6 @@ void rm_resolve_speed_table(const char* resources, const char* name, RmText* out
 {
     rm_text_clear(out);
     if (!is_absolute(name) && resources != NULL && resources[0] != '\0') {
-        FileInfo st;
         RmText joined;
         rm_text_init(&joined);
         rm_puts(&joined, resources);
@@ -256,7 +91,8 @@ void rm_resolve_speed_table(const char* resources, const char* name, RmText* out
         rm_puts(&joined, "/");
 #endif
         rm_puts(&joined, name);
-        if (!joined.failed && file_info(rm_text_str(&joined), &st) == 0) {
+        int kind = joined.failed ? RM_PATH_MISSING : rm_path_kind(rm_text_str(&joined));
+        if (kind != RM_PATH_MISSING && kind != RM_PATH_UNREADABLE) {
             rm_puts(out, rm_text_str(&joined));
             rm_text_free(&joined);
             return;

@@ -404,7 +404,7 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
                 rm_printf(&err, "value %zu ('%s') is NULL", i, v->name);
                 refused = 1;
             }
-            else if ((bad = rm_utf8_error_at((const unsigned char*)s, strlen(s))) != (size_t)-1) {
+            else if ((bad = rm_utf8_string_error_at(s)) != (size_t)-1) {
                 rm_printf(&err, "value %zu ('%s') is not valid UTF-8 (byte 0x%02X at offset "
                                 "%zu)", i, v->name, (unsigned)(unsigned char)s[bad], bad);
                 refused = 1;

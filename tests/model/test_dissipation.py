@@ -126,7 +126,8 @@ def test_no_stokes_number_below_critical_rebounds_and_the_contact_is_then_film_d
     static = probe.loads(DRIVE, 0.0, 0.0, phi_w, 0.0, 1e-4)
     touching = [r for r in loads.pairs if r["delta"] > 0.0]
     assert touching
-    film = sum(squeeze.film_damping(m, r["r_x"], m.law.r_y) for r in touching)  # crowned
+    film = sum(squeeze.film_damping(m, r["r_x"], m.law.r_y, pen=r["delta"])  # crowned
+               for r in touching)
     assert pytest.approx(film * rate, rel=1e-12) == loads.W - static.W
 
 

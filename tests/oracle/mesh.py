@@ -226,7 +226,7 @@ class MeshModel:
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             W = a.force(K, pl.W_r, pen)
-            c = (squeeze.film_damping(self, r_x, pl.r_y, pl.length) if contact.sticks
+            c = (squeeze.film_damping(self, r_x, pl.r_y, pl.length, pen) if contact.sticks
                  else ratio.pop(0) if ratio else 0.0)
             if contact.d > 0.0:
                 W *= 1.0 + contact.d * (delta_dot - self.pair_rate(flank, w_p, dg))

@@ -114,16 +114,24 @@ def onset(model, flank: int, phi_p: float, v: float) -> Onset:
     return Onset(area, St, e, hertz.hunt_crossley_factor(e, v), False)
 
 
-def film_damping(model, r_x: float, r_y: float, length: float = 0.0) -> float:
+#: The penetration over which a pair's film damping engages, as a fraction of sigma.
+FILM_ENGAGEMENT = 0.01
+
+
+def film_damping(model, r_x: float, r_y: float, length: float = 0.0,
+                 pen: float = math.inf) -> float:
     """Squeeze-film damping [N.s/m] of a touching pair (radii r_x, r_y; contact line
-    ``length`` for the line contact) after an impact that did not rebound: its film at the
-    roughness gap, 6 pi eta phi A / sigma, or for a line 3 sqrt(2) pi eta phi L R^(3/2) /
-    sigma^(3/2)."""
+    ``length`` for the line contact; penetration ``pen``) after an impact that did not
+    rebound: its film at the roughness gap, 6 pi eta phi A / sigma, or for a line 3 sqrt(2)
+    pi eta phi L R^(3/2) / sigma^(3/2), engaged linearly over the pair's first
+    FILM_ENGAGEMENT sigma of penetration (so that the load is continuous where a pair starts
+    to carry it)."""
     p = model.params
+    engaged = min(1.0, pen / (FILM_ENGAGEMENT * p.sigma))
     if model.geometry.layout == LAYOUT_LINE:
-        return (3.0 * math.sqrt(2.0) * math.pi * p.eta * p.squeeze_fraction * length
-                * r_x**1.5 / p.sigma**1.5)
-    return 6.0 * math.pi * p.eta * p.squeeze_fraction * pair_area(r_x, r_y) / p.sigma
+        return engaged * (3.0 * math.sqrt(2.0) * math.pi * p.eta * p.squeeze_fraction * length
+                          * r_x**1.5 / p.sigma**1.5)
+    return engaged * 6.0 * math.pi * p.eta * p.squeeze_fraction * pair_area(r_x, r_y) / p.sigma
 
 
 def ratio_dampings(model, stiffnesses: list[float]) -> list[float]:
