@@ -257,19 +257,45 @@ def call_strategy(f: Fuzz):
     resealed = st.builds(lambda d: [d, ("set_state", d[1])],
                          st.tuples(st.just("deserialize"), slot, st.integers(0, 10**6),
                                    st.sampled_from(INTACT[2:]), floats_any, wide_ints))
-    # A set whose last entry is refused (an output, another type, unknown): nothing of it may
-    # be stored.
-    settable = [vr for vr in f.by_kind["Real"] if vr not in f.outputs]
-    refused_entry = st.sampled_from([*sorted(f.outputs), *f.by_kind["Integer"], *f.bad_vrs])
-    mixed_set = st.builds(lambda vrs, bad: [*vrs, bad],
-                          st.lists(st.sampled_from(settable), min_size=1, max_size=3),
-                          refused_entry).flatmap(
-        lambda vrs: st.lists(floats_any, min_size=len(vrs), max_size=len(vrs)).map(
-            lambda values: [("set", "Real", vrs, values)]))
     one = single.map(lambda c: [c])
     # sampled_from weighs its choices evenly (one_of favours its first branches)
     return st.sampled_from([one, one, one, one, initialize, session, run, run, rollback,
-                            resealed, mixed_set]).flatmap(lambda s: s)
+                            resealed, mixed_set(f)]).flatmap(lambda s: s)
+
+
+def mixed_set(f: Fuzz):
+    """A set whose last entry is refused (an output, another type, unknown): nothing of it
+    may be stored."""
+    settable = [vr for vr in f.by_kind["Real"] if vr not in f.outputs]
+    refused_entry = st.sampled_from([*sorted(f.outputs), *f.by_kind["Integer"], *f.bad_vrs])
+    return st.builds(lambda vrs, bad: [*vrs, bad],
+                     st.lists(st.sampled_from(settable), min_size=1, max_size=3),
+                     refused_entry).flatmap(
+        lambda vrs: st.lists(floats_any, min_size=len(vrs), max_size=len(vrs)).map(
+            lambda values: [("set", "Real", vrs, values)]))
+
+
+def backbone(f: Fuzz):
+    """What every example begins with, so that what a run must exercise is there by
+    construction, not by the draw: a master's start and one pristine step, every state
+    operation once (a state got, set back, serialized; a record deserialized, intact or edited
+    and re-sealed, and set; the first state freed) and a set with a refused last entry."""
+    return st.builds(lambda tour, refused: [*tour, *refused], state_tour(), mixed_set(f))
+
+
+def state_tour():
+    """A master's start, one pristine step and every state operation once."""
+    slot = st.integers(0, SLOTS - 1)
+    start = [("setup", 0.0, False, 0.0), ("enter",), ("defaults",), ("inputs", 1.0), ("exit",),
+             ("inputs", 1.0)]
+    return st.builds(
+        lambda h, a, b, extra, kind, seal, t, n: [
+            *start, ("step", "next", h),
+            ("get_state", a), ("set_state", a), ("serialize", a, extra),
+            ("deserialize", b, seal, kind, t, n), ("set_state", b), ("free_state", a)],
+        st.sampled_from(PRISTINE_STEPS), slot, slot, st.sampled_from([0, 0, 7]),
+        st.sampled_from(INTACT), st.integers(0, 10**6), floats_any,
+        wide_ints).filter(lambda tour: tour[-6][1] != tour[-3][1])
 
 
 def realistic(f: Fuzz, scale: float, t: float) -> dict:
@@ -703,9 +729,9 @@ def main(fmu: Path, examples: int, seed_value: int, work: Path, use_shadow: bool
     @settings(max_examples=examples, deadline=None, database=None,
               suppress_health_check=list(HealthCheck),
               phases=[Phase.generate, Phase.shrink] if shrink else [Phase.generate])
-    @given(st.lists(call_strategy(f), min_size=3, max_size=14))
-    def fuzz(segments):
-        run_example(f, [call for segment in segments for call in segment])
+    @given(backbone(f), st.lists(call_strategy(f), min_size=3, max_size=14))
+    def fuzz(tour, segments):
+        run_example(f, [*tour, *(call for segment in segments for call in segment)])
 
     fuzz()
     counts = {op: sum(f.by_op.get(op, [0, 0])) for op in STATE_OPS}
