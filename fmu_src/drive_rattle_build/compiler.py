@@ -20,8 +20,8 @@ class BuildError(RuntimeError):
 
 
 #: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline x86-64
-#: (instructions every x86-64 host has) with glibc, whose libm is the one CPython uses (the
-#: kernel's results are bit-identical to the Python core's only with the same libm).
+#: (instructions every x86-64 host has) with glibc, so that a library built with ziglang and
+#: one built with gcc call the same libm and compute the same numbers.
 ZIG_TARGET = {"x86_64": "x86_64-linux-gnu"}
 _ZIG_WRAPPER: list[str] = []
 

@@ -317,7 +317,12 @@ int rattle_read_marker(const char* path, char* out, size_t size, char* why, size
 {
     RmFileProblem problem;
     size_t n;
-    char* text = rm_read_small_file(path, size - 1, 1, &n, &problem);
+    char* text;
+    if (size == 0) {
+        snprintf(why, why_size, "cannot be read: no room for it");
+        return RATTLE_MARKER_BAD;
+    }
+    text = rm_read_small_file(path, size - 1, 1, &n, &problem);
     out[0] = '\0';
     if (text == NULL) {
         if (problem.problem == RM_FILE_MISSING) return RATTLE_MARKER_MISSING;

@@ -178,6 +178,8 @@ char* rm_read_small_file(const char* path, size_t limit, int truncate, size_t* n
     FileInfo st;
     size_t total = 0;
     *n = 0;
+    if (limit > (size_t)-1 - 2) /* the buffer holds limit + 1 bytes and the NUL */
+        return refuse(why, RM_FILE_NO_MEMORY, rm_errno_reason(ENOMEM), 0);
     if (file_info(path, &st) != 0)
         return refuse(why, errno == ENOENT ? RM_FILE_MISSING : RM_FILE_UNREADABLE,
                       rm_errno_reason(errno), 0);

@@ -592,6 +592,11 @@ static int release_time(Run* r, double t, double h, double delta_a, double delta
         if (!found) return 0;
     }
     *out = rm_brent(r->f, delta_after, &c, lo, h, f_lo, delta_b, EVENT_XTOL, EVENT_RTOL);
+    /* penetrations at the rounding level of the angles (the ulp of phi r: 4e-15 m after 1000
+     * rad) can put the root at the substep's start; the flanks then release at its end, so
+     * that the step progresses -- a release at the start would be followed by an onset at the
+     * same instant, and so on for ever */
+    if (!(*out > 0.0)) *out = h;
     return 1;
 }
 

@@ -302,3 +302,20 @@ def test_a_pinion_jump_out_of_an_approaching_contact_keeps_the_contact(flank):
     assert kinds == [("onset", flank), ("release", flank)]
     out = unit.outputs()
     assert out["mesh.impacts_drive"] + out["mesh.impacts_coast"] == 1
+
+
+def test_a_release_at_the_rounding_level_of_large_angles_lets_the_step_progress():
+    # After 19.45 s (about 1000 rad of pinion) a penetration is known to the ulp of phi r,
+    # 4e-15 m: on the multistability grid (0.5 M*, 0.1 mm, start phase 1/3) a contact whose
+    # located release fell on its substep's start was released there and met again at the same
+    # instant a million times, until the step was refused as making no progress. The release
+    # then ends the substep instead; the run reaches 20 s.
+    from drive_rattle import DrivelineParameters
+    from drive_rattle_cosim import multistability as ms
+
+    mesh = replace(MeshParameters(), backlash=1e-4)
+    drive = DrivelineParameters()
+    load = ms.paper_driveline(0.5 * ms.separation_load(mesh, drive), drive)
+    start = next(s for s in ms.STARTS if s.name == "phase 1/3")
+    run = ms.run_start(mesh, load, start, min_time=20.0, max_time=20.0)
+    assert run.seconds >= 20.0
