@@ -41,7 +41,7 @@ typedef char boolean_is_int32[sizeof(fmi2Boolean) == sizeof(int32_t) ? 1 : -1];
 /* The prefix of fmi2Instantiate's messages, before an instance exists. */
 #define PREFIX "rattle native FMU: "
 
-typedef struct State State;
+typedef RattleRecordState State;
 
 typedef struct {
     fmi2CallbackFunctions host;
@@ -117,17 +117,7 @@ static char* resolve_resources(const char* location, char* why, size_t why_size)
 }
 
 /* ------------------------------------------------------------------ FMU states */
-/* An FMU state: the unit's record (rm_save), tagged with the FMU's GUID, on the list of the
- * instance that made it (freed with it). */
-struct State {
-    RattleStateTag tag; /* first: the host's pointer is checked through it */
-    unsigned char* record;
-    size_t size;
-    Instance* owner;
-    State* next;
-    State* prev;
-};
-
+/* An FMU state: a RattleRecordState (rattle_fmi_common.h). */
 /* The host's state pointer as one of ours, or NULL (refused, logged). */
 static State* own_state(const Instance* inst, fmi2FMUstate state, const char* function)
 {
@@ -139,49 +129,14 @@ static State* own_state(const Instance* inst, fmi2FMUstate state, const char* fu
     return state;
 }
 
-/* A new state holding `record` (taken over), on the instance's list. */
-static State* new_state(Instance* inst, unsigned char* record, size_t size)
-{
-    State* st = calloc(1, sizeof *st);
-    if (st == NULL) return NULL;
-    rattle_state_tag(&st->tag, RATTLE_GUID);
-    st->record = record;
-    st->size = size;
-    st->owner = inst;
-    st->next = inst->states;
-    if (inst->states != NULL) inst->states->prev = st;
-    inst->states = st;
-    return st;
-}
-
-static void delete_state(State* st)
-{
-    if (st->prev != NULL)
-        st->prev->next = st->next;
-    else
-        st->owner->states = st->next;
-    if (st->next != NULL) st->next->prev = st->prev;
-    rattle_state_untag(&st->tag);
-    free(st->record);
-    free(st);
-}
-
 /* `record` (taken over) into the reused state, or into a new one stored in *state. */
 static fmi2Status keep_record(Instance* inst, const char* function, State* reuse,
                               fmi2FMUstate* state, unsigned char* record, size_t size)
 {
-    if (reuse != NULL) {
-        free(reuse->record);
-        reuse->record = record;
-        reuse->size = size;
-        return fmi2OK;
-    }
-    State* st = new_state(inst, record, size);
-    if (st == NULL) {
-        free(record);
+    State* made = NULL;
+    if (!rattle_record_state_keep(&inst->states, reuse, &made, record, size, RATTLE_GUID))
         return refuse(inst, function, "out of memory; nothing changed");
-    }
-    *state = st;
+    if (made != NULL) *state = made;
     return fmi2OK;
 }
 
@@ -233,7 +188,7 @@ void fmi2FreeInstance(fmi2Component c)
 {
     Instance* inst = c;
     if (inst == NULL) return;
-    while (inst->states != NULL) delete_state(inst->states);
+    while (inst->states != NULL) rattle_record_state_delete(inst->states);
     rm_free(inst->unit);
     free(inst->resources);
     free(inst->name);
@@ -431,7 +386,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state)
                       "; nothing freed");
     if (*state == NULL) return fmi2OK;
     if ((st = own_state(inst, *state, "fmi2FreeFMUstate")) == NULL) return fmi2Error;
-    delete_state(st);
+    rattle_record_state_delete(st);
     *state = NULL;
     return fmi2OK;
 }

@@ -50,6 +50,44 @@ void rattle_state_tag(RattleStateTag* tag, const char* guid)
 
 void rattle_state_untag(RattleStateTag* tag) { memset(tag->magic, 0, sizeof tag->magic); }
 
+int rattle_record_state_keep(RattleRecordState** list, RattleRecordState* reuse,
+                             RattleRecordState** made, unsigned char* record, size_t size,
+                             const char* guid)
+{
+    if (reuse != NULL) {
+        free(reuse->record);
+        reuse->record = record;
+        reuse->size = size;
+        return 1;
+    }
+    RattleRecordState* st = calloc(1, sizeof *st);
+    if (st == NULL) {
+        free(record);
+        return 0;
+    }
+    rattle_state_tag(&st->tag, guid);
+    st->record = record;
+    st->size = size;
+    st->list = list;
+    st->next = *list;
+    if (*list != NULL) (*list)->prev = st;
+    *list = st;
+    *made = st;
+    return 1;
+}
+
+void rattle_record_state_delete(RattleRecordState* st)
+{
+    if (st->prev != NULL)
+        st->prev->next = st->next;
+    else
+        *st->list = st->next;
+    if (st->next != NULL) st->next->prev = st->prev;
+    rattle_state_untag(&st->tag);
+    free(st->record);
+    free(st);
+}
+
 int rattle_state_misaddressed(const void* address)
 {
     /* no more bytes than a pointer variable has */

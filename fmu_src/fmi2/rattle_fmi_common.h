@@ -47,6 +47,25 @@ typedef struct {
 RATTLE_INTERNAL void rattle_state_tag(RattleStateTag* tag, const char* guid);
 /* Clears the tag of a state about to be freed (a dangling pointer then fails the check). */
 RATTLE_INTERNAL void rattle_state_untag(RattleStateTag* tag);
+/* An FMU state of the native faces: the unit's record (rm_save) behind its tag, on the list of
+ * the instance that made it (freeing the instance frees its states). */
+typedef struct RattleRecordState RattleRecordState;
+struct RattleRecordState {
+    RattleStateTag tag; /* first: the host's pointer is checked through it */
+    unsigned char* record;
+    size_t size;
+    RattleRecordState** list; /* the head of the making instance's list */
+    RattleRecordState* next;
+    RattleRecordState* prev;
+};
+/* `record` (malloc'ed, taken over) into `reuse` (its old record freed) or, where reuse is NULL,
+ * into a new state of the FMU `guid` at the head of *list, stored in *made: 1, or 0 out of
+ * memory (the record freed, nothing changed). */
+RATTLE_INTERNAL int rattle_record_state_keep(RattleRecordState** list, RattleRecordState* reuse,
+                                            RattleRecordState** made, unsigned char* record,
+                                            size_t size, const char* guid);
+/* Takes the state off its instance's list, clears its tag and frees it with its record. */
+RATTLE_INTERNAL void rattle_record_state_delete(RattleRecordState* st);
 /* 1 when `address`, which the host passed as the address of its FMU-state variable
  * (fmi2FMUstate*, fmi3FMUState*), points at a state of these FMUs itself: the host passed the
  * state where FMI asks for its address (fmusim of Reference-FMUs 0.0.39 does, when it frees

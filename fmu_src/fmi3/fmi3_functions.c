@@ -59,7 +59,7 @@ static const char* const CATEGORIES[] = {"logStatusWarning", "logStatusDiscard",
                                          "logStatusError", "logStatusFatal", "logAll"};
 enum { CATEGORY_WARNING = 0, CATEGORY_ALL = 4, N_CATEGORIES = 5 };
 
-typedef struct State State;
+typedef RattleRecordState State;
 
 typedef struct {
     char* name;
@@ -231,17 +231,8 @@ static char* resolve_resources(const char* path, int* none, char* why, size_t wh
 /* ------------------------------------------------------------------ FMU states */
 #define STATE_MAKERS "fmi3GetFMUState or fmi3DeserializeFMUState"
 
-/* An FMU state: the unit's record (rm_save), tagged with the instantiation token, on the list
- * of the instance that made it (freed with it). */
-struct State {
-    RattleStateTag tag; /* first: the importer's pointer is checked through it */
-    unsigned char* record;
-    size_t size;
-    Instance* owner;
-    State* next;
-    State* prev;
-};
-
+/* An FMU state: a RattleRecordState (rattle_fmi_common.h), tagged with the instantiation
+ * token. */
 /* The importer's state pointer as one of ours, or NULL (refused, logged). */
 static State* own_state(const Instance* inst, fmi3FMUState state, const char* function)
 {
@@ -253,48 +244,14 @@ static State* own_state(const Instance* inst, fmi3FMUState state, const char* fu
     return state;
 }
 
-static State* new_state(Instance* inst, unsigned char* record, size_t size)
-{
-    State* st = calloc(1, sizeof *st);
-    if (st == NULL) return NULL;
-    rattle_state_tag(&st->tag, RATTLE_GUID);
-    st->record = record;
-    st->size = size;
-    st->owner = inst;
-    st->next = inst->states;
-    if (inst->states != NULL) inst->states->prev = st;
-    inst->states = st;
-    return st;
-}
-
-static void delete_state(State* st)
-{
-    if (st->prev != NULL)
-        st->prev->next = st->next;
-    else
-        st->owner->states = st->next;
-    if (st->next != NULL) st->next->prev = st->prev;
-    rattle_state_untag(&st->tag);
-    free(st->record);
-    free(st);
-}
-
 /* `record` (taken over) into the reused state, or into a new one stored in *state. */
 static fmi3Status keep_record(Instance* inst, const char* function, State* reuse,
                               fmi3FMUState* state, unsigned char* record, size_t size)
 {
-    if (reuse != NULL) {
-        free(reuse->record);
-        reuse->record = record;
-        reuse->size = size;
-        return fmi3OK;
-    }
-    State* st = new_state(inst, record, size);
-    if (st == NULL) {
-        free(record);
+    State* made = NULL;
+    if (!rattle_record_state_keep(&inst->states, reuse, &made, record, size, RATTLE_GUID))
         return refuse(inst, function, "out of memory; nothing changed");
-    }
-    *state = st;
+    if (made != NULL) *state = made;
     return fmi3OK;
 }
 
@@ -435,7 +392,7 @@ void fmi3FreeInstance(fmi3Instance instance)
 {
     Instance* inst = instance;
     if (inst == NULL) return;
-    while (inst->states != NULL) delete_state(inst->states);
+    while (inst->states != NULL) rattle_record_state_delete(inst->states);
     rm_free(inst->unit);
     free(inst->resources);
     free(inst->name);
@@ -820,7 +777,7 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState* FMUState)
                       "; nothing freed");
     if (*FMUState == NULL) return fmi3OK;
     if ((st = own_state(inst, *FMUState, "fmi3FreeFMUState")) == NULL) return fmi3Error;
-    delete_state(st);
+    rattle_record_state_delete(st);
     *FMUState = NULL;
     return fmi3OK;
 }
