@@ -167,3 +167,24 @@ def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8(tmp_path, 
     assert at_08["verdict"] == "single-valued"
     assert len(at_08["attractors"][0]["starts"]) == len(ms.STARTS)
     assert "| 0.8 | 0.1333 | 0.1 | single-valued |" in (tmp_path / "b.md").read_text()
+
+
+@pytest.mark.slow
+def test_the_default_physics_has_two_states_at_0_4_and_0_2_mm():
+    # Measured on 2026-11-29 (docs/model.md section 6.2): at the default physics, 0.4 M* and
+    # backlash 0.2 mm, the start with the orders shifted by a third of a period settles on a
+    # periodic orbit -- one impact per flank and forcing period -- beside the chaotic
+    # double-sided rattle the smooth start reaches; both persist over the 60 s runs.
+    starts = [ms.STARTS_BY_KEY[k] for k in ("smooth", "phase1/3")]
+    point = ms.study_point(0.4, 2e-4, starts=starts, workers=2)
+    assert point.verdict == "multistable"
+    by_start = {s: a for a in point.attractors for s in a.starts}
+    chaotic, orbit = by_start["smooth"], by_start["phase 1/3"]
+    period = 1.0 / ms.forcing_period(MeshParameters(), DrivelineParameters())
+    assert orbit.mean["drive_rate"] == pytest.approx(period, rel=1e-3)  # 27.7 per s
+    assert orbit.mean["coast_rate"] == pytest.approx(period, rel=1e-3)
+    assert chaotic.mean["drive_rate"] > 1.5 * period  # 61.8 +- 6.4 per s
+    assert chaotic.scatter["drive_rate"] > 1.0  # chaotic: it varies between windows
+    for a in (chaotic, orbit):
+        for s in a.starts:
+            assert a.durations[s] == pytest.approx(60.0, abs=0.1)
