@@ -56,15 +56,19 @@ static double line_pair_area(const RmMeshParams* p, double r_x, double length)
     return sqrt(2.0) * length * r_x * sqrt(r_x) / (p->stokes_critical * sqrt(p->sigma));
 }
 
-/* The pairs of `flank` whose crown offset is below the roughness touch first and squeeze
- * their films down to it; the others keep a gap of at least their offset.  (Unmodified flanks:
- * every pair in the zone, at its line's area for contact.geometry 2.) */
+/* The pairs of `flank` whose crown offset is within the roughness of the first-touching pair's
+ * (the smallest) touch first and squeeze their films down to it; the others keep a gap of at
+ * least the difference.  (Unmodified flanks: every pair in the zone, at its line's area for
+ * contact.geometry 2.)  Measured from the smallest offset, not from zero: where no pair's face
+ * centre lies in the path of contact the first pair touches at an offset above zero, and
+ * counting from zero could leave no film at all (St infinite, the dry restitution). */
 double rm_squeeze_area(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, double phi_p)
 {
     RmPairSet* ps = rm_pairs_at(M, f, cache, rm_flank_roll(&M->g, flank, phi_p));
-    double area = 0.0;
+    double first = INFINITY, area = 0.0;
+    for (int i = 0; i < ps->n; i++) first = rm_min(first, ps->offset[i]);
     for (int i = 0; i < ps->n; i++) {
-        if (!(ps->offset[i] < M->p.sigma)) continue;
+        if (!(ps->offset[i] < first + M->p.sigma)) continue;
         rm_pair_coefficients(M, f, ps, i);
         area += M->g.layout == RM_LAYOUT_LINE
                     ? line_pair_area(&M->p, ps->r_x[i], ps->length[i])
@@ -147,6 +151,8 @@ double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta)
  * regularization, not a film law: a pair's film before its asperities touch is not modelled. */
 const double RM_FILM_ENGAGEMENT = 0.01;
 
+double rm_film_engagement_width(const RmMeshParams* p) { return RM_FILM_ENGAGEMENT * p->sigma; }
+
 /* Film state: the pair's squeeze film at the roughness gap h_c = sigma, c = 6 pi eta phi A / h_c
  * (the film that stopped the impact goes on damping the contact's normal motion).  Mesh
  * damping ratio: the pair's share k_i / k of 2 zeta sqrt(k m_n), k_i = dW_i/d(pen) its
@@ -159,7 +165,7 @@ double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y
     const RmMeshParams* p = &M->p;
     if (film) {
         double scale = 6.0 * RM_PI * p->eta * p->squeeze_fraction;
-        double engaged = rm_min(1.0, pen / (RM_FILM_ENGAGEMENT * p->sigma));
+        double engaged = rm_min(1.0, pen / rm_film_engagement_width(p));
         if (M->g.layout == RM_LAYOUT_LINE) /* 3 sqrt(2) pi eta phi L R^(3/2) / sigma^(3/2) */
             return engaged * 0.5 * sqrt(2.0) * scale * length * r_x * sqrt(r_x)
                    / (p->sigma * sqrt(p->sigma));

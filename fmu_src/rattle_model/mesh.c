@@ -325,8 +325,7 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                                      ps->length[i], k_i, ratio_scale, pen);
                 c_sum += c_v;
                 /* a film still engaging adds c_v rate / pen to the stiffness */
-                double engaging = RM_FILM_ENGAGEMENT * M->p.sigma;
-                if (diss.film && pen < engaging)
+                if (diss.film && pen < rm_film_engagement_width(&M->p))
                     k_sum += c_v / pen
                              * fabs(delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             }

@@ -503,9 +503,10 @@ RM_INTERNAL RmContactDissipation rm_resting_dissipation(const RmMesh* M);
 RM_INTERNAL double rm_pair_viscous_damping(const RmMesh* M, int film, double r_x, double r_y,
                                            double length, double k_i, double ratio_scale,
                                            double pen);
-/* The penetration [m] over which a pair's squeeze-film damping engages, as a fraction of the
- * composite roughness sigma. */
+/* The penetration over which a pair's squeeze-film damping engages: RM_FILM_ENGAGEMENT of the
+ * composite roughness sigma, rm_film_engagement_width [m]. */
 RM_INTERNAL extern const double RM_FILM_ENGAGEMENT;
+RM_INTERNAL double rm_film_engagement_width(const RmMeshParams* p);
 /* 2 zeta sqrt(m_n / k) over the touching pairs of a pair set at the flank penetration delta
  * (0 without the mesh damping ratio or without a touching pair). */
 RM_INTERNAL double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta);

@@ -60,18 +60,21 @@ def line_pair_area(params, r_x: float, length: float) -> float:
 
 def flank_area(model, flank: int, phi_p: float) -> float:
     """Squeeze-film area of ``flank`` at the pinion angle ``phi_p``: the pairs whose crown
-    offset is below the roughness sigma (they touch first), each with its own r_y (the
-    crown's, or eq. 6's), or its line's area for the line contact."""
+    offset is within the roughness sigma of the smallest (they touch first), each with its own
+    r_y (the crown's, or eq. 6's), or its line's area for the line contact."""
     line = model.geometry.layout == LAYOUT_LINE
+    laws = model.pair_laws(flank, phi_p)
+    first = min((pl.offset for pl in laws), default=math.inf)
     return sum(line_pair_area(model.params, pl.r_x, pl.length) if line
-               else pair_area(pl.r_x, pl.r_y) for pl in model.pair_laws(flank, phi_p)
-               if pl.offset < model.params.sigma)
+               else pair_area(pl.r_x, pl.r_y) for pl in laws
+               if pl.offset < first + model.params.sigma)
 
 
 def stokes_number(model, v: float, area: float) -> float:
-    """St = m_n v / (6 pi eta phi A)."""
+    """St = m_n v / (6 pi eta phi A); infinite with no film area (no pair in the zone)."""
     p = model.params
-    return model.normal_mass * v / (6.0 * math.pi * p.eta * p.squeeze_fraction * area)
+    resistance = 6.0 * math.pi * p.eta * p.squeeze_fraction * area
+    return model.normal_mass * v / resistance if resistance > 0.0 else math.inf
 
 
 def restitution(params, St: float) -> float:
