@@ -183,20 +183,25 @@ int rattle_state_open(const unsigned char* in, size_t size, const char* guid, ui
 /* ------------------------------------------------------------------ UTF-8 */
 void rattle_printable(char* out, size_t size, const char* text)
 {
-    size_t j = 0;
+    size_t j = 0, left = strlen(text);
     const char* p = text;
-    while (*p != '\0' && j + 1 < size) {
-        size_t bad = rm_utf8_string_error_at(p);
+    while (left > 0 && j + 1 < size) {
+        /* only what can still be copied is checked (a character of up to 4 bytes beyond it
+         * is cut there anyway): linear in the output, however long the text */
+        size_t room = size - 1 - j, span = left < room + 3 ? left : room + 3;
+        size_t bad = rm_utf8_error_at((const unsigned char*)p, span);
         if (bad == 0) {
             out[j++] = '?';
             p++;
+            left--;
             continue;
         }
-        size_t good = bad == (size_t)-1 ? strlen(p) : bad;
-        if (good > size - 1 - j) good = size - 1 - j;
+        size_t good = bad == (size_t)-1 ? span : bad;
+        if (good > room) good = room;
         memcpy(out + j, p, good);
         j += good;
         p += good;
+        left -= good;
     }
     out[j] = '\0';
 }
