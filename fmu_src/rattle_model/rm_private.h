@@ -468,12 +468,17 @@ RM_INTERNAL double rm_energy_balance_delta_max(const RmMesh* M, RmFail* f, RmPai
                                                int flank, double phi_p, double v_impact);
 
 /* ------------------------------------------------------------------ stepper.c */
+/* The cumulative onset counters stop at 2^53 (285,000 years at 1,000 onsets/s): every count
+ * stays exact as a double in a host language, and every state the unit saves it restores
+ * (unit_mesh.c refuses saved counts above this). */
+#define RM_COUNT_MAX ((int64_t)1 << 53)
+
 /* The wheel's state and the contact bookkeeping (SI). */
 typedef struct {
     double phi, w;
     int flank; /* in contact: +1 drive, -1 coast, 0 none */
     double v_drive, v_coast, v_last; /* approach speed at the last onset of each flank, any */
-    int64_t n_drive, n_coast;        /* cumulative onsets */
+    int64_t n_drive, n_coast;        /* cumulative onsets, saturating at RM_COUNT_MAX */
     double rattle_index;             /* exponentially averaged impact energy per second [W] */
     RmContactDissipation diss;       /* of the contact in progress (or the last one) */
 } RmWheel;

@@ -148,12 +148,12 @@ static void onset(Run* r, double t, int flank)
     r->rattle_gain += energy / r->rattle_time * rm_exp_checked(r->f, -(r->H - t) / r->rattle_time);
     if (flank == RM_DRIVE) {
         st->v_drive = v;
-        st->n_drive++;
+        if (st->n_drive < RM_COUNT_MAX) st->n_drive++;
         r->onsets_drive++;
     }
     else {
         st->v_coast = v;
-        st->n_coast++;
+        if (st->n_coast < RM_COUNT_MAX) st->n_coast++;
         r->onsets_coast++;
     }
 }

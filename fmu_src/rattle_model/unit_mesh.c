@@ -390,12 +390,12 @@ static void save(const void* model, RmWriter* w)
     rm_write_i64(w, st->diss.film);
 }
 
-/* A saved count: an integer in [0, 2^53]. */
+/* A saved count: an integer in [0, RM_COUNT_MAX], where the counters stop (stepper.c). */
 static int read_count(RmReader* r, const char* what, int64_t* out, RmText* err)
 {
     int64_t x = rm_read_i64(r);
     if (rm_read_ended(r, what, err)) return 0;
-    if (x < 0 || x > ((int64_t)1 << 53)) {
+    if (x < 0 || x > RM_COUNT_MAX) {
         rm_printf(err, "%s = %lld: expected an integer in [0, 2^53]", what, (long long)x);
         return 0;
     }

@@ -23,6 +23,7 @@ from drive_rattle import (
 )
 from drive_rattle.library import DRIVELINE, MESH
 from drive_rattle.parameters import DEG
+from tests.adversarial.records import Record
 from tests.oracle import hertz, roots, squeeze
 from tests.oracle.mesh import MeshModel
 
@@ -414,6 +415,31 @@ def test_a_restored_mesh_unit_continues_exactly(changes):
         other.restore(saved)
         assert other.save() == saved and other.phase == "stepping"
         assert run_mesh(other, 30, 60) == first
+
+
+def test_the_onset_counters_stop_at_2_53_and_such_a_state_restores():
+    """The cumulative counters saturate at 2^53, the largest count the record accepts: a unit
+    restored with its counters one below and at that bound counts up to it and no further,
+    and the state it then saves restores (a fuzzer found the state saved one past the bound
+    and refused on restore)."""
+    unit = MeshUnit(MeshParameters(), *fluctuating_pinion(0)[:2], 0.15)
+    run_mesh(unit, 0, 10)
+    variables = {name: (v.vr, v.type, v.causality) for name, v in unit.variables.items()}
+    record = Record.decode(unit.save(), variables)
+    cap = 2**53
+    record.model["n_drive"], record.model["n_coast"] = cap - 1, cap
+    unit.restore(record.encode())
+    rows = run_mesh(unit, 10, 400)
+    kinds = [(e.kind, e.flank) for _, events, _ in rows for e in events]
+    assert kinds.count(("onset", DRIVE)) >= 2 and kinds.count(("onset", COAST)) >= 1
+    saved = unit.save()
+    after = Record.decode(saved, variables).model
+    assert (after["n_drive"], after["n_coast"]) == (cap, cap)
+    with Unit(MESH, initialize=False) as other:
+        other.restore(saved)
+        assert other.save() == saved
+    # the FMI Integer outputs (32 bits) show the counts clipped, as before
+    assert unit.outputs()["mesh.impacts_drive"] == 2**31 - 1
 
 
 def run_driveline(unit, k0, n):
