@@ -23,6 +23,9 @@
 #define COMMUNICATION_POINT_TOLERANCE 1e-9
 /* The largest |start time| [s]: beyond ~1e9 s a 1e-7 s step no longer moves the time. */
 #define MAX_START_TIME 1e9
+/* The longest run [s] from the start time (127 years): a step that would end later is
+ * refused, so that every state the unit saves it restores (rm_restore checks the same). */
+#define MAX_RUN_LENGTH (4.0 * MAX_START_TIME)
 /* Version of the record of rm_save (bumped when its fields change). */
 #define RECORD_MAGIC "RATLUNIT"
 #define RECORD_VERSION 2u /* 2: the contact, dissipation and friction options of issue 19 */
@@ -689,6 +692,14 @@ int rm_do_step(RmUnit* u, double t, double h)
             rm_put_number(&err, t);
             rm_puts(&err, " s (it is below its rounding); allowed: a step that moves the time");
         }
+        else if (!(t + h - u->start_time <= MAX_RUN_LENGTH)) {
+            rm_puts(&err, "communication step to ");
+            rm_put_number(&err, t + h);
+            rm_puts(&err, " s ends beyond the longest run the unit supports; allowed: up to "
+                          "the start time ");
+            rm_put_number(&err, u->start_time);
+            rm_printf(&err, " s + %g s", MAX_RUN_LENGTH);
+        }
         else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {
             u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
             u->time = t + h;
@@ -1034,7 +1045,7 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         goto done;
     }
     if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME && isfinite(time)
-          && time >= start_time && time - start_time <= 4.0 * MAX_START_TIME
+          && time >= start_time && time - start_time <= MAX_RUN_LENGTH
           && (phase >= RM_STEPPING || time == start_time))) {
         rm_puts(&err, "its start time ");
         rm_put_number(&err, start_time);
@@ -1042,7 +1053,7 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
         rm_put_number(&err, time);
         rm_printf(&err, " s do not go together; allowed: finite, |start time| <= %g s, start "
                         "time <= time <= start time + %g s, time = start time before the "
-                        "first step", MAX_START_TIME, 4.0 * MAX_START_TIME);
+                        "first step", MAX_START_TIME, MAX_RUN_LENGTH);
         goto done;
     }
     for (size_t k = 0; k < u->n_variables; k++) {

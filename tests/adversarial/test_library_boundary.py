@@ -5,6 +5,7 @@ items).  The same cases through the built FMUs of both flavours: boundary_rows.p
 from __future__ import annotations
 
 import re
+import struct
 
 import pytest
 
@@ -119,3 +120,26 @@ def test_a_refusal_names_any_value_given(value, text):
         unit.advance(1e-4)
     unit.set({"wheel.tau_load": 0.15})
     assert unit.time == 0.0 and unit.save()[:40] == record[:40]
+
+
+def test_a_step_beyond_the_longest_run_is_refused_so_every_saved_state_restores():
+    """rm_restore accepts a time up to the start time + 4e9 s; a step that would end later is
+    refused (it was accepted, and the state it left was then refused on restore)."""
+    unit = Unit(MESH)
+    unit.advance(1e-4)
+    record = bytearray(unit.save())
+    start, = struct.unpack_from("<d", record, 24)
+    struct.pack_into("<d", record, 32, start + 4e9 - 5e-4)  # the header's time
+    unit.restore(bytes(record))
+    before = unit.save()
+    with pytest.raises(ModelError) as err:
+        unit.advance(1e-3)
+    assert "ends beyond the longest run the unit supports; allowed: up to the start time 0 s" \
+           " + 4e+09 s" in str(err.value), str(err.value)
+    assert unit.save() == before  # nothing changed
+    unit.advance(5e-4)  # to the bound: accepted, and what it leaves restores
+    assert unit.time == start + 4e9
+    saved = unit.save()
+    with Unit(MESH, initialize=False) as other:
+        other.restore(saved)
+        assert other.save() == saved
