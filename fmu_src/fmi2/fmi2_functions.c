@@ -345,24 +345,16 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* state)
     static const char function[] = "fmi2GetFMUstate";
     Instance* inst = c;
     State* reuse = NULL;
-    unsigned char* record;
-    size_t size = 0, written = 0;
+    unsigned char* record = NULL;
+    size_t size = 0;
     int status;
     if (inst == NULL) return fmi2Error;
     if (state == NULL) return refuse(inst, function, "the FMUstate pointer is NULL");
     if (rattle_state_misaddressed(state))
         return refuse(inst, function, "FMUstate " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*state != NULL && (reuse = own_state(inst, *state, function)) == NULL) return fmi2Error;
-    status = rm_save(inst->unit, NULL, 0, &size);
+    status = rm_save_alloc(inst->unit, &record, &size);
     if (status != RM_OK) return done(inst, status);
-    record = malloc(size > 0 ? size : 1);
-    if (record == NULL) return refuse(inst, function, "out of memory; nothing changed");
-    status = rm_save(inst->unit, record, size, &written);
-    if (status != RM_OK || written != size) {
-        free(record);
-        if (status != RM_OK) return done(inst, status);
-        return refuse(inst, function, "the unit's record changed size while it was saved");
-    }
     return keep_record(inst, function, reuse, state, record, size);
 }
 

@@ -735,8 +735,8 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState)
     static const char function[] = "fmi3GetFMUState";
     Instance* inst = instance;
     State* reuse = NULL;
-    unsigned char* record;
-    size_t size = 0, written = 0;
+    unsigned char* record = NULL;
+    size_t size = 0;
     int status;
     if (inst == NULL) return fmi3Error;
     if (FMUState == NULL) return refuse(inst, function, "the FMUState pointer is NULL");
@@ -744,16 +744,8 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState* FMUState)
         return refuse(inst, function, "FMUState " RATTLE_STATE_MISADDRESSED "; nothing done");
     if (*FMUState != NULL && (reuse = own_state(inst, *FMUState, function)) == NULL)
         return fmi3Error;
-    status = rm_save(inst->unit, NULL, 0, &size);
+    status = rm_save_alloc(inst->unit, &record, &size);
     if (status != RM_OK) return done(inst, status);
-    record = malloc(size > 0 ? size : 1);
-    if (record == NULL) return refuse(inst, function, "out of memory; nothing changed");
-    status = rm_save(inst->unit, record, size, &written);
-    if (status != RM_OK || written != size) {
-        free(record);
-        if (status != RM_OK) return done(inst, status);
-        return refuse(inst, function, "the unit's record changed size while it was saved");
-    }
     return keep_record(inst, function, reuse, FMUState, record, size);
 }
 

@@ -138,6 +138,10 @@ RM_API int rm_get_string(RmUnit* u, const unsigned* vr, size_t n, const char** v
  * bytes written to buf when it fits `capacity` (call with buf NULL for the size).  RM_ERROR
  * before anything could be saved (out of memory). */
 RM_API int rm_save(RmUnit* u, unsigned char* buf, size_t capacity, size_t* size);
+/* The same record in a new buffer, *record of *size bytes, for the caller to free() (the faces
+ * compile the library into their own binary, so they share its allocator).  RM_ERROR (nothing
+ * allocated) when the pointers are NULL or out of memory. */
+RM_API int rm_save_alloc(RmUnit* u, unsigned char** record, size_t* size);
 /* The unit as a record of rm_save left it (any unit of the same kind), checked whole before
  * anything changes: its version and kind, every value in its domain, the times consistent,
  * the parameters valid.  Linear in the record's size; nothing is solved or read from files. */

@@ -995,6 +995,22 @@ int rm_save(RmUnit* u, unsigned char* buf, size_t capacity, size_t* size)
     return u->status;
 }
 
+int rm_save_alloc(RmUnit* u, unsigned char** record, size_t* size)
+{
+    if (u == NULL) return RM_ERROR;
+    begin(u);
+    if (record == NULL || size == NULL)
+        return refuse_text(u, "getFMUstate", "the record or size pointer is NULL");
+    RmWriter w = {NULL, 0, 0, 0};
+    if (!save_record(u, &w) || w.data == NULL) {
+        free(w.data);
+        return refuse_text(u, "getFMUstate", "out of memory");
+    }
+    *record = w.data;
+    *size = w.len;
+    return u->status;
+}
+
 int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
 {
     static const char action[] = "setFMUstate";
