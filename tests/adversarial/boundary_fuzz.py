@@ -325,16 +325,21 @@ def resealed(m: Model, blob: bytes, how: str, at: int, real: float, integer: int
     """``blob`` with its record edited and the envelope made valid again (length, checksum):
     a byte changed, the record cut or extended, or one field of it set to a drawn value."""
     payload = state_payload(blob)
+    if how == "reseal extend":
+        return with_payload(blob, payload + bytes((at * 13 + i) % 256
+                                                  for i in range(1 + at % 64)))
+    if not payload:  # a state whose record was cut to nothing and serialized again
+        return with_payload(blob, payload)
     if how == "reseal flip":
         i = at % len(payload)
         return with_payload(blob, payload[:i] + bytes([payload[i] ^ (1 + at % 255)])
                             + payload[i + 1:])
     if how == "reseal truncate":
         return with_payload(blob, payload[:at % len(payload)])
-    if how == "reseal extend":
-        return with_payload(blob, payload + bytes((at * 13 + i) % 256
-                                                  for i in range(1 + at % 64)))
-    r = Record.decode(payload, m.variables)
+    try:
+        r = Record.decode(payload, m.variables)
+    except (ValueError, struct.error):  # no whole record (an edited one, serialized again)
+        return resealed(m, blob, "reseal flip", at, real, integer)
     fields = (["phase", "motion_set", "start_time", "time", "has_model"]
               + [("value", n) for n in r.values] + [("model", n) for n in r.model]
               + ([("rest", k) for k in range(5)] if r.has_model and not r.model else []))
