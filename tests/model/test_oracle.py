@@ -336,6 +336,18 @@ def test_restitution_equals_the_oracle(alpha):
     assert close(Probe().restitution(alpha), hertz.hunt_crossley_restitution(alpha), rel=1e-13)
 
 
+@pytest.mark.parametrize("alpha", [1e-7, 1e-6, 1e-5])
+def test_a_nearly_elastic_restitution_follows_its_series(alpha):
+    """For small alpha = d v the balance gives e = 1 - 2/3 alpha + 4/9 alpha^2 + O(alpha^3)
+    (phi(alpha) = phi(-alpha e), phi(x) = x - ln(1 + x) = x^2/2 - x^3/3 + ..., solved order by
+    order).  1 - e is held to 1e-8 of itself, the rounding of e near 1 allowing: the balance
+    written as its four logarithm terms lost 14 digits here (1 - e off by 2e-10 at alpha 2e-7,
+    3e-3 of itself)."""
+    series = 2.0 / 3.0 * alpha - 4.0 / 9.0 * alpha**2
+    assert 1.0 - Probe().restitution(alpha) == pytest.approx(series, rel=1e-8)
+    assert 1.0 - hertz.hunt_crossley_restitution(alpha) == pytest.approx(series, rel=1e-8)
+
+
 @pytest.mark.parametrize("alpha", [0.01, 0.3, 1.0, 3.0, 20.0])
 def test_restitution_against_direct_integration(alpha):
     # m x'' = -x^(3/2) (1 + d x'), unit mass and stiffness, v = 1: the restitution depends

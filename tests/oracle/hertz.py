@@ -287,10 +287,20 @@ def hertz_impact(m: float, K: float, v: float) -> HertzImpact:
     return HertzImpact(d, K * d**1.5, CONTACT_DURATION_FACTOR * d / v, v)
 
 
+def _x_minus_log1p(x: float) -> float:
+    """x - ln(1 + x) for x > -1; for |x| < 0.1, where the two terms cancel, its Taylor series
+    sum over k >= 2 of (-x)^k / k, summed exactly (math.fsum)."""
+    if abs(x) >= 0.1:
+        return x - math.log1p(x)
+    return math.fsum((-x) ** k / k for k in range(2, 24))
+
+
 def _hunt_crossley_balance(alpha: float, e: float) -> float:
     """G(alpha, e) = alpha - ln(1 + alpha) + alpha e + ln(1 - alpha e); zero on the
-    restitution curve of the Hunt-Crossley impact (see :func:`hunt_crossley_restitution`)."""
-    return alpha - math.log1p(alpha) + alpha * e + math.log1p(-alpha * e)
+    restitution curve of the Hunt-Crossley impact (see :func:`hunt_crossley_restitution`).
+    Written as phi(alpha) - phi(-alpha e), phi(x) = x - ln(1 + x), so that for a nearly
+    elastic impact (small alpha) the four terms do not cancel to rounding."""
+    return _x_minus_log1p(alpha) - _x_minus_log1p(-alpha * e)
 
 
 def hunt_crossley_restitution(alpha: float) -> float:
