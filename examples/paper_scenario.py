@@ -26,6 +26,7 @@ import numpy as np
 from drive_rattle import MAX_PAIR_SLOTS, DrivelineParameters, MeshParameters
 from drive_rattle.parameters import specs
 from drive_rattle_build import build_fmus
+from drive_rattle_build.library import build_in_place
 from drive_rattle_cosim.analysis import (
     catalogue_for,
     further_statistics,
@@ -66,6 +67,7 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
         significance: float = 0.01, show_plot: bool = False, progress: bool = False) -> dict:
     """Run the scenario; returns the windowed statistics, the comparison rows, the lines of
     the spectrum after the transient, the written files and the wall time of the run [s]."""
+    build_in_place()  # a fresh clone has no model library yet, and the parameters need it
     parameters = dict(parameters or {})
     mesh_params = MeshParameters.from_public(_unit_parameters(parameters, "GearMeshRattle"))
     drive_params = DrivelineParameters.from_public(_unit_parameters(parameters, "Driveline"))

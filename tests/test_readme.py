@@ -1,5 +1,6 @@
 """The README's commands and code are what CI and users run."""
 
+import os
 import re
 from pathlib import Path
 
@@ -47,3 +48,33 @@ def test_readme_variable_listing_command_runs_on_both_flavours(fmus, native_fmus
             unit_io = {"GearMeshRattle": ("pinion.w", "mesh.W"),
                        "Driveline": ("wheel.w", "wheel.tau_load")}[name]
             assert all(f"  {v} " in run.stdout for v in unit_io), run.stdout
+
+
+#: What a fresh clone does not have: everything the build, the tests and a run leave behind.
+BUILT = ("*.so", "*.so.id", "*.dll", "__pycache__", "*.egg-info", ".venv", "dist", "out",
+         ".git", ".hypothesis", ".pytest_cache", ".ruff_cache")
+
+
+def test_the_main_command_runs_in_a_clone_with_no_model_library(fmus, tmp_path):
+    """The README's main command on a fresh clone: no model library has been built yet (the
+    tests' own session built one next to this checkout's sources, which hid that the scenario
+    checked its parameters with the library before building anything).  The scenario runs from
+    a copy of the sources without any built file, short, on this session's FMUs, and leaves
+    the copy's library built."""
+    import shutil
+    import subprocess
+    import sys
+
+    copy = tmp_path / "clone"
+    shutil.copytree(ROOT, copy, ignore=shutil.ignore_patterns(*BUILT))
+    library = copy / "fmu_src" / "drive_rattle" / "rattle_model.so"
+    assert not library.exists()
+    env = {k: v for k, v in os.environ.items() if k != "RATTLE_MODEL_LIBRARY"}
+    env["PYTHONPATH"] = str(copy / "fmu_src")  # ahead of the editable install's path
+    run = subprocess.run(
+        [sys.executable, "examples/paper_scenario.py", "--stop-time", "0.5", "--transient",
+         "0.1", "--window", "0.2", "--fmu-dir", str(fmus["GearMeshRattle"].parent), "--out",
+         str(tmp_path / "out")], cwd=copy, env=env, capture_output=True, text=True,
+        timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert library.is_file() and "The paper comparison" in run.stdout
