@@ -13,7 +13,9 @@ point from the starts of :data:`STARTS` --
   -1, +1, +5 rad/s;
 * ``free``: the wheel at the centre of the backlash at the rigid speed, no flank in contact;
 * ``phase 1/3``, ``phase 2/3``: the smooth start with the engine orders shifted by a third and
-  two thirds of the forcing period (the run starts at another point of the forcing cycle) --
+  two thirds of the forcing period (the run starts at another point of the forcing cycle);
+* with ``--phases N`` (:func:`phase_starts`), the smooth start at N evenly spaced points of
+  the forcing cycle besides: a state whose basin is small can lie between the seven --
 
 on the paper's model by default (``vehicle.model`` = 1: the pinion kinematic from the engine
 orders, the wheel under the constant load M_res; loads relative to the separation load M*,
@@ -44,7 +46,7 @@ squares of their window scatters plus the floor; otherwise they are told apart. 
 and *unsettled* when a start did not settle and the settled ones found at most one.
 
     python -m drive_rattle_cosim.multistability [--loads 0.3,0.4,0.5,0.6,0.8,1.0]
-        [--backlash 0.1e-3,0.2e-3] [--starts smooth,kick-1,...] [--min-time 20]
+        [--backlash 0.1e-3,0.2e-3] [--starts smooth,kick-1,...] [--phases 24] [--min-time 20]
         [--max-time 60] [--window 1] [--workers 2] [--set GearMeshRattle.NAME=VALUE]
         [--out out/multistability.md]
 
@@ -124,6 +126,27 @@ STARTS = (
     Start("phase 2/3", phase=2.0 / 3.0),
 )
 STARTS_BY_KEY = {s.name.replace(" ", ""): s for s in STARTS}
+#: The most phase starts :func:`phase_starts` makes.
+MAX_PHASES = 360
+
+
+def phase_starts(n: int) -> tuple[Start, ...]:
+    """The smooth start at ``n`` evenly spaced points of the forcing cycle: ``phase k/n`` for
+    k = 1 .. n - 1 (k = 0 is ``smooth``).  A state with a small basin can lie between the
+    seven :data:`STARTS`: at 0.4 M* and 0.2 mm (default physics) a periodic orbit is reached
+    from 4 of 24 phases and from none of the seven (docs/analysis.md section 7)."""
+    if not (isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= MAX_PHASES):
+        raise ValueError(f"phases = {n!r}: expected an integer in [1, {MAX_PHASES}]")
+    return tuple(Start(f"phase {k}/{n}", phase=k / n) for k in range(1, n))
+
+
+def with_phase_starts(starts, n: int) -> list[Start]:
+    """``starts``, then those of :func:`phase_starts` (``n``) at a phase none of them has
+    already (a smooth start shifted by that fraction of the period: phase 8/24 is phase 1/3)."""
+    taken = {Fraction(s.phase).limit_denominator(MAX_PHASES) for s in starts
+             if not s.kick and not s.free}
+    return [*starts, *(s for s in phase_starts(n)
+                       if Fraction(s.phase).limit_denominator(MAX_PHASES) not in taken)]
 
 
 def forcing_period(mesh: MeshParameters, drive: DrivelineParameters) -> float:
@@ -582,6 +605,10 @@ def main(argv=None) -> int:
     ap.add_argument("--backlash", default="0.1e-3,0.2e-3", help="normal backlash [m]")
     ap.add_argument("--starts", default=",".join(STARTS_BY_KEY),
                     help=f"starts (of {', '.join(STARTS_BY_KEY)})")
+    ap.add_argument("--phases", type=int, default=0, metavar="N",
+                    help="also start from the smooth start at N evenly spaced points of the "
+                         "forcing cycle (phase k/N, k = 1..N-1) beside --starts: a state with "
+                         "a small basin needs more starts (24: docs/analysis.md section 7)")
     ap.add_argument("--min-time", type=float, default=20.0, help="shortest run [s]")
     ap.add_argument("--max-time", type=float, default=60.0, help="longest run [s]")
     ap.add_argument("--window", type=float, default=1.0,
@@ -597,6 +624,11 @@ def main(argv=None) -> int:
         starts = [STARTS_BY_KEY[k.strip().replace(" ", "")] for k in args.starts.split(",")]
     except KeyError as err:
         raise SystemExit(f"unknown start {err}; known: {', '.join(STARTS_BY_KEY)}") from None
+    if args.phases:
+        try:
+            starts = with_phase_starts(starts, args.phases)
+        except ValueError as err:
+            raise SystemExit(f"--phases: {err}") from None
     mesh_changes, drive_changes = _parse_set(args.set)
     mesh = MeshParameters.from_public(mesh_changes)
     drive = DrivelineParameters.from_public(drive_changes)
