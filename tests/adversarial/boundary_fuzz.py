@@ -342,7 +342,9 @@ def resealed(m: Model, blob: bytes, how: str, at: int, real: float, integer: int
         return resealed(m, blob, "reseal flip", at, real, integer)
     fields = (["phase", "motion_set", "start_time", "time", "has_model"]
               + [("value", n) for n in r.values] + [("model", n) for n in r.model]
-              + ([("rest", k) for k in range(5)] if r.has_model and not r.model else []))
+              # the Driveline's leading doubles, those the (possibly cut) record still holds
+              + ([("rest", k) for k in range(min(5, len(r.rest) // 8))]
+                 if r.has_model and not r.model else []))
     choice = fields[at % len(fields)]
     if choice in ("phase", "motion_set", "has_model"):
         setattr(r, choice, integer % 2**32)
