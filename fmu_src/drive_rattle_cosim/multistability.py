@@ -134,7 +134,8 @@ def phase_starts(n: int) -> tuple[Start, ...]:
     """The smooth start at ``n`` evenly spaced points of the forcing cycle: ``phase k/n`` for
     k = 1 .. n - 1 (k = 0 is ``smooth``).  A state with a small basin can lie between the
     seven :data:`STARTS`: at 0.4 M* and 0.2 mm (default physics) a periodic orbit is reached
-    from 4 of 24 phases and from none of the seven (docs/analysis.md section 7)."""
+    from 4 of the 23 starts of ``phase_starts(24)`` and from none of the seven
+    (docs/analysis.md section 7)."""
     if not (isinstance(n, int) and not isinstance(n, bool) and 1 <= n <= MAX_PHASES):
         raise ValueError(f"phases = {n!r}: expected an integer in [1, {MAX_PHASES}]")
     return tuple(Start(f"phase {k}/{n}", phase=k / n) for k in range(1, n))

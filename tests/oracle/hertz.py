@@ -289,7 +289,7 @@ def hertz_impact(m: float, K: float, v: float) -> HertzImpact:
 
 def _x_minus_log1p(x: float) -> float:
     """x - ln(1 + x) for x > -1; for |x| < 0.1, where the two terms cancel, its Taylor series
-    sum over k >= 2 of (-x)^k / k, summed exactly (math.fsum)."""
+    sum over k >= 2 of (-x)^k / k, summed with math.fsum."""
     if abs(x) >= 0.1:
         return x - math.log1p(x)
     return math.fsum((-x) ** k / k for k in range(2, 24))
