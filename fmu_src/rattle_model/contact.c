@@ -23,6 +23,7 @@
  * Dissipation: Hunt-Crossley, W = K delta^(3/2) (1 + d d(delta)/dt), with d set exactly from a
  * coefficient of restitution (docs/model.md section 3.3).
  */
+#include <float.h>
 #include <stdlib.h>
 
 #include "rm_private.h"
@@ -460,12 +461,20 @@ static double smooth_load(const RmApproachLaw* a, RmFail* f, double K, double pe
     return K * (pen * rm_sqrt_checked(f, pen));
 }
 
+/* A load below the smallest normal double (2.2e-308 N) is none: a subnormal keeps a few bits
+ * at most (the series law's exp() of a log-space sum), and whether a pair counts as loaded --
+ * its friction, film and area (mesh.c) -- must not turn on them. */
 double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen)
 {
     if (!(K > 0.0)) return 0.0; /* a line of zero length */
-    if (!a->rough) return smooth_load(a, f, K, pen);
-    double bulk, layer;
-    return series_load(a, f, K, W_r, pen, &bulk, &layer);
+    double W;
+    if (!a->rough)
+        W = smooth_load(a, f, K, pen);
+    else {
+        double bulk, layer;
+        W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+    }
+    return W < DBL_MIN ? 0.0 : W;
 }
 
 /* dW/d(pen): p W / pen for the smooth law (Hertz: 1.5 K sqrt(pen)); for the series law the

@@ -11,6 +11,7 @@ operations (relative 1e-12 on a quantity, 1e-12 of the sum of magnitudes on a si
 the measured agreement is tighter (most quantities agree to the last bit)."""
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -306,6 +307,26 @@ def test_approach_laws_equal_the_oracle(changes):
             for name, g, w in zip(("W", "stiffness", "energy", "area"), got, want,
                                   strict=True):
                 assert close(g, w), (changes, pen, name, g, w)
+
+
+@pytest.mark.parametrize("changes", APPROACH_LAWS.values(), ids=APPROACH_LAWS)
+def test_a_load_below_the_smallest_normal_double_is_none(changes):
+    """Where a law's load falls below 2.2e-308 N (approaches below 1e-213 m on Hertz, 2e-286 m
+    on Palmgren's line, 1e-46 to 1e-50 m on the rough series laws) the library and the oracle
+    both give none, so that whether a pair counts as loaded (its friction, film and area) does
+    not turn on a subnormal's few bits: the library's log-space series gave 0 where the oracle
+    gave 5e-324 N, and the pair's dry fraction 0 against 1 (hypothesis found it)."""
+    p = MeshParameters(**changes)
+    probe, a = Probe(p), MeshModel(p).approach
+    row = next(r for r in probe.pair_laws(DRIVE, 0.1) if r["K"] > 0.0)
+    K, W_r, kz = row["K"], row["W_r"], row["kz"]
+    loads = []
+    for pen in np.geomspace(1e-320, 1e-4, 801):
+        load = probe.approach(K, W_r, kz, pen)[0]
+        assert load == a.force(K, W_r, pen), (pen, load)
+        assert load == 0.0 or load >= sys.float_info.min, (pen, load)
+        loads.append(load)
+    assert loads[0] == 0.0 and loads[-1] > 0.0  # the range spans the cut
 
 
 def test_approach_law_oracle_is_the_parameters_law():

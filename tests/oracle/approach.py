@@ -27,6 +27,7 @@ the model library's contact.c is held against.
 from __future__ import annotations
 
 import math
+import sys
 
 #: Palmgren: the approach [m] at Q = 1 N and l = 1 mm, and the exponents of Q and l.
 PALMGREN_APPROACH = 3.84e-8
@@ -112,12 +113,13 @@ class ApproachLaw:
         return math.exp(y), bulk, layer
 
     def force(self, K: float, W_r: float, delta: float) -> float:
-        """The elastic load W [N] at approach ``delta`` > 0 (0 for a line of zero length)."""
+        """The elastic load W [N] at approach ``delta`` > 0 (0 for a line of zero length, and
+        below the smallest normal double: a subnormal load is known to a few bits at most, and
+        whether a pair is loaded must not turn on them)."""
         if not K > 0.0:
             return 0.0
-        if not self.rough:
-            return self.smooth(K, delta)
-        return self.series(K, W_r, delta)[0]
+        load = self.smooth(K, delta) if not self.rough else self.series(K, W_r, delta)[0]
+        return load if load >= sys.float_info.min else 0.0
 
     def stiffness(self, K: float, W_r: float, delta: float) -> float:
         """dW/d(delta) [N/m]: p W / delta (smooth), W / (bulk/p + q layer) (series)."""
