@@ -115,6 +115,13 @@ def test_no_impact_creates_energy_or_penetrates_beyond_its_energy(changes, log_v
     with MeshUnit(p, 0.0, 0.0, 0.0) as unit:
         try:
             events, d_peak, _ = run_impact(unit, h=H)
+            if not any(e.kind == "release" for _, e in events):
+                # a slow contact (a soft rough layer, strong damping, a weak force, a low
+                # speed): run on for its release rather than leave its rebound unchecked
+                # (at 0.12 mm/s on the rough layer with a damping ratio of 0.375 it came
+                # at 49 ms, the criterion below had let it pass unchecked)
+                more, d_more, _ = run_impact(unit, h=H, t_max=1.0)
+                events, d_peak = events + more, max(d_peak, d_more)
         except ModelError as err:  # beyond the Hertz contact's validity, or its resolution
             assert "beyond the validity" in str(err) or "too stiff" in str(err)
             event("step refused")
@@ -135,12 +142,12 @@ def test_no_impact_creates_energy_or_penetrates_beyond_its_energy(changes, log_v
         # a near-plastic impact -- on the soft asperity layer (W ~ delta^7.8 at first
         # contact), a squeeze-film restitution just above sticking, or a mesh damping ratio
         # near critical: creeping out of the peak penetration at no more than the rebound
-        # speed e v takes longer than 10 ms, and under a weak force more than the 30 ms run;
+        # speed e v takes longer than 10 ms, and under a weak force more than the 1 s run;
         # the energy bounds above hold meanwhile
-        event("near-plastic: no release within 30 ms")
+        event("near-plastic: no release within 1 s")
         return
     if not release:  # held in the flank: only friction can do that (its energy is checked)
-        assert p.friction_enabled, "no release within 30 ms"
+        assert p.friction_enabled, "no release within 1 s"
         event("held in the flank by friction")
         return
     e = -release[0].speed / v
