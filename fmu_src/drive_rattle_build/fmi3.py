@@ -41,7 +41,7 @@ from drive_rattle.interface import MODELS
 
 from . import model_description_fmi3, model_tables, templates
 from .compiler import IEEE_CFLAGS, BuildError, c_compiler, compile_library, zig_cc
-from .documentation import html_page
+from .documentation import LICENSE_ENTRY, html_page, license_text
 from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
@@ -267,6 +267,7 @@ def package_fmi3(model: str, out_dir: Path, cc: str | Sequence[str] | None = Non
             for ref in reference_files:
                 z.write(ref, f"resources/regression/{Path(ref).name}")
             z.writestr("documentation/index.html", documentation_page(model, platforms))
+            z.writestr(LICENSE_ENTRY, license_text())
         os.replace(part, fmu)
     return fmu
 

@@ -35,6 +35,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
+from .paths import DIST
 from .system import communication_points
 
 #: Rounds of output-to-input exchange in initialization mode (libcosim does one per unit).
@@ -368,7 +369,14 @@ class CoSimulation:
 
 
 #: How masters place communication points (``time_grid``).
-GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied")
+GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied", "fmpy")
+
+
+def steps_between(points: list[float]) -> list[float]:
+    """The step sizes of a master that steps from each point to the next: ``t_{k+1} - t_k``
+    in floating point (what libcosim and fmpy's ``simulate_fmu`` pass; read a master's points
+    from its own result and get its steps from them)."""
+    return [b - a for a, b in itertools.pairwise(points)]
 
 
 def time_grid(start: float, step: float, stop: float,
@@ -384,17 +392,21 @@ def time_grid(start: float, step: float, stop: float,
       ``t_k < stop``, each step ``min(step, t_{k+1} - t_k)`` (gemseo-fmu's
       ``TimeSteppingSystem``; its last step can be a rounding residue of 1e-14 s);
     * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` but a last one that
-      ends at ``stop`` (fmpy's ``simulate_fmu`` from a zero start; fmu-manipulation-toolbox's
-      container inside).
+      ends at ``stop`` (fmu-manipulation-toolbox's container inside);
+    * ``"fmpy"``: ``t_k = start + k step``, each step ``t_{k+1} - t_k`` (fmpy 0.3.32's
+      ``simulate_fmu``: ``steps_between`` its points).
 
     The sums end at the first point at or past ``stop``."""
     if grid == "nanoseconds":
         points = communication_points(start, step, stop)
-        return points, [b - a for a, b in itertools.pairwise(points)]
+        return points, steps_between(points)
     if grid not in GRIDS:
         raise ValueError(f"grid = {grid!r}; allowed: {', '.join(GRIDS)}")
     if not (step > 0.0 and stop - start < 1e9 * step):
         raise ValueError(f"communication step {step!r} s is invalid for {start!r}..{stop!r} s")
+    if grid == "fmpy":
+        points = time_grid(start, step, stop, "multiplied")[0]
+        return points, steps_between(points)
     points, sizes = [start], []
     while (t := points[-1]) < stop:
         if grid == "accumulated":
@@ -428,12 +440,11 @@ def _parse_value(text: str):
 
 
 def main(argv=None) -> int:
-    root = Path(__file__).resolve().parents[2]
     ap = argparse.ArgumentParser(
         prog="python -m drive_rattle_cosim.harness",
         description="Co-simulate GearMeshRattle with Driveline (fmpy, fixed step, Jacobi).")
-    ap.add_argument("--mesh", type=Path, default=root / "dist" / f"{MESH}.fmu")
-    ap.add_argument("--driveline", type=Path, default=root / "dist" / f"{DRIVELINE}.fmu")
+    ap.add_argument("--mesh", type=Path, default=DIST / f"{MESH}.fmu")
+    ap.add_argument("--driveline", type=Path, default=DIST / f"{DRIVELINE}.fmu")
     ap.add_argument("--start-time", type=float, default=0.0, help="[s]")
     ap.add_argument("--stop-time", type=float, default=0.1, help="[s]")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")

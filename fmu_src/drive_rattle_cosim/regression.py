@@ -37,8 +37,10 @@ from fmpy import read_model_description, simulate_fmu
 
 from drive_rattle.interface import CONNECTIONS, MODELS
 
-ROOT = Path(__file__).resolve().parents[2]
-REFERENCE_ROOT = ROOT / "regression"
+from .paths import DIST, REFERENCES
+
+#: The committed references, a folder per model (``paths.REFERENCES``).
+REFERENCE_ROOT = REFERENCES
 #: Horizon of the references: 500 communication steps of the paper scenario.
 START, STOP, STEP = 0.0, 0.05, 1e-4
 REL_TOL = 1e-6
@@ -249,7 +251,7 @@ def main(argv=None) -> int:
     c.add_argument("--reference-dir", type=Path, default=None,
                    help="folder with <Model>/<Model>_{in,ref}.csv, _ref.opt (default: in the FMU)")
     g = sub.add_parser("generate", help="rewrite the committed references from built FMUs")
-    g.add_argument("--fmu-dir", type=Path, default=ROOT / "dist")
+    g.add_argument("--fmu-dir", type=Path, default=DIST)
     g.add_argument("--out", type=Path, default=REFERENCE_ROOT)
     args = ap.parse_args(argv)
     if args.command == "generate":

@@ -54,7 +54,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .paths import DIST
+
 #: Frequency bands [Hz] of the normal-force spectrum reported per case.
 BANDS = ((20.0, 100.0), (100.0, 500.0), (500.0, 1500.0), (1500.0, 5000.0))
 #: Outputs a case records (the rattle metrics need no more).
@@ -479,7 +480,7 @@ def main(argv=None) -> int:
                     help="library: the model library's compiled loop (default; the FMUs' "
                          "numbers at the model's cost); fmu: the FMUs of --fmu-dir in the "
                          "fmpy harness")
-    ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist",
+    ap.add_argument("--fmu-dir", type=Path, default=DIST,
                     help="folder of the FMUs on this machine, for --engine fmu (they are sent "
                          "to the workers)")
     ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")

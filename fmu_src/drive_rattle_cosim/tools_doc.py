@@ -32,11 +32,13 @@ from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DEFAULT_EXPERIMENT, MESH_OUTPUTS, MODELS
 from drive_rattle.parameters import RPM, specs
 
-from . import step_accuracy
+from . import environments, step_accuracy
 from .harness import time_grid
 
-#: The masters whose versions the document was measured with (distribution names).
-MASTERS = ("fmpy", "libcosimpy", "ecospy", "fmu-manipulation-toolbox", "gemseo-fmu", "cofmupy")
+#: The masters of the project's environment whose versions the document was measured with
+#: (distribution names); gemseo-fmu and cofmupy run in environments of their own
+#: (``environments.PINNED``).
+MASTERS = ("fmpy", "libcosimpy", "ecospy", "fmu-manipulation-toolbox")
 
 
 def _g(x: float, digits: int = 3) -> str:
@@ -165,7 +167,7 @@ def held_mesh() -> str:
     s = input_starts(MESH)
     mp = MeshParameters()
     mesh = _mesh_alone()
-    _, sizes = time_grid(0.0, step, stop, "multiplied")
+    _, sizes = time_grid(0.0, step, stop, "fmpy")
     phi, w = s["pinion.phi"], s["pinion.w"]
     rows = [mesh.outputs()]
     for h in sizes:
@@ -196,7 +198,7 @@ def held_driveline() -> str:
     dp = DrivelineParameters()
     d = input_starts(DRIVELINE)
     drive = DrivelineUnit(dp, d["wheel.phi"], d["wheel.w"])
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
+    times, sizes = time_grid(0.0, step, stop, "fmpy")
     phi, w = d["wheel.phi"], d["wheel.w"]
     torque = [drive.outputs()["wheel.tau_load"]]
     for t, h in zip(times, sizes, strict=False):
@@ -221,11 +223,11 @@ def versions() -> str:
         except metadata.PackageNotFoundError:
             return "not installed"
 
-    fmpy_pin = next((r for r in metadata.requires("gemseo-fmu") or [] if r.startswith("fmpy")),
-                    "fmpy") if version("gemseo-fmu") != "not installed" else "fmpy"
     listed = ", ".join(f"{name} {version(name)}" for name in MASTERS)
-    return (f"{listed} (gemseo-fmu requires `{re.sub(r';.*', '', fmpy_pin).strip()}`, which is "
-            "why the project's test environment runs that fmpy)")
+    own = "; ".join(" with ".join(p.replace("==", " ") for p in pins)
+                    for pins in environments.PINNED.values())
+    return (f"{listed}; {own}, each in an environment of its own, since they pin an older "
+            "fmpy (`python -m drive_rattle_cosim.environments`)")
 
 
 def messages() -> str:

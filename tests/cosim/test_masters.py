@@ -9,11 +9,7 @@ Each master runs in its own process (run_master.py).  Workarounds of the masters
 are in drive_rattle_cosim.masters.
 """
 
-import json
-import subprocess
-import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
@@ -23,7 +19,7 @@ from drive_rattle.interface import CONNECTIONS
 from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
 from drive_rattle.units import coupled_start_inputs
 from drive_rattle_build import write_system
-from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, time_grid
+from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, steps_between, time_grid
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
 from drive_rattle_cosim.ssp import (
     PARAMETER_SET,
@@ -32,26 +28,9 @@ from drive_rattle_cosim.ssp import (
     validate_ssd,
 )
 
+from .master_process import finish, run_master, start_master
+
 STOP, STEP = 0.5, 1e-4
-RUNNER = Path(__file__).with_name("run_master.py")
-
-
-def start_master(kind: str, **args) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, str(RUNNER), kind, json.dumps(args)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def finish(process: subprocess.Popen) -> tuple[dict, str]:
-    """(result, everything the master printed)."""
-    out, _ = process.communicate(timeout=600)
-    assert process.returncode == 0, out
-    return json.loads(out.strip().splitlines()[-1]), out
-
-
-def run_master(kind: str, **args) -> tuple[dict, str]:
-    return finish(start_master(kind, **args))
-
-
 @pytest.fixture(scope="module")
 def system_ssp(fmus):
     """dist/DriveRattle.ssp as `python build_fmu.py` writes it, next to this session's FMUs."""
@@ -189,11 +168,9 @@ def test_gemseo_fmu_time_stepping_system(fmus, gemseo_run):
 
 
 def test_cofmupy_with_its_workarounds(fmus):
-    """cofmupy (not in the test extra: its pins conflict with this project's; skipped where
-    it is not installed): Jacobi on accumulated time, no exchange during initialization; with
-    only the Real outputs read and every coupling input in "initialization" it computes the
-    harness's run."""
-    pytest.importorskip("cofmupy")
+    """cofmupy (in an environment of its own: it pins an old fmpy): Jacobi on accumulated
+    time, no exchange during initialization; with only the Real outputs read and every
+    coupling input in "initialization" it computes the harness's run."""
     result, _ = run_master("cofmupy", mesh=str(fmus["GearMeshRattle"]),
                            driveline=str(fmus["Driveline"]), stop=STOP, step=STEP)
     assert_identical(result, harness(fmus, MASTER_GRIDS["cofmupy"]), first=1)
@@ -209,7 +186,6 @@ def test_cofmupy_without_them_fails_with_the_units_reason(fmus, variant, message
     read as Real; zeros written to every input before initialization (then the units settle
     against the zeros and the second step drives the teeth into each other); the fixed-point
     initialization's fmi2SetupExperiment on running units."""
-    pytest.importorskip("cofmupy")
     args = {k: v for k, v in variant.items() if k != "outputs"}
     kind = "cofmupy-real-outputs" if variant.get("outputs") else "cofmupy"
     result, printed = run_master(kind, mesh=str(fmus["GearMeshRattle"]),
@@ -239,8 +215,9 @@ def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
     starts = input_starts(MESH)
     tau = starts["wheel.tau_load"]
     core = MeshUnit(MeshParameters(), starts["pinion.phi"], starts["pinion.w"], tau)
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
-    assert result["time"] == times
+    times = result["time"]  # fmpy's points, and its steps between them
+    assert times == pytest.approx(time_grid(0.0, step, stop, "fmpy")[0], rel=1e-12)
+    sizes = steps_between(times)
     columns = result["columns"]
     phi, w = starts["pinion.phi"], starts["pinion.w"]
     for k in range(len(times)):
@@ -267,8 +244,9 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
     starts = input_starts(DRIVELINE)
     phi_w, w_w = starts["wheel.phi"], starts["wheel.w"]
     core = DrivelineUnit(DrivelineParameters(), phi_w, w_w)
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
-    assert result["time"] == times
+    times = result["time"]  # fmpy's points, and its steps between them
+    assert times == pytest.approx(time_grid(0.0, step, stop, "fmpy")[0], rel=1e-12)
+    sizes = steps_between(times)
     for k, t in enumerate(times):
         if k:
             # fmpy's points are k * step, not the sum of the steps: the engine's firing

@@ -17,10 +17,7 @@ Each master runs in its own process (run_master.py), on 0.1 s (1000 steps, sever
 """
 
 import json
-import subprocess
-import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
@@ -37,6 +34,8 @@ from drive_rattle_cosim.ssp import (
     validate_ssd,
 )
 
+from .master_process import run_master
+
 STOP, STEP = 0.1, 1e-4
 EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12,
         "GearMeshRattle.contact.dissipation": 0}
@@ -44,16 +43,8 @@ EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12,
 REAL_EDIT = {k: v for k, v in EDIT.items() if isinstance(v, float)}
 #: What libcosim and ecos apply of EDIT in the SSP as shipped (no Enumeration variable).
 NOT_ENUMERATIONS = {k: v for k, v in EDIT.items() if k != "GearMeshRattle.contact.dissipation"}
-RUNNER = Path(__file__).with_name("run_master.py")
 #: Index of the master's first recorded point in the harness's record from t = 0.
 FIRST = {"libcosim": 1, "fmpy.ssp": 1, "gemseo": 1, "ecos": 0, "container": 0}
-
-
-def run_master(kind: str, **args) -> tuple[dict, str]:
-    run = subprocess.run([sys.executable, str(RUNNER), kind, json.dumps(args)],
-                         capture_output=True, text=True, timeout=600)
-    assert run.returncode == 0, run.stdout + run.stderr
-    return json.loads(run.stdout.strip().splitlines()[-1]), run.stdout + run.stderr
 
 
 _REFERENCES: dict = {}

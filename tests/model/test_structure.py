@@ -19,7 +19,7 @@ SOURCE = ROOT / "fmu_src"
 ORACLE = ROOT / "tests" / "oracle"
 RUNTIME = ("drive_rattle", "drive_rattle_fmi")
 PACKAGES = (*RUNTIME, "drive_rattle_build", "drive_rattle_cosim")
-#: The slave modules (fmu_src/<Model>.py): runtime, next to the packages in each FMU.
+#: The slave modules (fmu_src/slaves/<Model>.py): runtime, next to the packages in each FMU.
 SLAVES = ("GearMeshRattle", "Driveline")
 #: The modules of the Python API: specs and the binding, no physics (the model is the C
 #: library).  A new module here is either physics, which belongs in fmu_src/rattle_model, or
@@ -50,7 +50,7 @@ PHYSICS_MATH = {"sqrt", "cbrt", "pow", "exp", "expm1", "log", "log1p", "log2", "
 
 def module_files() -> dict[str, Path]:
     """``{module name: file}`` of every first-party module."""
-    out = {name: SOURCE / f"{name}.py" for name in SLAVES}
+    out = {name: SOURCE / "slaves" / f"{name}.py" for name in SLAVES}
     for package in PACKAGES:
         for path in sorted((SOURCE / package).glob("*.py")):
             name = package if path.stem == "__init__" else f"{package}.{path.stem}"
