@@ -38,6 +38,7 @@ from drive_rattle_cosim.analysis import (
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.paper_models import compare, comparison_table, hypothesis
 from drive_rattle_cosim.paper_models import report as models_report
+from drive_rattle_cosim.progress import Phases
 from drive_rattle_cosim.spectral_lines import (
     KINDS,
     RESONANCE,
@@ -66,8 +67,12 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
         fmu_dir: str | Path | None = None, parameters: dict | None = None,
         significance: float = 0.01, show_plot: bool = False, progress: bool = False) -> dict:
     """Run the scenario; returns the windowed statistics, the comparison rows, the lines of
-    the spectrum after the transient, the written files and the wall time of the run [s]."""
-    build_in_place()  # a fresh clone has no model library yet, and the parameters need it
+    the spectrum after the transient, the written files and the wall time of the run [s].
+    With ``progress``, each phase is announced on stderr with its time (and the co-simulation
+    shows a progress bar where stderr is a terminal)."""
+    phases = Phases("paper scenario", enabled=progress)
+    with phases.phase("building the model library"):
+        build_in_place()  # a fresh clone has no model library yet, and the parameters need it
     parameters = dict(parameters or {})
     mesh_params = MeshParameters.from_public(_unit_parameters(parameters, "GearMeshRattle"))
     drive_params = DrivelineParameters.from_public(_unit_parameters(parameters, "Driveline"))
@@ -78,117 +83,123 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if fmu_dir is None:
-        fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
+        with phases.phase("building the FMUs (dist/)"):
+            fmu_dir = build_fmus(ROOT / "dist")["GearMeshRattle"].parent
     fmu_dir = Path(fmu_dir)
     wall = time.perf_counter()
-    with CoSimulation(fmu_dir / "GearMeshRattle.fmu", fmu_dir / "Driveline.fmu", parameters,
-                      step=step) as sim:
+    with phases.phase(f"co-simulating the FMUs, {stop_time:g} s"), \
+            CoSimulation(fmu_dir / "GearMeshRattle.fmu", fmu_dir / "Driveline.fmu", parameters,
+                         step=step) as sim:
         res = sim.run(stop_time, [f"GearMeshRattle.{n}" for n in MESH_OUTPUTS],
                       progress=progress)
     wall = time.perf_counter() - wall
-    res.to_csv(out / "cosim.csv")
-    t = np.asarray(res.time)
-    s = {name.split(".", 1)[1]: np.asarray(col) for name, col in res.columns.items()}
-    onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
-                                  s["mesh.v_impact"])
-    search = LineSearch(significance=significance)
-    catalogue = catalogue_for(mesh_params, drive_params)
-    ws = windowed_statistics(t, s, *onsets, mesh_params.derived()["normal_mass"], transient,
-                             window, lines=search, catalogue=catalogue,
-                             segment_seconds=SEGMENT_SECONDS)
-    # The spectrum of everything the windows cover: more averages, so weaker lines show.
-    analysed = slice(ws.slices[0].start + 1, ws.slices[-1].stop)
-    full_spec = welch_spectrum(t[analysed], s["mesh.W"][analysed], SEGMENT_SECONDS)
-    full = detect_lines(full_spec, search, catalogue)
-    full_extent = spectral_extent(full_spec, ExtentSearch())
-    full_sub = subharmonic_test(full_spec, catalogue.fundamental, SubharmonicSearch())
-    per_window = [detect_lines(welch_spectrum(t[sl][1:], s["mesh.W"][sl][1:], SEGMENT_SECONDS),
-                               search, catalogue) for sl in ws.slices]
-    rows = paper_comparison(ws)
-    table = markdown_table(rows, headers=("quantity", "this run: mean ± scatter (min–max "
-                                          "over windows)", "paper"))
-    further = markdown_table(further_statistics(ws), headers=("further statistics",
-                                                              "this run"))
+    with phases.phase("statistics and spectral lines of the windows"):
+        res.to_csv(out / "cosim.csv")
+        t = np.asarray(res.time)
+        s = {name.split(".", 1)[1]: np.asarray(col) for name, col in res.columns.items()}
+        onsets = onsets_from_counters(t, s["mesh.impacts_drive"], s["mesh.impacts_coast"],
+                                      s["mesh.v_impact"])
+        search = LineSearch(significance=significance)
+        catalogue = catalogue_for(mesh_params, drive_params)
+        ws = windowed_statistics(t, s, *onsets, mesh_params.derived()["normal_mass"], transient,
+                                 window, lines=search, catalogue=catalogue,
+                                 segment_seconds=SEGMENT_SECONDS)
+        # The spectrum of everything the windows cover: more averages, so weaker lines show.
+        analysed = slice(ws.slices[0].start + 1, ws.slices[-1].stop)
+        full_spec = welch_spectrum(t[analysed], s["mesh.W"][analysed], SEGMENT_SECONDS)
+        full = detect_lines(full_spec, search, catalogue)
+        full_extent = spectral_extent(full_spec, ExtentSearch())
+        full_sub = subharmonic_test(full_spec, catalogue.fundamental, SubharmonicSearch())
+        per_window = [detect_lines(welch_spectrum(t[sl][1:], s["mesh.W"][sl][1:], SEGMENT_SECONDS),
+                                   search, catalogue) for sl in ws.slices]
+        rows = paper_comparison(ws)
+        table = markdown_table(rows, headers=("quantity", "this run: mean ± scatter (min–max "
+                                              "over windows)", "paper"))
+        further = markdown_table(further_statistics(ws), headers=("further statistics",
+                                                                  "this run"))
 
-    def windows_with(peak) -> str:
-        if peak.kind == RESONANCE:
-            hits = sum(any(abs(r.frequency - peak.frequency) <= d.resolution
-                           for r in d.resonances) for d in per_window)
+        def windows_with(peak) -> str:
+            if peak.kind == RESONANCE:
+                hits = sum(any(abs(r.frequency - peak.frequency) <= d.resolution
+                               for r in d.resonances) for d in per_window)
+            else:
+                hits = sum(d.near(peak.frequency) is not None for d in per_window)
+            return f"{hits} of {len(per_window)}"
+
+        peaks = sorted(full.lines + full.resonances, key=lambda ln: ln.frequency)
+        lines = markdown_table(
+            [(f"{ln.frequency:.1f}", ln.name or ("—" if ln.kind == RESONANCE else "unexplained"),
+              ln.kind, f"{ln.ratio_db:.1f}", f"{ln.width_ratio:.2f}", f"{ln.fluctuation:.2f}",
+              windows_with(ln)) for ln in peaks],
+            headers=("peak [Hz]", "name", "kind", "above floor [dB]", "width / a tone's",
+                     "fluctuation", "found in windows"))
+        spec = full.spectrum
+        setting = ", ".join(f"`{k}={v}`" for k, v in parameters.items()) or "defaults"
+        if full_extent.censored:
+            extent = (f"≥ {full_extent.frequency:.0f} Hz: the 1/3-octave PSD stays within 10 dB of "
+                      "its 100–500 Hz mean up to the band top next to Nyquist "
+                      f"({spec.sample_rate / 2:g} Hz)")
         else:
-            hits = sum(d.near(peak.frequency) is not None for d in per_window)
-        return f"{hits} of {len(per_window)}"
-
-    peaks = sorted(full.lines + full.resonances, key=lambda ln: ln.frequency)
-    lines = markdown_table(
-        [(f"{ln.frequency:.1f}", ln.name or ("—" if ln.kind == RESONANCE else "unexplained"),
-          ln.kind, f"{ln.ratio_db:.1f}", f"{ln.width_ratio:.2f}", f"{ln.fluctuation:.2f}",
-          windows_with(ln)) for ln in peaks],
-        headers=("peak [Hz]", "name", "kind", "above floor [dB]", "width / a tone's",
-                 "fluctuation", "found in windows"))
-    spec = full.spectrum
-    setting = ", ".join(f"`{k}={v}`" for k, v in parameters.items()) or "defaults"
-    if full_extent.censored:
-        extent = (f"≥ {full_extent.frequency:.0f} Hz: the 1/3-octave PSD stays within 10 dB of "
-                  "its 100–500 Hz mean up to the band top next to Nyquist "
-                  f"({spec.sample_rate / 2:g} Hz)")
-    else:
-        extent = f"{full_extent.frequency:.0f} Hz"
-    subharmonic = (f"{'flagged' if full_sub.flag else 'not flagged'} (f0 = "
-                   f"{full_sub.fundamental:.2f} Hz, {full_sub.positions} positions, statistic "
-                   f"{full_sub.statistic:.3g} against the threshold {full_sub.threshold:.3g}; "
-                   f"sub-harmonic comb over the comb {full_sub.ratio_db:.1f} dB)")
-    report = out / "comparison.md"
-    report.write_text(
-        f"# Paper scenario: {stop_time:g} s co-simulated (GearMeshRattle + Driveline FMUs, "
-        f"fmpy harness, {step:g} s communication step; parameters: {setting})\n\n"
-        f"Statistics of {len(ws.windows)} windows of {ws.window:g} s after a start transient "
-        f"of {ws.transient:g} s (left out): mean ± window-to-window standard deviation "
-        "(min–max over the windows). Rattle is chaotic: compare statistics, not trajectories. "
-        "Impact velocities are the normal approach speeds at contact onsets "
-        "(`mesh.v_impact`), per flank as percentiles and RMS, with the impact energy rate "
-        "Σ ½ m_n v² per second; a periodic impact pattern puts its onsets in a few clusters, "
-        "so no single percentile is \"the\" impact speed, and the paper does not say which "
-        "statistic its figure is. The paper's figures come from its own, unpublished gear "
-        "data (docs/model.md). Spectral figures: Welch spectra of the total normal force "
-        f"({SEGMENT_SECONDS:g} s Hann segments, {spec.resolution:g} Hz resolution, up to "
-        f"Nyquist); a line where the PSD exceeds its noise floor at {significance:.0%} "
-        "family-wise significance and the peak is neither wider than the window makes a tone "
-        "nor fluctuating between segments like noise (else: a resonance); the spectral "
-        "extent where the 1/3-octave PSD falls 10 dB below its 100–500 Hz mean; the "
-        "sub-harmonic flag from the power at odd multiples of half the forcing frequency "
-        f"f0 = {catalogue.fundamental:.2f} Hz against the noise floor (docs/analysis.md)."
-        "\n\n"
-        + table + "\n" + further
-        + f"\nWall time of the co-simulation: {wall:.1f} s ({wall / stop_time:.2f} s per "
-        "simulated second).\n\n"
-        f"## Lines of the spectrum after the transient ({spec.segments} segments, "
-        f"{spec.dof:.0f} degrees of freedom, {len(full.lines)} lines and "
-        f"{len(full.resonances)} resonances found in "
-        f"{full.search.f_min:g}–{full.search.f_max:g} Hz)\n\n"
-        f"Over all windows together: spectral extent {extent}; sub-harmonic {subharmonic}."
-        "\n\n"
-        f"Names: mesh = z_p n/60 = {catalogue.mesh_frequency:.1f} Hz, Ek = engine order k "
-        f"(k × {catalogue.shaft_frequency:.2f} Hz); a name means the line lies within one "
-        "bin of that frequency. \"width / a tone's\": the peak's −3 dB width over the width "
-        "the window gives a pure tone at the same offset from the bin centre (a resonance "
-        "above 1.5); \"fluctuation\": variance / mean² of the peak bin's power over the "
-        "segments (about (2r − 1)/r² for a line r times its floor, about 1 for noise). "
-        "\"found in windows\": windows whose own spectrum has a peak of that kind there.\n\n"
-        + lines)
+            extent = f"{full_extent.frequency:.0f} Hz"
+        subharmonic = (f"{'flagged' if full_sub.flag else 'not flagged'} (f0 = "
+                       f"{full_sub.fundamental:.2f} Hz, {full_sub.positions} positions, statistic "
+                       f"{full_sub.statistic:.3g} against the threshold {full_sub.threshold:.3g}; "
+                       f"sub-harmonic comb over the comb {full_sub.ratio_db:.1f} dB)")
+        report = out / "comparison.md"
+        report.write_text(
+            f"# Paper scenario: {stop_time:g} s co-simulated (GearMeshRattle + Driveline FMUs, "
+            f"fmpy harness, {step:g} s communication step; parameters: {setting})\n\n"
+            f"Statistics of {len(ws.windows)} windows of {ws.window:g} s after a start transient "
+            f"of {ws.transient:g} s (left out): mean ± window-to-window standard deviation "
+            "(min–max over the windows). Rattle is chaotic: compare statistics, not trajectories. "
+            "Impact velocities are the normal approach speeds at contact onsets "
+            "(`mesh.v_impact`), per flank as percentiles and RMS, with the impact energy rate "
+            "Σ ½ m_n v² per second; a periodic impact pattern puts its onsets in a few clusters, "
+            "so no single percentile is \"the\" impact speed, and the paper does not say which "
+            "statistic its figure is. The paper's figures come from its own, unpublished gear "
+            "data (docs/model.md). Spectral figures: Welch spectra of the total normal force "
+            f"({SEGMENT_SECONDS:g} s Hann segments, {spec.resolution:g} Hz resolution, up to "
+            f"Nyquist); a line where the PSD exceeds its noise floor at {significance:.0%} "
+            "family-wise significance and the peak is neither wider than the window makes a tone "
+            "nor fluctuating between segments like noise (else: a resonance); the spectral "
+            "extent where the 1/3-octave PSD falls 10 dB below its 100–500 Hz mean; the "
+            "sub-harmonic flag from the power at odd multiples of half the forcing frequency "
+            f"f0 = {catalogue.fundamental:.2f} Hz against the noise floor (docs/analysis.md)."
+            "\n\n"
+            + table + "\n" + further
+            + f"\nWall time of the co-simulation: {wall:.1f} s ({wall / stop_time:.2f} s per "
+            "simulated second).\n\n"
+            f"## Lines of the spectrum after the transient ({spec.segments} segments, "
+            f"{spec.dof:.0f} degrees of freedom, {len(full.lines)} lines and "
+            f"{len(full.resonances)} resonances found in "
+            f"{full.search.f_min:g}–{full.search.f_max:g} Hz)\n\n"
+            f"Over all windows together: spectral extent {extent}; sub-harmonic {subharmonic}."
+            "\n\n"
+            f"Names: mesh = z_p n/60 = {catalogue.mesh_frequency:.1f} Hz, Ek = engine order k "
+            f"(k × {catalogue.shaft_frequency:.2f} Hz); a name means the line lies within one "
+            "bin of that frequency. \"width / a tone's\": the peak's −3 dB width over the width "
+            "the window gives a pure tone at the same offset from the bin centre (a resonance "
+            "above 1.5); \"fluctuation\": variance / mean² of the peak bin's power over the "
+            "segments (about (2r − 1)/r² for a line r times its floor, about 1 for noise). "
+            "\"found in windows\": windows whose own spectrum has a peak of that kind there.\n\n"
+            + lines)
     # The two contact models side by side, each with its band, and the hypothesis test (the
     # compiled loop; with the parameters given, on top of each model's own).
     span = {"stop_time": stop_time, "transient": transient, "window": window, "step": step}
-    if parameters:
-        models = _with_parameters(parameters)
-        results = compare(**span, models=models)
-    else:
-        results = compare(**span)
-    models_text = models_report(results, hypothesis(**span) if not parameters else None)
+    with phases.phase("the two contact models and their bands (compiled loop)"):
+        if parameters:
+            models = _with_parameters(parameters)
+            results = compare(**span, models=models)
+        else:
+            results = compare(**span)
+        models_text = models_report(results, hypothesis(**span) if not parameters else None)
     models_file = out / "models.md"
     models_file.write_text("# The paper comparison: two contact models, each as a band\n\n"
                            + models_text, encoding="utf-8")
-    files = [report, models_file, out / "cosim.csv",
-             *_figures(t, s, ws, full, catalogue, out, show_plot)]
+    with phases.phase("figures"):
+        figures = _figures(t, s, ws, full, catalogue, out, show_plot)
+    files = [report, models_file, out / "cosim.csv", *figures]
+    phases.done()
     return {"statistics": ws, "rows": rows, "lines": full, "files": files, "table": table,
             "models": results, "models_table": comparison_table(results),
             "wall_seconds": wall}

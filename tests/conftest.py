@@ -27,6 +27,8 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from drive_rattle_build import build
+
 # The property tests draw the same examples on every run (derandomized: from each test's own
 # code) and use no example database, so a run depends on the commit alone; the soak profile
 # draws fresh examples from pytest's --hypothesis-seed (tests/soak.py).
@@ -34,7 +36,6 @@ settings.register_profile("ci", derandomize=True, database=None, print_blob=True
 settings.register_profile("soak", derandomize=False, database=None, print_blob=True)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
-from drive_rattle_build import build
 
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").

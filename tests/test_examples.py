@@ -97,3 +97,21 @@ def test_rattle_maps_mark_the_cells_whose_starts_disagree_beyond_their_scatter(t
     path, split = mod._heat_map(rows, (x, 1.0, "drag"), (y, 1e3, "backlash"),
                                 tmp_path / "m.png", "test", 0.2)
     assert split == [(0.1, 1e-4)] and path.stat().st_size > 5000
+
+
+@pytest.mark.slow
+def test_the_benchmark_quick_form_completes(tmp_path):
+    """``python benchmarks/run.py --quick``: every run of the benchmark's default form on a
+    1 s horizon (a step whose cost grows with the run's length shows here as a run that does
+    not end), each phase announced with its time, the report written."""
+    import subprocess
+    import sys
+
+    bench = EXAMPLES.parent / "benchmarks" / "run.py"
+    run = subprocess.run([sys.executable, str(bench), "--quick", "--out", str(tmp_path)],
+                         capture_output=True, text=True, timeout=1200)
+    assert run.returncode == 0, run.stderr[-3000:]
+    report = (tmp_path / "report.md").read_text(encoding="utf-8")
+    assert "| compiled loop: the two units in the library, one call |" in report
+    assert "| library: 2 workers / 1 worker |" in report
+    assert "benchmarks [" in run.stderr and "done in" in run.stderr.splitlines()[-1]
