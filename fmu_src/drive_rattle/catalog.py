@@ -63,18 +63,28 @@ def parameter_spec(qualified: str) -> ParameterSpec:
         for _, spec in specs(unit.parameters):
             if spec.name == name:
                 return spec
+        for kind, signals in (("an input", unit.inputs), ("an output", unit.outputs)):
+            if any(signal.name == name for signal in signals):
+                raise ValueError(f"'{qualified}' is {kind} of {model}, not a parameter; "
+                                 "allowed: a parameter's name (docs/fmi.md lists them)")
     raise ValueError(f"unknown parameter '{qualified}'{_did_you_mean(qualified)}; allowed: "
                      f"<Unit>.<name> with Unit one of {', '.join(UNITS)} and name one of its "
                      "parameters (docs/fmi.md lists them)")
 
 
 def _did_you_mean(qualified: str) -> str:
+    """`` (did you mean A or B?)``: the parameters of that name in other units, else the
+    nearest names of the unit (of the nearest unit name), else nothing."""
     from difflib import get_close_matches
 
     known = parameter_names()
-    # a name given without its unit is matched whole against each unit's names
-    near = [q for q in known if q.split(".", 1)[1] == qualified]
-    near = near or get_close_matches(qualified, known, n=3, cutoff=0.75)
+    model, _, name = qualified.partition(".")
+    near = [q for q in known if q.split(".", 1)[1] in (qualified, name)]
+    if not near:
+        units = [model] if model in UNITS else get_close_matches(model, list(UNITS), n=1)
+        for unit in units:
+            names = [spec.name for _, spec in specs(UNITS[unit].parameters)]
+            near = [f"{unit}.{n}" for n in get_close_matches(name, names, n=3)]
     return f" (did you mean {' or '.join(near)}?)" if near else ""
 
 

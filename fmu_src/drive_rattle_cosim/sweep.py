@@ -4,7 +4,11 @@ A design (full grid or Latin hypercube) over any FMU parameters becomes a list o
 case is a full co-simulation run in a dask worker process.  Results are appended to a CSV file
 case by case, as they finish, so that an interrupted sweep resumes without redoing finished
 cases; a failed case is recorded with its error and the sweep goes on.  One client writes a
-result file at a time (a lock file beside it refuses a second).
+result file at a time (``ResultWriter``: the lock of ``<out>.lock`` held for the writer's life,
+released by the system when a client dies); a last row cut short is dropped on resuming and its
+case run again.  A request is checked before any work (``check_request``, the designs), at most
+``MAX_CASES`` cases.  Exit statuses of the command line: ``EXIT_OK``, ``EXIT_STOPPED``,
+``EXIT_BAD_REQUEST``, ``EXIT_CASES_FAILED`` (docs/cosim.md).
 
 Two engines, named in every result row (``engine``):
 
@@ -704,6 +708,10 @@ def read_results(path: Path) -> list[dict]:
     """The whole rows of a result file (a last row cut short left out: :func:`_whole_rows`),
     numbers as floats (empty strings as NaN)."""
     header, rows, _ = _whole_rows(Path(path).read_bytes())
+    for k, r in enumerate(rows, start=2):
+        if len(r) != len(header):
+            raise ValueError(f"{path} row {k} has {len(r)} fields, the header {len(header)}; "
+                             "allowed: one field per column (the file was edited or spoilt)")
     return [{k: (v if k in TEXT_COLUMNS else (float(v) if v != "" else math.nan))
              for k, v in zip(header, r, strict=True)} for r in rows]
 
