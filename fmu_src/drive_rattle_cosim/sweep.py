@@ -481,12 +481,18 @@ class ResultWriter:
         self.path = Path(path)
         self.columns = ["case_id", *parameter_names, *METRICS, "error"]
         self.resume_hint = resume_hint
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self.lock = self.path.with_name(self.path.name + ".lock")
-        self._file = None
-        self._lock_fd = self._take_lock()
+        self._file = self._lock_fd = None
         try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._lock_fd = self._take_lock()
             self._open()
+        except OSError as err:  # a folder, a file of no permission: a bad --out
+            self.close()
+            where = f": {err.filename}" if err.filename else ""
+            raise ValueError(f"cannot write the result file {self.path} ({err.strerror or err}"
+                             f"{where}); allowed: a file in a folder this user can write"
+                             ) from None
         except BaseException:
             self.close()
             raise
@@ -760,6 +766,7 @@ EXIT_OK, EXIT_STOPPED, EXIT_BAD_REQUEST, EXIT_CASES_FAILED = 0, 1, 2, 3
 
 def main(argv=None) -> int:
     from .cli import Parser
+    from .spectral_lines import MIN_SAMPLES
 
     ap = Parser(prog="python -m drive_rattle_cosim.sweep",
                 description="Parameter sweep of the rattle co-simulation.",
@@ -790,8 +797,8 @@ def main(argv=None) -> int:
     ap.add_argument("--transient", type=float, default=0.0,
                     help="start transient left out of the metrics [s], below the stop time")
     ap.add_argument("--window", type=float, default=None,
-                    help="window of the statistics [s], at least 16 steps and at most what "
-                         "follows the transient (default: all after the transient)")
+                    help=f"window of the statistics [s], at least {MIN_SAMPLES} steps and at "
+                         "most what follows the transient (default: all after the transient)")
     ap.add_argument("--engine", choices=ENGINES, default="library",
                     help="library: the model library's compiled loop (default; the FMUs' "
                          "numbers at the model's cost); fmu: the FMUs of --fmu-dir in the "

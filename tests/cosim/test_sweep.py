@@ -476,3 +476,19 @@ def test_the_documented_limits_are_the_codes():
                           r"ran)", doc)
     assert statuses == [str(s) for s in (sweep.EXIT_OK, sweep.EXIT_STOPPED,
                                          sweep.EXIT_BAD_REQUEST, sweep.EXIT_CASES_FAILED)]
+
+
+def test_an_out_that_is_no_result_file_is_refused_and_left_as_it_was(tmp_path, capsys):
+    """Even a file with no whole line, which a result file cut short in its header would
+    be, is left alone unless it is the start of this sweep's header."""
+    notes = tmp_path / "notes.txt"
+    notes.write_bytes(b"hello, world: no newline at all \xff")
+    for out, message in [(notes, f"{notes} is not a result file of this sweep"),
+                         (tmp_path, f"cannot write the result file {tmp_path} (Is a directory"),
+                         (notes / "sweep.csv", f"(File exists: {notes}); allowed")]:
+        status, stdout, stderr = sweep_cli(capsys, "--param", RANGE, "--grid", "2",
+                                           "--out", str(out))
+        assert status == 2 and stdout == "" and len(stderr.splitlines()) == 1, stderr
+        assert message in stderr, stderr
+    assert notes.read_bytes() == b"hello, world: no newline at all \xff"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]  # no lock left
