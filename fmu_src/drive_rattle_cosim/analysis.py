@@ -327,6 +327,39 @@ class WindowedStatistics:
         return value, count
 
 
+def window_layout(points: int, h: float, transient: float = 0.0,
+                  window: float | None = None, record: float | None = None
+                  ) -> tuple[int, int, int]:
+    """``(first, width, count)`` of the windows of a record of ``points`` samples at the step
+    ``h`` [s] (``record`` [s] long, default ``(points - 1) h``): the sample after the first
+    ``transient`` seconds, the samples per window of ``window`` seconds (None: all that
+    follow) and the number of whole windows; ValueError naming the value and what is allowed
+    when the transient or a window does not fit the record."""
+    record = (points - 1) * h if record is None else record
+    if not (math.isfinite(transient) and 0.0 <= transient < record):
+        raise ValueError(f"transient = {transient!r} s; allowed: "
+                         f"0 <= transient < the record's {record:g} s")
+    first = round(transient / h)
+    available = points - 1 - first
+    if window is None:
+        width = available
+        if width < 1:
+            raise ValueError(
+                f"transient = {transient!r} s leaves no step of the "
+                f"{record:g} s record (at a {h:g} s step); allowed: a transient that leaves "
+                "one step or more")
+    else:
+        if not (math.isfinite(window) and window > 0):
+            raise ValueError(f"window = {window!r} s; allowed: > 0")
+        width = round(window / h)
+        if width < 2 or width > available:
+            raise ValueError(
+                f"a window of {window!r} s ({width} samples) does not "
+                f"fit the {available * h:g} s after a transient of {transient:g} s of the "
+                f"{record:g} s record (at a {h:g} s step); allowed: 2 samples up to that")
+    return first, width, available // width
+
+
 def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_flanks,
                         normal_mass: float, transient: float = 0.0,
                         window: float | None = None, *, lines: LineSearch | None = None,
@@ -349,24 +382,10 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
     if not h > 0 or np.max(np.abs(dt - h)) > 1e-6 * h:
         raise ValueError("windowed_statistics: the time points are not uniformly spaced "
                          f"(steps {np.min(dt)!r}..{np.max(dt)!r} s); allowed: a fixed step")
-    record = float(t[-1] - t[0])
-    if not (math.isfinite(transient) and 0.0 <= transient < record):
-        raise ValueError(f"windowed_statistics: transient = {transient!r} s; allowed: "
-                         f"0 <= transient < the record's {record:g} s")
-    first = round(transient / h)
-    available = len(t) - 1 - first
-    if window is None:
-        width = available
-    else:
-        if not (math.isfinite(window) and window > 0):
-            raise ValueError(f"windowed_statistics: window = {window!r} s; allowed: > 0")
-        width = round(window / h)
-        if width < 2 or width > available:
-            raise ValueError(
-                f"windowed_statistics: a window of {window!r} s ({width} samples) does not "
-                f"fit the {available * h:g} s after a transient of {transient:g} s of the "
-                f"{record:g} s record (at a {h:g} s step); allowed: 2 samples up to that")
-    count = available // width
+    try:
+        first, width, count = window_layout(len(t), h, transient, window, float(t[-1] - t[0]))
+    except ValueError as err:
+        raise ValueError(f"windowed_statistics: {err}") from None
     onset_t = np.asarray(onset_times, dtype=float)
     onset_v = np.asarray(onset_speeds, dtype=float)
     onset_f = np.asarray(onset_flanks, dtype=int)

@@ -19,10 +19,10 @@ Command line: ``python -m drive_rattle_cosim.harness --help``.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import itertools
+import math
 import shutil
 import sys
 from ctypes import c_double, c_int, c_uint
@@ -36,7 +36,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
 from .paths import DIST
-from .system import communication_points
+from .system import communication_points, step_nanoseconds
 
 #: Rounds of output-to-input exchange in initialization mode (libcosim does one per unit).
 INIT_ROUNDS = 2
@@ -425,22 +425,14 @@ def time_grid(start: float, step: float, stop: float,
     return points, sizes
 
 
-def _parse_value(text: str):
-    low = text.lower()
-    if low in ("true", "false"):
-        return low == "true"
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(
+    """The command line: exit status 0 on success, 1 when a unit refused a call during the
+    run, 2 for a request refused before any work (one line on stderr)."""
+    from drive_rattle.catalog import check_settings, parse_settings
+
+    from .cli import Parser
+
+    ap = Parser(
         prog="python -m drive_rattle_cosim.harness",
         description="Co-simulate GearMeshRattle with Driveline (fmpy, fixed step, Jacobi).")
     ap.add_argument("--mesh", type=Path, default=DIST / f"{MESH}.fmu")
@@ -449,18 +441,25 @@ def main(argv=None) -> int:
     ap.add_argument("--stop-time", type=float, default=0.1, help="[s]")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
     ap.add_argument("--set", action="append", default=[], metavar="UNIT.NAME=VALUE",
-                    help="parameter value (SI units), e.g. GearMeshRattle.gear.backlash=1.2e-4")
+                    help="parameter value by its declared type (SI units), e.g. "
+                         "GearMeshRattle.gear.backlash=1.2e-4; an enumeration by its code or "
+                         "item name (GearMeshRattle.contact.dissipation=none), a Boolean "
+                         "true/false; checked with the model library before the run")
     ap.add_argument("--record", action="append", default=None, metavar="UNIT.OUTPUT",
                     help="output to record (repeatable; default: all outputs)")
     ap.add_argument("--out", type=Path, default=Path("out") / "cosim.csv", help="result CSV")
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
-    params = {}
-    for item in args.set:
-        key, sep, value = item.partition("=")
-        if not sep:
-            ap.error(f"--set {item!r}: expected UNIT.NAME=VALUE")
-        params[key] = _parse_value(value)
+    try:
+        params = parse_settings(args.set)
+        check_settings(params)
+        step_nanoseconds(args.step)
+        if not (math.isfinite(args.start_time) and math.isfinite(args.stop_time)
+                and args.stop_time > args.start_time):
+            raise ValueError(f"--stop-time {args.stop_time!r} s after --start-time "
+                             f"{args.start_time!r} s; allowed: finite times, stop after start")
+    except ValueError as err:
+        ap.error(str(err))
     try:
         with CoSimulation(args.mesh, args.driveline, params, args.start_time, args.step) as sim:
             result = sim.run(args.stop_time, args.record, progress=not args.no_progress)
