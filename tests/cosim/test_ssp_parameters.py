@@ -17,6 +17,7 @@ with a warning), so that a fixed master shows up here.
 Each master runs in its own process (run_master.py), on 0.1 s (1000 steps, several impacts).
 """
 
+import io
 import json
 import subprocess
 import sys
@@ -26,7 +27,9 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
+from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DRIVELINE, MESH
+from drive_rattle.parameters import specs
 from drive_rattle_build import write_systems
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
@@ -39,6 +42,7 @@ from drive_rattle_cosim.ssp import (
     validate_ssd,
     write_ssp,
 )
+from drive_rattle_cosim.variants import integer_coded_model_description
 
 STOP, STEP = 0.1, 1e-4
 EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12,
@@ -131,6 +135,33 @@ def test_one_parameter_set_per_component_with_every_binding(shipped, tmp_path):
     assert bindings["GearMeshRattle.friction.enabled"] is True
     assert bindings["Driveline.engine.speed_table"] == ""
     assert bindings == read_bindings(shipped["outputs"])
+
+
+def test_the_shipped_ssps_bundle_integer_coded_copies_and_name_the_codes(shipped, fmus):
+    """Both SSPs bundle the FMUs of their folder as ``variants.integer_codes`` copies them (no
+    Enumeration left for libcosim and ecos to ignore), and the SSD's binding of each of the
+    nine integer codes names its codes as the specs do."""
+    coded = {model: [spec for _, spec in specs(UNITS[model].parameters) if spec.choices]
+             for model in (MESH, DRIVELINE)}
+    assert sum(map(len, coded.values())) == 9
+    for path in shipped.values():
+        with zipfile.ZipFile(path) as z:
+            text = z.read(SSD_NAME).decode()
+            for model in (MESH, DRIVELINE):
+                with zipfile.ZipFile(fmus[model]) as original, \
+                        zipfile.ZipFile(io.BytesIO(z.read(f"resources/{model}.fmu"))) as copy:
+                    assert copy.read("modelDescription.xml") == \
+                        integer_coded_model_description(original.read("modelDescription.xml"))
+                    assert b"<Enumeration" not in copy.read("modelDescription.xml")
+                    assert [(i.filename, i.CRC) for i in copy.infolist()
+                            if i.filename != "modelDescription.xml"] == \
+                        [(i.filename, i.CRC) for i in original.infolist()
+                         if i.filename != "modelDescription.xml"]
+        assert text.count('description="codes: ') == 9
+        for spec in (s for specs_ in coded.values() for s in specs_):
+            codes = ", ".join(f"{c} = {n}" for c, n in sorted(spec.choice_names.items()))
+            assert (f'<ssv:Parameter name="{spec.name}" description="codes: {codes}">'
+                    f'<ssv:Integer value="{spec.default}"/>') in text, spec.name
 
 
 def test_edit_bindings_changes_only_the_named_values(shipped, edited, tmp_path):
