@@ -143,17 +143,19 @@ def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ss
 def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
     """libcosim (native C++, OSP): exchanges during initialization, integer-nanosecond grid;
     records from the first point after the start."""
-    result, _ = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
+    result, printed = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
     assert MASTER_GRIDS["libcosim"] == "nanoseconds"
     assert_identical(result, harness(fmus, "nanoseconds"), first=1)
+    assert "[warning]" not in printed, printed  # it loads the SSP's integer codes
 
 
 def test_ecos_runs_the_shipped_system(fmus, system_ssp):
     """ecos (Vico, native C++): exchanges during initialization, accumulated time; records
     from the start.  Its parameter set is named (masters.PARAMETER_SET); here the SSP binds
     the defaults, so the run is the default one either way."""
-    result, _ = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
+    result, printed = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
     assert_identical(result, harness(fmus, MASTER_GRIDS["ecos"]), first=0)
+    assert "[warning]" not in printed, printed
 
 
 def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
