@@ -210,6 +210,9 @@ def test_the_edited_parameters_are_applied(master, edited_flavour, tmp_path):
     assert first_difference(result, harness(fmus, {}, grid), FIRST[master]) != {}
     if master in ("libcosim", "ecos"):
         assert "[warning]" not in printed, printed
+        # the integer code itself was applied: without it the run is another
+        assert first_difference(result, harness(fmus, NOT_ENUMERATIONS, grid),
+                                FIRST[master]) != {}
 
 
 @pytest.mark.parametrize("master", list(IGNORED))
