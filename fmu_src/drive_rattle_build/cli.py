@@ -74,7 +74,7 @@ def main(argv=None) -> int:
         fmus = build(args.out, args.update_templates, not args.no_fmutool)
         for fmu in fmus:
             print(f"built and validated {fmu}")
-        for system in write_systems(fmus, args.out):
+        for system in write_systems(fmus, args.out, not args.no_fmutool):
             print(f"wrote the system {system}")
         if not args.no_native:
             from .native import NATIVE_SUBDIR, build_native
@@ -82,7 +82,8 @@ def main(argv=None) -> int:
             native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool)
             for fmu in native:
                 print(f"built and validated {fmu} (native: C only, linux64 and win64)")
-            for system in write_systems(native, args.out / NATIVE_SUBDIR):
+            for system in write_systems(native, args.out / NATIVE_SUBDIR,
+                                        not args.no_fmutool):
                 print(f"wrote the system {system}")
         if not args.no_fmi3:
             from .fmi3 import FMI3_SUBDIR, build_fmi3

