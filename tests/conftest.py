@@ -96,3 +96,19 @@ FLAVOURS = ("pythonfmu", "native")
 def flavour_fmus(request):
     """The FMUs of each flavour in turn: the pythonfmu FMUs and the native ones."""
     return request.getfixturevalue("fmus" if request.param == "pythonfmu" else "native_fmus")
+
+
+#: Seconds spent in the tests (setup, call and teardown), split by whether they are slow.
+_SECONDS = {"not slow": 0.0, "slow": 0.0}
+
+
+def pytest_runtest_logreport(report):
+    item_slow = "slow" in report.keywords
+    _SECONDS["slow" if item_slow else "not slow"] += report.duration
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The fast layer's time beside the slow one's (a session fixture's build counts for the
+    first test that uses it)."""
+    terminalreporter.write_line(
+        f"time in tests: {_SECONDS['not slow']:.0f} s not slow, {_SECONDS['slow']:.0f} s slow")

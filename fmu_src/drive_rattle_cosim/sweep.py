@@ -548,6 +548,32 @@ class ResultWriter:
         self._append(_row_bytes([row.get(c, "") for c in self.columns]))
         self.rows += 1
 
+    def drop(self, case_ids: set[str]) -> None:
+        """Remove the rows of ``case_ids`` (failed cases about to run again, so that each case
+        keeps one row): the file rewritten beside itself and renamed into place, under the
+        lock, so that a crash leaves either the old file or the new one."""
+        if not case_ids:
+            return
+        header, rows, _ = _whole_rows(self.path.read_bytes())
+        k = header.index("case_id")
+        kept = [r for r in rows if r[k] not in case_ids]
+        part = self.path.with_name(f".{self.path.name}.{os.getpid()}.part")
+        try:
+            with part.open("wb") as f:
+                f.write(b"".join(_row_bytes(r) for r in [header, *kept]))
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(part, self.path)
+        except OSError as err:
+            part.unlink(missing_ok=True)
+            raise ResultWriteError(
+                f"cannot rewrite {self.path} without the failed rows to retry "
+                f"({err.strerror or err}); it is unchanged: make room, then "
+                f"{self.resume_hint}") from None
+        self._file.close()
+        self._file = None
+        self._open()
+
     def _append(self, data: bytes) -> None:
         view = memoryview(data)
         try:
@@ -610,6 +636,8 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
               "failed_before": sum(1 for c in cases if finished.get(c.case_id)
                                    and not retry_failed)}
     try:
+        if retry_failed:  # a retried case's failed row gives way to its new one
+            writer.drop({c.case_id for c in todo if finished.get(c.case_id)})
         if not todo:
             return counts
         if scheduler:

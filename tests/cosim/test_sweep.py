@@ -370,6 +370,23 @@ def test_a_sweep_with_failed_cases_exits_non_zero_with_their_count(tmp_path, sch
     assert status == sweep.EXIT_OK and stderr == "" and "(0 failed)" in stdout
 
 
+def test_a_retried_case_keeps_one_row(tmp_path, scheduler, capsys):
+    """``--retry-failed`` runs a failed case again and its new row replaces the failed one:
+    every case once in the file (its failed row and the retry's were both kept)."""
+    out = tmp_path / "sweep.csv"
+    args = ["--param", "GearMeshRattle.solver.h_comm_max=5e-5:2e-4", "--grid", "2",
+            "--stop-time", "0.005", "--scheduler", scheduler, "--out", str(out)]
+    assert sweep_cli(capsys, *args)[0] == sweep.EXIT_CASES_FAILED
+    before = read_results(out)
+    status, stdout, _ = sweep_cli(capsys, *args, "--retry-failed")
+    assert status == sweep.EXIT_CASES_FAILED and "1 cases run (1 failed)" in stdout
+    after = read_results(out)
+    assert sorted(r["case_id"] for r in after) == sorted(r["case_id"] for r in before)
+    assert len({r["case_id"] for r in after}) == len(after) == 2
+    ran = [repr(r) for r in before if not r["error"]]  # repr: nan equals nan
+    assert [repr(r) for r in after if not r["error"]] == ran
+
+
 P, D, K = "GearMeshRattle.gear.backlash", "Driveline.vehicle.drag", "Driveline.shaft.k"
 RANGE = f"{P}=1e-4:2e-4"
 #: Requests refused before any work: the arguments and a text the one-line message holds.
