@@ -1,10 +1,22 @@
-"""Co-simulation of GearMeshRattle and Driveline on fmpy's low-level FMU2Slave API.
+"""Co-simulation of GearMeshRattle and Driveline on fmpy's low-level FMI 2.0 and FMI 3.0 APIs
+(``FMU2Slave``, ``FMU3Slave``).
 
 Fixed communication step, Jacobi coupling (both units step from the outputs of the last
 communication point) along ``drive_rattle.interface.CONNECTIONS``, the same as libcosim's
 fixed-step algorithm and as the in-process twin ``drive_rattle_cosim.system.simulate``.
 Communication points are integer nanoseconds, ``t_k = (t0_ns + k step_ns) / 1e9``, and each
 step is ``t_{k+1} - t_k``, as libcosim computes them, so the three agree bit for bit.
+
+Each unit is driven through the adapter of its FMU's standard (``FMI2``, ``FMI3``: read from
+the modelDescription's ``fmiVersion``), which is all that differs between them: the names of
+the typed get/set calls (FMI 2.0 Real, Integer, an Enumeration as an Integer; FMI 3.0
+Float64, Int32, an Enumeration as an Int64), the ``nValues`` argument of FMI 3.0's, the
+initialization calls (``fmi2SetupExperiment`` + ``fmi2EnterInitializationMode``;
+``fmi3EnterInitializationMode`` with the start time), ``fmi3DoStep``'s outputs (a request to
+terminate or an early return ends the run with an error) and the logger.  One loop drives
+both, so the FMI 3.0 FMUs give the FMI 2.0 FMUs' numbers bit for bit (tested).  Each FMU is
+unpacked into a temporary folder of its own, removed on every way out (a failed load
+included).
 
 Python::
 
@@ -21,17 +33,19 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import functools
 import itertools
 import math
+import os
 import shutil
 import sys
-from ctypes import c_double, c_int, c_uint
+import tempfile
+from ctypes import byref, c_bool, c_double, c_int, c_int32, c_int64, c_uint
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
 from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
@@ -46,8 +60,13 @@ PROGRESS_MIN_STEPS = 20_000
 _STATUS = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
 
 
-#: Live units by FMI instance name: fmpy's native logger proxy keeps a single Python logger per
-#: process, so one callback serves every instance and routes messages by instance name.
+def _status_name(status: int) -> str:
+    return _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+
+
+#: Live FMI 2.0 units by FMI instance name: fmpy's native logger proxy keeps a single Python
+#: logger per process, so one callback serves every FMI 2.0 instance and routes messages by
+#: instance name (an FMI 3.0 instance gets a callback of its own).
 _INSTANCES: dict[str, Unit] = {}
 _CALLBACKS: list = []
 
@@ -63,18 +82,17 @@ def _register_instance(unit: Unit) -> str:
 def _log(env, instance, status, category, message) -> None:
     unit = _INSTANCES.get(instance.decode("utf-8", "replace") if instance else "")
     if unit is not None:
-        unit.messages.append((_STATUS[status] if 0 <= status < 6 else str(status),
-                              message.decode("utf-8", "replace")))
+        unit.messages.append((_status_name(status), message.decode("utf-8", "replace")))
 
 
-def _callbacks() -> fmi2CallbackFunctions:
-    """The process-wide callback struct (logger formatted natively by fmpy's proxy)."""
+def _callbacks():
+    """The process-wide FMI 2.0 callback struct (logger formatted natively by fmpy's proxy)."""
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+
     if not _CALLBACKS:
         cb = fmi2CallbackFunctions()
         cb.logger = fmi2CallbackLoggerTYPE(_log)
         with contextlib.suppress(Exception):  # the proxy ships with fmpy on every platform
-            from ctypes import byref
-
             from fmpy.logging import addLoggerProxy
 
             addLoggerProxy(byref(cb))
@@ -83,19 +101,20 @@ def _callbacks() -> fmi2CallbackFunctions:
 
 
 class CoSimulationError(RuntimeError):
-    """A unit refused a call; the message holds the unit's logged reason."""
+    """A unit refused a call, or an FMU could not be loaded; the message holds the unit's
+    logged reason."""
 
 
 @dataclass
 class Variable:
     name: str
     vr: int
-    fmi_type: str  # Real, Integer, Boolean, String
+    fmi_type: str  # the type of the calls that get and set it: Real, Integer, ... / Float64, ...
     causality: str
     unit: str
 
 
-def raw_function(slave: FMU2Slave, name: str):
+def raw_function(slave, name: str):
     """The ctypes function ``name`` of the FMU's library, argument types set by fmpy.
 
     fmpy >= 0.3.20 keeps them in ``slave._functions``; 0.3.19 (the newest that gemseo-fmu
@@ -104,46 +123,188 @@ def raw_function(slave: FMU2Slave, name: str):
     return functions[name] if functions is not None else getattr(slave.dll, name)
 
 
+class FMI2:
+    """How the harness drives an FMI 2.0 co-simulation FMU (fmpy's ``FMU2Slave``)."""
+
+    version: ClassVar[str] = "2.0"
+    #: The type of the get/set calls of each modelDescription type (an Enumeration is got and
+    #: set with fmi2GetInteger / fmi2SetInteger).
+    ACCESS: ClassVar[dict] = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
+                              "Boolean": "Boolean", "String": "String"}
+    #: The C type of each numeric access type, in the order outputs are recorded.
+    CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
+    #: The access type of the coupling signals.
+    FLOAT: ClassVar[str] = "Real"
+
+    @staticmethod
+    def load(unit: Unit, md, folder: str):
+        from fmpy.fmi2 import FMU2Slave
+
+        unit.instance_name = _register_instance(unit)
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=folder,
+                          modelIdentifier=unit.model_name, instanceName=unit.instance_name)
+        unit.slave = slave
+        slave.instantiate(callbacks=_callbacks(), loggingOn=False)
+        return slave
+
+    @staticmethod
+    def unload(unit: Unit) -> None:
+        _INSTANCES.pop(unit.instance_name, None)
+
+    @staticmethod
+    def enter_initialization(unit: Unit, start_time: float) -> None:
+        unit.call("setupExperiment", unit.slave.setupExperiment, None, start_time)
+        unit.call("enterInitializationMode", unit.slave.enterInitializationMode)
+
+    @staticmethod
+    def bind(function, component, vrs, n: int, values):
+        """The raw get or set of ``n`` values at ``vrs``, as a call of no arguments."""
+        return functools.partial(function, component, vrs, n, values)
+
+    @staticmethod
+    def stepper(unit: Unit):
+        """``(doStep, component, the arguments after the step size, flags)``: an FMI 2.0 step
+        reports nothing beside its status."""
+        return raw_function(unit.slave, "fmi2DoStep"), unit.slave.component, (1,), ()
+
+
+class FMI3:
+    """How the harness drives an FMI 3.0 co-simulation FMU (fmpy's ``FMU3Slave``): no event
+    mode, no early return, no intermediate update."""
+
+    version: ClassVar[str] = "3.0"
+    ACCESS: ClassVar[dict] = {"Float64": "Float64", "Int32": "Int32", "Int64": "Int64",
+                              "Enumeration": "Int64", "Boolean": "Boolean", "String": "String"}
+    CTYPES: ClassVar[dict] = {"Float64": c_double, "Int32": c_int32, "Int64": c_int64,
+                              "Boolean": c_bool}
+    FLOAT: ClassVar[str] = "Float64"
+
+    @staticmethod
+    def load(unit: Unit, md, folder: str):
+        from fmpy.fmi3 import FMU3Slave
+
+        def log(env, status, category, message):
+            unit.messages.append((_status_name(status),
+                                  message.decode("utf-8", "replace") if message else ""))
+
+        unit.instance_name = unit.name
+        slave = FMU3Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=unit.model_name,
+                          instanceName=unit.instance_name)
+        unit.slave = slave
+        slave.instantiate(loggingOn=False, logMessage=log)
+        return slave
+
+    @staticmethod
+    def unload(unit: Unit) -> None:
+        pass
+
+    @staticmethod
+    def enter_initialization(unit: Unit, start_time: float) -> None:
+        unit.call("enterInitializationMode",
+                  functools.partial(unit.slave.enterInitializationMode, startTime=start_time))
+
+    @staticmethod
+    def bind(function, component, vrs, n: int, values):
+        return functools.partial(function, component, vrs, n, values, n)
+
+    @staticmethod
+    def stepper(unit: Unit):
+        """fmi3DoStep's outputs: ``flags`` (a request to terminate, an early return) end the
+        run; the event flag cannot be set without event mode."""
+        event, terminate, early, last = c_bool(), c_bool(), c_bool(), c_double()
+        return (raw_function(unit.slave, "fmi3DoStep"), unit.slave.component,
+                (True, byref(event), byref(terminate), byref(early), byref(last)),
+                (terminate, early))
+
+
+#: The adapters by the major version of ``fmiVersion``.
+STANDARDS = {"2": FMI2, "3": FMI3}
+
+
+def standard_of(md, fmu: Path):
+    """The adapter of a modelDescription's FMI version (CoSimulationError for another
+    version or an FMU that is not for co-simulation)."""
+    standard = STANDARDS.get(str(md.fmiVersion).split(".")[0])
+    if standard is None:
+        raise CoSimulationError(f"{fmu} is an FMI {md.fmiVersion} FMU; allowed: FMI 2.0 or "
+                                "3.0 co-simulation FMUs")
+    if md.coSimulation is None:
+        raise CoSimulationError(f"{fmu} has no co-simulation interface; allowed: FMI 2.0 or "
+                                "3.0 co-simulation FMUs")
+    return standard
+
+
 class _Raw:
-    """The prepared arguments of getX/setX for a fixed list of value references: the raw
-    functions, the component, the reference array and a preallocated value array."""
+    """The prepared get or set of a fixed list of value references: the raw function bound to
+    the component, the reference array and a preallocated value array, called with no
+    arguments (``get()``, ``put()``); ``values``: an array to share (a coupling's set takes
+    the values its get wrote)."""
 
-    _CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
-
-    def __init__(self, unit: Unit, fmi_type: str, vrs: list[int]):
+    def __init__(self, unit: Unit, fmi_type: str, vrs: list[int], values=None):
         n = len(vrs)
+        standard = unit.standard
         self.unit, self.fmi_type, self.n = unit, fmi_type, n
         self.vrs = (c_uint * n)(*vrs)
-        self.values = (self._CTYPES[fmi_type] * n)()
-        self._get = raw_function(unit.slave, f"fmi2Get{fmi_type}")
-        self._set = raw_function(unit.slave, f"fmi2Set{fmi_type}")
-        self.component = unit.slave.component
+        self.values = (standard.CTYPES[fmi_type] * n)() if values is None else values
+        prefix = f"fmi{standard.version[0]}"
+        component = unit.slave.component
+        self.get = standard.bind(raw_function(unit.slave, f"{prefix}Get{fmi_type}"), component,
+                                 self.vrs, n, self.values)
+        self.put = standard.bind(raw_function(unit.slave, f"{prefix}Set{fmi_type}"), component,
+                                 self.vrs, n, self.values)
 
 
 class Unit:
-    """One FMU instance with name-based, typed access."""
+    """One FMU instance (FMI 2.0 or 3.0) with name-based, typed access.  Its FMU is unpacked
+    into a temporary folder of its own, removed by :meth:`close` and on a failed load."""
 
     def __init__(self, fmu: Path, instance_name: str):
         self.name = instance_name
+        self.instance_name = instance_name
         self.fmu = Path(fmu)
+        self.slave = None
+        self.messages: list[tuple[str, str]] = []  # (status, message) from the logger
+        self._freed = False
+        self._stepper = None
         if not self.fmu.is_file():
             raise FileNotFoundError(f"FMU {self.fmu} does not exist (build it with build_fmu.py)")
-        md = read_model_description(str(self.fmu))
+        try:
+            md = read_model_description(str(self.fmu))
+        except Exception as err:
+            raise CoSimulationError(f"{self.name}: {self.fmu} is not a readable FMU ({err}); "
+                                    "allowed: an FMI 2.0 or 3.0 co-simulation FMU") from None
+        self.standard = standard_of(md, self.fmu)
+        self.fmi_version = md.fmiVersion
         self.model_name = md.coSimulation.modelIdentifier
-        self.variables = {
-            # an Enumeration is set and got as an Integer (fmi2SetInteger, fmi2GetInteger)
-            v.name: Variable(v.name, v.valueReference,
-                             "Integer" if v.type == "Enumeration" else v.type, v.causality,
-                             v.unit or "")
-            for v in md.modelVariables
-        }
-        self.messages: list[tuple[str, str]] = []  # (status, message) from the logger
-        self._dir = extract(str(self.fmu))
-        instance_name = _register_instance(self)
-        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=self._dir,
-                               modelIdentifier=self.model_name, instanceName=instance_name)
-        self.slave.instantiate(callbacks=_callbacks(), loggingOn=False)
-        self._freed = False
+        access = self.standard.ACCESS
+        self.variables = {v.name: Variable(v.name, v.valueReference, access.get(v.type, v.type),
+                                           v.causality, v.unit or "")
+                          for v in md.modelVariables}
+        self._dir = tempfile.mkdtemp(prefix=f"drive_rattle_{self.model_name}_")
+        cwd = os.getcwd()
+        try:
+            extract(str(self.fmu), self._dir)
+            self.standard.load(self, md, self._dir)
+        except BaseException as err:
+            # fmpy changes into the binaries' folder to load them and stays there when the
+            # load fails: back to where we were before that folder goes
+            with contextlib.suppress(OSError):
+                os.chdir(cwd)
+            self._release()
+            if isinstance(err, Exception):
+                reason = f"; the FMU logged: {self.messages[-1][1]}" if self.messages else ""
+                raise CoSimulationError(f"{self.name}: cannot load {self.fmu}: {err}{reason}"
+                                        ) from None
+            raise
+
+    def _release(self) -> None:
+        """Everything the load took: the library, the instance registry, the folder."""
+        if self.slave is not None:
+            with contextlib.suppress(Exception):
+                self.slave.freeLibrary()
+        self.standard.unload(self)
+        self._freed = True
+        shutil.rmtree(self._dir, ignore_errors=True)
 
     def call(self, what: str, fn, *args):
         """Call an fmpy method; an FMI error becomes CoSimulationError with the logged reason."""
@@ -157,8 +318,7 @@ class Unit:
     def fail(self, what: str, status: int):
         """Raise CoSimulationError for a call that returned ``status``, with the logged reason."""
         reason = self.messages[-1][1] if self.messages else "no message logged"
-        name = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-        raise CoSimulationError(f"{self.name}: {what} returned {name}: {reason}")
+        raise CoSimulationError(f"{self.name}: {what} returned {_status_name(status)}: {reason}")
 
     def var(self, name: str) -> Variable:
         try:
@@ -177,15 +337,54 @@ class Unit:
         for fmi_type, (vrs, vals) in groups.items():
             self.call(f"set{fmi_type}", getattr(self.slave, f"set{fmi_type}"), vrs, vals)
 
+    def get(self, names) -> list:
+        """The values of the variables ``names``, in order."""
+        out = []
+        for name in names:
+            v = self.var(name)
+            out += self.call(f"get{v.fmi_type}", getattr(self.slave, f"get{v.fmi_type}"), [v.vr])
+        return out
+
+    def enter_initialization(self, start_time: float) -> None:
+        self.standard.enter_initialization(self, start_time)
+
+    def exit_initialization(self) -> None:
+        self.call("exitInitializationMode", self.slave.exitInitializationMode)
+
+    def stepper(self):
+        """``(doStep, component, the arguments after the step size, flags)``: the raw step
+        of this unit's standard (:meth:`FMI2.stepper`, :meth:`FMI3.stepper`), made once."""
+        if self._stepper is None:
+            self._stepper = self.standard.stepper(self)
+        return self._stepper
+
+    def do_step(self, t: float, h: float) -> None:
+        """One communication step from ``t`` [s] of ``h`` [s] (CoSimulationError when it is
+        refused, the unit asks to terminate or returns early)."""
+        do_step, component, tail, flags = self.stepper()
+        self.check_step(t, do_step(component, t, h, *tail), flags)
+
+    def check_step(self, t: float, status: int, flags) -> None:
+        """CoSimulationError for a step from ``t`` that returned ``status > 1`` or raised a
+        flag (FMI 3.0: a request to terminate, an early return)."""
+        if status > 1:
+            self.fail(f"doStep at t = {t!r} s", status)
+        if flags and (flags[0].value or flags[1].value):
+            what = "asked to terminate" if flags[0].value else "returned early"
+            raise CoSimulationError(f"{self.name}: doStep at t = {t!r} s {what}; allowed: "
+                                    "every step to its end")
+
     def close(self) -> None:
         if not self._freed:
             self._freed = True
-            # terminate after a failed call may be refused; free the instance anyway
-            with contextlib.suppress(Exception):
-                self.slave.terminate()
-            self.slave.freeInstance()
-            _INSTANCES.pop(self.slave.instanceName, None)
-            shutil.rmtree(self._dir, ignore_errors=True)
+            try:
+                # terminate after a failed call may be refused; free the instance anyway
+                with contextlib.suppress(Exception):
+                    self.slave.terminate()
+                self.slave.freeInstance()
+            finally:
+                self.standard.unload(self)
+                shutil.rmtree(self._dir, ignore_errors=True)
 
 
 @dataclass
@@ -256,13 +455,12 @@ class CoSimulation:
             per_unit[unit.name][name] = value
         for u in self.units.values():
             u.set(per_unit[u.name])
-            u.call("setupExperiment", u.slave.setupExperiment, None, self.start_time)
-            u.call("enterInitializationMode", u.slave.enterInitializationMode)
+            u.enter_initialization(self.start_time)
         self._plan = self._transfer_plan()
         for _ in range(INIT_ROUNDS):
             self._transfer()
         for u in self.units.values():
-            u.call("exitInitializationMode", u.slave.exitInitializationMode)
+            u.exit_initialization()
         self.time = self.start_time
         self._k = 0
 
@@ -281,8 +479,9 @@ class CoSimulation:
     def _transfer(self) -> None:
         """One output-to-input exchange along the plan (initialization mode)."""
         for src, outs, dst, ins in self._plan:
-            dst.call("setReal", dst.slave.setReal, ins,
-                     src.call("getReal", src.slave.getReal, outs))
+            get, put = f"get{src.standard.FLOAT}", f"set{dst.standard.FLOAT}"
+            dst.call(put, getattr(dst.slave, put), ins,
+                     src.call(get, getattr(src.slave, get), outs))
 
     def run(self, stop_time: float, outputs=None, progress: bool = False,
             grid: str | tuple[list[float], list[float]] = "nanoseconds") -> Result:
@@ -298,7 +497,7 @@ class CoSimulation:
                        for v in u.variables.values() if v.causality == "output"]
         rec = []  # (unit, FMI type, [vrs], [qualified names])
         for u in self.units.values():
-            for fmi_type in ("Real", "Integer", "Boolean"):
+            for fmi_type in u.standard.CTYPES:
                 names = [o for o in outputs if self._split(o)[0] is u
                          and u.var(self._split(o)[1]).fmi_type == fmi_type]
                 if names:
@@ -321,42 +520,40 @@ class CoSimulation:
             steps = tqdm(steps, unit="step", desc="co-simulation", mininterval=0.5,
                          disable=None)  # no bar where stderr is not a terminal
         # Hot loop on the FMUs' raw ctypes functions with preallocated arrays (fmpy's
-        # convenience wrappers cost several microseconds per call), the arguments prepared
+        # convenience wrappers cost several microseconds per call), the arguments bound
         # once, a row per recorded type and point (turned into columns at the end).
         raw_rec = [_Raw(u, fmi_type, vrs) for u, fmi_type, vrs, _ in rec]
-        recorders = [(r._get, r.component, r.vrs, r.n, r.values, r) for r in raw_rec]
+        recorders = [(r.get, r.values, r) for r in raw_rec]
         rows: list[list] = [[] for _ in raw_rec]
         exchanges = []
         for src, outs, dst, ins in self._plan:
-            a, b = _Raw(src, "Real", outs), _Raw(dst, "Real", ins)
-            exchanges.append((a._get, a.component, a.vrs, a.n, a.values, a,
-                              b._set, b.component, b.vrs, b.n, b))
-        steppers = [(raw_function(u.slave, "fmi2DoStep"), u.slave.component, u)
-                    for u in self.units.values()]
+            a = _Raw(src, src.standard.FLOAT, outs)
+            b = _Raw(dst, dst.standard.FLOAT, ins, values=a.values)  # both C doubles
+            exchanges.append((a.get, a, b.put, b))
+        steppers = [(*u.stepper(), u) for u in self.units.values()]
         last = len(points) - 1
         done = 0
         try:
             for k in steps:
-                for (get, component, vrs, n, values, raw), out in zip(recorders, rows,
-                                                                       strict=True):
-                    status = get(component, vrs, n, values)
+                for (get, values, raw), out in zip(recorders, rows, strict=True):
+                    status = get()
                     if status > 1:
                         raw.unit.fail(f"get{raw.fmi_type}", status)
                     out.append(values[:])
                 if k == last:
                     break
-                for get, c_src, v_src, n_src, values, a, put, c_dst, v_dst, n_dst, b in exchanges:
-                    status = get(c_src, v_src, n_src, values)
+                for get, a, put, b in exchanges:
+                    status = get()
                     if status > 1:
-                        a.unit.fail("getReal", status)
-                    status = put(c_dst, v_dst, n_dst, values)
+                        a.unit.fail(f"get{a.fmi_type}", status)
+                    status = put()
                     if status > 1:
-                        b.unit.fail("setReal", status)
+                        b.unit.fail(f"set{b.fmi_type}", status)
                 t, h = points[k], sizes[k]
-                for do_step, component, u in steppers:
-                    status = do_step(component, t, h, 1)
-                    if status > 1:
-                        u.fail(f"doStep at t = {t!r} s", status)
+                for do_step, component, tail, flags, u in steppers:
+                    status = do_step(component, t, h, *tail)
+                    if status > 1 or flags:
+                        u.check_step(t, status, flags)
                 done = k + 1
         finally:
             self.time = points[done]

@@ -1,7 +1,7 @@
 """A second FMI 3.0 master: Vico's ecos (pip ``ecospy`` 0.7.2, a C++ engine on fmi4c; it needs
 Debian's ``libtbb12``) runs the FMI 3.0 pair coupled and gives, on its own grid (time
-accumulated, ``t += step``), the numbers of the fmpy FMI 3.0 master on that grid -- and so of
-the FMI 2.0 native face -- bit for bit, a Float64 parameter set through its parameter set too.
+accumulated, ``t += step``), the numbers of the harness on the FMI 3.0 pair on that grid -- and
+so of the FMI 2.0 native face -- bit for bit, a Float64 parameter set through its parameter set too.
 ecos 0.7.2 does not handle FMI 3.0 Enumerations: it skips those variables with a warning
 ("Variable named 'contact.dissipation' is of unsupported type, skipping"), so the integer codes
 cannot be set in ecos (docs/fmi3.md)."""
@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 
 from drive_rattle.interface import DRIVELINE, MESH
+from drive_rattle_cosim.harness import CoSimulation
 
 from ..native.twin import bits
-from .master3 import Pair
 
 ROOT = Path(__file__).resolve().parents[2]
 STOP, STEP = 0.02, 1e-4  # 200 communication steps
@@ -43,7 +43,7 @@ def run_ecos(folder: Path, parameters: dict, tmp_path: Path) -> tuple[dict, str]
 def test_ecos_runs_the_pair_as_fmpy_does(fmi3_fmus, parameters, tmp_path):
     folder = fmi3_fmus[MESH].parent
     result, log = run_ecos(folder, parameters, tmp_path)
-    with Pair(fmi3_fmus, parameters) as pair:
+    with CoSimulation(fmi3_fmus[MESH], fmi3_fmus[DRIVELINE], parameters) as pair:
         mine = pair.run(STOP, grid="accumulated")
     assert result["time"] == [t.hex() for t in mine.time]
     assert set(result["columns"]) == set(mine.columns)

@@ -1,7 +1,8 @@
 """The FMI 3.0 FMUs are the model library under its FMI 3.0 face: in fmpy they give the FMI 2.0
 native face's numbers bit for bit -- each FMU alone on the committed regression inputs, the
-pair coupled in the paper scenario (and with other contact laws, friction readings and
-dissipation, set through the Enumerations) -- and their FMU states are the library's records.
+pair coupled in the harness in the paper scenario (and with other contact laws, friction
+readings and dissipation, set through the Enumerations) -- and their FMU states are the
+library's records.
 Every float is compared as its hexadecimal text, never with a tolerance: rattle is chaotic, and
 one ulp of difference would grow into another impact sequence."""
 
@@ -16,7 +17,6 @@ from drive_rattle_cosim.regression import REFERENCE_ROOT, check
 
 from ..native.test_native_hosts import run_fmpy
 from ..native.twin import KINDS, bits, input_rows, interface, twin_run
-from .master3 import Pair, run_alone
 from .raw_fmi3 import OK, Model, unpack
 
 #: (mesh parameters, driveline parameters) by public name; the integer codes go through
@@ -39,10 +39,10 @@ STOPS = {"paper scenario (defaults)": 0.5}
 @pytest.mark.parametrize("model", MODELS)
 def test_alone_in_fmpy_is_the_fmi2_face(fmi3_fmus, native_fmus, model):
     """On the committed regression inputs (500 steps of 0.1 ms), every output at every point
-    equals the FMI 2.0 native FMU's under the same calls in fmpy, and the library's own unit
-    driven by them."""
+    equals the FMI 2.0 native FMU's under the same calls in fmpy (the harness's unit drives
+    both), and the library's own unit driven by them."""
     rows = input_rows(model)
-    table = run_alone(fmi3_fmus[model], rows)
+    table = run_fmpy(fmi3_fmus[model], rows)
     assert len(table) == len(rows) == 501
     assert bits(table) == bits(run_fmpy(native_fmus[model], rows))
     names = interface(native_fmus[model])[2]
@@ -61,15 +61,16 @@ def test_simulate_fmu_passes_the_regression_references(fmi3_fmus, model):
 
 @pytest.mark.parametrize("variant", list(VARIANTS))
 def test_coupled_pair_is_the_fmi2_face(fmi3_fmus, native_fmus, variant):
-    """The pair coupled in fmpy (FMI 3.0) and the FMI 2.0 native pair under the harness, the
-    same master algorithm: every output of both units at every point, bit for bit."""
+    """The FMI 3.0 pair and the FMI 2.0 native pair under the harness (one loop, an adapter
+    per standard): every output of both units at every point, bit for bit."""
     mesh, driveline = VARIANTS[variant]
     params = {**{f"{MESH}.{k}": v for k, v in mesh.items()},
               **{f"{DRIVELINE}.{k}": v for k, v in driveline.items()}}
     stop = STOPS.get(variant, STOP)
-    with Pair(fmi3_fmus, params) as pair:
+    with CoSimulation(fmi3_fmus[MESH], fmi3_fmus[DRIVELINE], params) as pair:
+        assert all(u.fmi_version == "3.0" for u in pair.units.values())
         mine = pair.run(stop)
-        assert not pair.messages(), pair.messages()
+        assert not [m for u in pair.units.values() for m in u.messages]
     with CoSimulation(native_fmus[MESH], native_fmus[DRIVELINE], params) as sim:
         reference = sim.run(stop)
     assert [t.hex() for t in mine.time] == [t.hex() for t in reference.time]

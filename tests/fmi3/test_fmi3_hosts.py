@@ -28,9 +28,8 @@ from drive_rattle_build.compiler import zig_cc
 from drive_rattle_build.fmi3 import fmi3_headers, source_files
 from drive_rattle_cosim.regression import read_opt, reference_files
 
-from ..native.test_native_hosts import windows_path, wine
+from ..native.test_native_hosts import run_fmpy, windows_path, wine
 from ..native.twin import STRICT, bits, gcc, input_rows, twin_run
-from .master3 import run_alone
 
 pytestmark = pytest.mark.skipif(gcc() is None,
                                 reason="gcc is not installed: the native host cannot be compiled")
@@ -92,7 +91,7 @@ def test_linux_host_without_python_is_the_library(linux_host, fmi3_fmus, model, 
     names, _, outputs, _ = interface3(fmu)
     rows = input_rows(model)
     expected = bits(twin_run(model, rows, names))
-    assert bits(run_alone(fmu, rows)) == expected
+    assert bits(run_fmpy(fmu, rows)) == expected
     for resources in (None, "-"):  # the resources folder, and NULL
         run = run_linux_host(linux_host, fmu, unpacked, tmp_path, resources)
         assert run.returncode == 0, f"fmu3_host failed (rc {run.returncode}):\n{run.stderr}"

@@ -46,27 +46,22 @@ pytestmark = pytest.mark.skipif(gcc() is None,
 
 
 def run_fmpy(fmu: Path, rows) -> list[list]:
-    """fmu_host.c's call sequence through fmpy in this process."""
+    """fmu_host.c's call sequence through fmpy in this process (the harness's unit, so an FMI
+    2.0 or 3.0 FMU): start at the first row's time, the first row's inputs set in
+    initialization mode, then per row the inputs set and a step to the next row's time;
+    [time, outputs...] at every row."""
     _, _, input_names, outputs = interface(fmu)
+    names = [name for name, _, _ in outputs]
     unit = Unit(fmu, "fmpy_reference")
     try:
-        s = unit.slave
-        real = [vr for _, kind, vr in outputs if kind == "Real"]
-        ints = [vr for _, kind, vr in outputs if kind == "Integer"]
-
-        def record(t: float) -> list:
-            r, i = iter(s.getReal(real)), iter(s.getInteger(ints) if ints else [])
-            return [t] + [next(r) if kind == "Real" else next(i) for _, kind, _ in outputs]
-
-        s.setupExperiment(startTime=rows[0][0])
-        s.enterInitializationMode()
+        unit.enter_initialization(rows[0][0])
         unit.set(dict(zip(input_names, rows[0][1:], strict=True)))
-        s.exitInitializationMode()
-        table = [record(rows[0][0])]
+        unit.exit_initialization()
+        table = [[rows[0][0], *unit.get(names)]]
         for row, following in itertools.pairwise(rows):
             unit.set(dict(zip(input_names, row[1:], strict=True)))
-            s.doStep(row[0], following[0] - row[0])
-            table.append(record(following[0]))
+            unit.do_step(row[0], following[0] - row[0])
+            table.append([following[0], *unit.get(names)])
         assert not unit.messages, unit.messages
         return table
     finally:
