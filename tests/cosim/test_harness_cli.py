@@ -1,8 +1,12 @@
 """The harness command line, end to end, and its refusals of a bad request before any work."""
 
 import csv
+import os
+import re
 import subprocess
 import sys
+import tempfile
+import zipfile
 
 import pytest
 
@@ -79,3 +83,100 @@ def test_a_bad_request_is_refused_before_the_fmus_load(tmp_path, capsys, args, m
                       "--out", str(tmp_path / "x.csv")])
     err = capsys.readouterr().err
     assert end.value.code == 2 and len(err.splitlines()) == 1 and message in err, err
+
+
+def run_cli(mesh, driveline, out, *args, env=None):
+    return subprocess.run([sys.executable, "-m", "drive_rattle_cosim.harness", "--mesh",
+                           str(mesh), "--driveline", str(driveline), "--out", str(out), *args],
+                          capture_output=True, text=True, timeout=600, env=env)
+
+
+def test_the_fmi3_pair_writes_the_native_pairs_csv(native_fmus, fmi3_fmus, tmp_path):
+    """The command on the FMI 3.0 FMUs and on the native FMI 2.0 FMUs, every output at the
+    default step and stop: the same file, byte for byte (the same model library under two
+    standards, one loop: every float written as its shortest round trip)."""
+    files = {}
+    for flavour, fmus in (("native", native_fmus), ("fmi3", fmi3_fmus)):
+        files[flavour] = tmp_path / f"{flavour}.csv"
+        run = run_cli(fmus["GearMeshRattle"], fmus["Driveline"], files[flavour])
+        assert run.returncode == 0, run.stderr
+    native = files["native"].read_bytes()
+    assert native.count(b"\n") == 1002 and native.count(b",", 0, native.index(b"\n")) == 35
+    assert files["fmi3"].read_bytes() == native
+
+
+def without_binary(fmu, target):
+    """A copy of ``fmu`` without its binary for this machine (as an FMU for another platform)."""
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w") as copy:
+        for info in source.infolist():
+            if not info.filename.startswith(("binaries/linux64/", "binaries/x86_64-linux/")):
+                copy.writestr(info, source.read(info))
+    return target
+
+
+def with_token(fmu, target, token: str):
+    """A copy of ``fmu`` whose modelDescription names another GUID / instantiation token, which
+    the binary refuses at instantiation."""
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w") as copy:
+        for info in source.infolist():
+            data = source.read(info)
+            if info.filename == "modelDescription.xml":
+                data = re.sub(rb'(guid|instantiationToken)="[^"]*"',
+                              rb'\1="' + token.encode() + b'"', data)
+            copy.writestr(info, data)
+    return target
+
+
+FAILURES = {
+    "no binary for this platform": (
+        lambda fmus, tmp: (without_binary(fmus["GearMeshRattle"], tmp / "m.fmu"),
+                           fmus["Driveline"], {}),
+        "cannot load"),
+    "a token the binary refuses": (
+        lambda fmus, tmp: (fmus["GearMeshRattle"],
+                           with_token(fmus["Driveline"], tmp / "d.fmu", "{0}"), {}),
+        "does not match this FMU's"),
+    "a parameter refused in initialization": (
+        lambda fmus, tmp: (fmus["GearMeshRattle"], fmus["Driveline"],
+                           {"GearMeshRattle.gear.backlash": -1.0}),
+        "'gear.backlash' = -1 is out of range"),
+}
+
+
+@pytest.mark.parametrize("failure", list(FAILURES))
+@pytest.mark.parametrize("standard", ["FMI 2.0", "FMI 3.0"])
+def test_a_failed_load_leaves_no_temporary_folder(native_fmus, fmi3_fmus, tmp_path, monkeypatch,
+                                                  standard, failure):
+    """Every FMU is unpacked into a temporary folder of its own; a load or an initialization
+    that fails removes them all, says why in one CoSimulationError, and leaves the working
+    folder where it was."""
+    fmus = native_fmus if standard == "FMI 2.0" else fmi3_fmus
+    make, message = FAILURES[failure]
+    mesh, driveline, parameters = make(fmus, tmp_path)
+    private = tmp_path / "tmp"
+    private.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(private))
+    cwd = os.getcwd()
+    with pytest.raises(harness.CoSimulationError) as err:
+        harness.CoSimulation(mesh, driveline, parameters)
+    assert message in str(err.value) and "\n" not in str(err.value), err.value
+    assert os.listdir(private) == [] and os.getcwd() == cwd
+    with harness.CoSimulation(fmus["GearMeshRattle"], fmus["Driveline"]) as sim:
+        assert len(os.listdir(private)) == 2
+        sim.run(0.001)
+    assert os.listdir(private) == []
+
+
+def test_the_cli_on_an_fmu_it_cannot_load_says_so_in_one_line(fmi3_fmus, tmp_path):
+    """The command on an FMU without a binary for this machine: exit status 1, one line naming
+    the missing library, no traceback, nothing left in its temporary folder."""
+    private = tmp_path / "tmp"
+    private.mkdir()
+    mesh = without_binary(fmi3_fmus["GearMeshRattle"], tmp_path / "m.fmu")
+    run = run_cli(mesh, fmi3_fmus["Driveline"], tmp_path / "x.csv",
+                  env={**os.environ, "TMPDIR": str(private)})
+    assert run.returncode == 1, run.stderr
+    assert re.fullmatch(r"error: GearMeshRattle: cannot load \S+m\.fmu: Cannot find shared "
+                        r"library \S+/binaries/x86_64-linux/GearMeshRattle\.so\.\n", run.stderr), \
+        run.stderr
+    assert os.listdir(private) == [] and not (tmp_path / "x.csv").exists()
