@@ -16,7 +16,8 @@ Two engines, named in every result row (``engine``):
   (``drive_rattle.units.run_coupled``) -- the same calls the FMUs make, so the same numbers
   as the co-simulation of the FMUs, bit for bit (tests/cosim/test_sweep.py), at the model's
   own cost.  Each worker loads the library once; a case only instantiates its two units.
-* ``fmu``: the FMUs of ``--fmu-dir`` in the fmpy harness (either flavour).  The FMUs travel
+* ``fmu``: the FMUs of ``--fmu-dir`` in the fmpy harness (either FMI 2.0 flavour, or the FMI
+  3.0 FMUs of ``dist/fmi3``: the same rows, tested).  The FMUs travel
   with the work: the client reads their bytes once and scatters them to every worker
   (``FmuBundle``), and each worker process unpacks them once into its own local folder, so
   workers on other machines need no copy of ``dist/``.
@@ -829,8 +830,8 @@ def main(argv=None) -> int:
                          "most what follows the transient (default: all after the transient)")
     ap.add_argument("--engine", choices=ENGINES, default="library",
                     help="library: the model library's compiled loop (default; the FMUs' "
-                         "numbers at the model's cost); fmu: the FMUs of --fmu-dir in the "
-                         "fmpy harness")
+                         "numbers at the model's cost); fmu: the FMUs of --fmu-dir (FMI 2.0 "
+                         "or 3.0) in the fmpy harness")
     ap.add_argument("--fmu-dir", type=Path, default=DIST,
                     help="folder of the FMUs on this machine, for --engine fmu (they are sent "
                          "to the workers)")

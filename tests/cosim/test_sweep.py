@@ -259,6 +259,30 @@ def whole_rows_of(cases, out, scheduler):
     return out.read_bytes()
 
 
+def test_the_fmi3_fmus_give_the_library_engines_rows(fmi3_fmus, tmp_path, scheduler, capsys):
+    """The command with ``--engine fmu`` on the FMI 3.0 FMUs runs every case (exit status 0,
+    no error) and writes the library engine's rows, bit for bit (only the wall time and the
+    engine's name differ)."""
+    args = ["--param", "GearMeshRattle.gear.backlash=0.08e-3:0.12e-3",
+            "--param", "Driveline.vehicle.drag=0.06:0.08", "--grid", "2", "--stop-time", "0.2",
+            "--transient", "0.05", "--window", "0.05", "--scheduler", scheduler]
+    rows = {}
+    for engine, where in (("fmu", ["--fmu-dir", str(fmi3_fmus["GearMeshRattle"].parent)]),
+                          ("library", [])):
+        out = tmp_path / f"{engine}.csv"
+        assert sweep.main([*args, "--engine", engine, *where, "--out", str(out)]) == 0, \
+            capsys.readouterr().err
+        rows[engine] = {r["case_id"]: r for r in read_results(out)}
+    assert len(rows["fmu"]) == 4 and rows["fmu"].keys() == rows["library"].keys()
+    for case_id, fmu in rows["fmu"].items():
+        library = rows["library"][case_id]
+        assert fmu["error"] == "" and fmu["engine"] == "fmu", fmu["error"]
+        assert library["impacts_per_s_drive"] > 0  # a rattling case
+        for key, value in library.items():
+            if key not in ("wall_seconds", "engine"):
+                assert value == fmu[key] or (value != value and fmu[key] != fmu[key]), key
+
+
 def test_a_row_cut_short_is_dropped_and_its_case_runs_again(tmp_path, scheduler):
     cases = grid_design(RANGES, 2)
     out = tmp_path / "sweep.csv"
