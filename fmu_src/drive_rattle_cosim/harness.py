@@ -40,6 +40,7 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
 from ctypes import byref, c_bool, c_double, c_int, c_int32, c_int64, c_uint
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,13 +70,16 @@ def _status_name(status: int) -> str:
 #: instance name (an FMI 3.0 instance gets a callback of its own).
 _INSTANCES: dict[str, Unit] = {}
 _CALLBACKS: list = []
+#: Held while an instance name is chosen (units may load in several threads).
+_NAMES_LOCK = threading.Lock()
 
 
 def _register_instance(unit: Unit) -> str:
-    n = 1
-    while (name := unit.name if n == 1 else f"{unit.name}#{n}") in _INSTANCES:
-        n += 1
-    _INSTANCES[name] = unit
+    with _NAMES_LOCK:
+        n = 1
+        while (name := unit.name if n == 1 else f"{unit.name}#{n}") in _INSTANCES:
+            n += 1
+        _INSTANCES[name] = unit
     return name
 
 

@@ -56,12 +56,11 @@ state), ``--workers`` at a time.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
@@ -307,15 +306,14 @@ class _Record:
         self.t, self.delta, self.pairs = [], [], []
         self.onset_t, self.onset_v, self.onset_f = [], [], []
 
-    def add(self, run, start_ns: int, step_ns: int, first: bool) -> None:
+    def add(self, chunk: Chunk, first: bool) -> None:
         k0 = 0 if first else 1  # a chunk's first point is the last one of the chunk before
-        n = run.steps + 1
-        self.t.append((start_ns + np.arange(k0, n, dtype=np.int64) * step_ns) / 1e9)
-        self.delta.append(np.asarray(run.column_buffer("GearMeshRattle.mesh.delta_peak"))[k0:])
-        self.pairs.append(np.asarray(run.column_buffer("GearMeshRattle.mesh.n_contact"))[k0:])
-        self.onset_t += run.onset_times
-        self.onset_v += run.onset_speeds
-        self.onset_f += run.onset_flanks
+        self.t.append(np.asarray(chunk.time, dtype=float)[k0:])
+        self.delta.append(np.asarray(chunk.delta_peak, dtype=float)[k0:])
+        self.pairs.append(np.asarray(chunk.n_contact, dtype=float)[k0:])
+        self.onset_t += list(chunk.onset_times)
+        self.onset_v += list(chunk.onset_speeds)
+        self.onset_f += list(chunk.onset_flanks)
 
     def windows(self, window: float, normal_mass: float) -> dict[str, list[float]]:
         t = np.concatenate(self.t)
@@ -348,11 +346,120 @@ class _Record:
         return out
 
 
+#: The engines a start runs on (``run_start``).
+ENGINES = ("library", "fmu")
+
+
+@dataclass
+class Chunk:
+    """A stretch of a run: every communication point from the stretch's start, the mesh's
+    ``mesh.delta_peak`` and ``mesh.n_contact`` there, and the contact onsets after its first
+    point (time [s], normal approach speed [m/s], flank)."""
+
+    time: np.ndarray
+    delta_peak: np.ndarray
+    n_contact: np.ndarray
+    onset_times: list
+    onset_speeds: list
+    onset_flanks: list
+
+
+class LibraryEngine:
+    """A start in the model library's compiled coupled loop (``units.run_coupled``): its two
+    units started at the coupled start (``coupled_start_inputs``), and the onsets located
+    in time by the mesh's stepper."""
+
+    RECORDED = ("GearMeshRattle.mesh.delta_peak", "GearMeshRattle.mesh.n_contact")
+
+    def __init__(self, mesh: MeshParameters, drive: DrivelineParameters, step: float):
+        self.step_ns = round(step * 1e9)
+        mesh_in, wheel = coupled_start_inputs(mesh, drive)
+        self.mesh = MeshUnit(mesh, mesh_in["pinion.phi"], mesh_in["pinion.w"],
+                             mesh_in["wheel.tau_load"], mesh_in["pinion.a"])
+        try:
+            self.drive = DrivelineUnit(drive, wheel["wheel.phi"], wheel["wheel.w"])
+        except BaseException:
+            self.mesh.close()
+            raise
+
+    @property
+    def time(self) -> float:
+        return self.mesh.time
+
+    def advance(self, steps: int) -> Chunk:
+        start_ns = round(self.mesh.time * 1e9)
+        run = run_coupled(self.mesh, self.drive, self.step_ns, steps, list(self.RECORDED))
+        return Chunk((start_ns + np.arange(run.steps + 1, dtype=np.int64) * self.step_ns) / 1e9,
+                     np.asarray(run.column_buffer(self.RECORDED[0])),
+                     np.asarray(run.column_buffer(self.RECORDED[1])),
+                     run.onset_times, run.onset_speeds, run.onset_flanks)
+
+    def close(self) -> None:
+        self.mesh.close()
+        self.drive.close()
+
+
+class FmuEngine:
+    """A start through the FMUs of ``fmu_dir`` (FMI 2.0 or 3.0) coupled by the fmpy harness:
+    every parameter of both units set before initialization (the start's parameter sets,
+    ``start_parameters``), the harness's initialization and its nanosecond grid -- the
+    library's calls, so the same trajectory bit for bit (tested).  The FMUs do not output the
+    located onsets: they are read from the mesh's counters (``analysis.onsets_from_counters``:
+    dated to the communication point that closes their step, several in one step sharing the
+    last one's speed), so the windows' onset statistics can differ from the library engine's
+    in the last places where an onset's step straddles a window's end or holds two onsets."""
+
+    RECORDED = tuple(f"GearMeshRattle.{n}" for n in ("mesh.delta_peak", "mesh.n_contact",
+                                                      "mesh.impacts_drive", "mesh.impacts_coast",
+                                                      "mesh.v_impact"))
+
+    def __init__(self, mesh: MeshParameters, drive: DrivelineParameters, step: float,
+                 fmu_dir: Path):
+        from .harness import CoSimulation
+
+        parameters = {**{f"GearMeshRattle.{k}": v for k, v in mesh.to_public().items()},
+                      **{f"Driveline.{k}": v for k, v in drive.to_public().items()}}
+        self.sim = CoSimulation(Path(fmu_dir) / "GearMeshRattle.fmu",
+                                Path(fmu_dir) / "Driveline.fmu", parameters, step=step)
+        self.step = step
+
+    @property
+    def time(self) -> float:
+        return self.sim.time
+
+    def advance(self, steps: int) -> Chunk:
+        from .analysis import onsets_from_counters
+
+        stop = (round(self.sim.time * 1e9) + steps * round(self.step * 1e9)) / 1e9
+        res = self.sim.run(stop, list(self.RECORDED))
+        delta, pairs, drive, coast, speed = (res[name] for name in self.RECORDED)
+        times, speeds, flanks = onsets_from_counters(res.time, drive, coast, speed)
+        return Chunk(np.asarray(res.time), np.asarray(delta), np.asarray(pairs), times, speeds,
+                     flanks)
+
+    def close(self) -> None:
+        self.sim.close()
+
+
+def start_engine(mesh: MeshParameters, drive: DrivelineParameters, step: float,
+                 engine: str = "library", fmu_dir: Path | None = None):
+    """The engine of a run (:data:`ENGINES`): ``LibraryEngine`` or ``FmuEngine`` on the FMUs of
+    ``fmu_dir``."""
+    if engine == "library":
+        return LibraryEngine(mesh, drive, step)
+    if engine == "fmu":
+        if fmu_dir is None:
+            raise ValueError("engine 'fmu' needs the folder of the FMUs (fmu_dir)")
+        return FmuEngine(mesh, drive, step, fmu_dir)
+    raise ValueError(f"engine = {engine!r}; allowed: {', '.join(ENGINES)}")
+
+
 def run_start(mesh: MeshParameters, drive: DrivelineParameters, start: Start = STARTS[0], *,
               step: float = 1e-4, window: float = 1.0, min_time: float = 20.0,
-              max_time: float = 60.0, chunk: float = 10.0) -> StartRun:
+              max_time: float = 60.0, chunk: float = 10.0, engine: str = "library",
+              fmu_dir: Path | None = None) -> StartRun:
     """Run one start (module docstring) in chunks of ``chunk`` seconds from ``min_time`` until
-    it is settled or reaches ``max_time`` [s]."""
+    it is settled or reaches ``max_time`` [s], on ``engine`` (:func:`start_engine`)."""
     wall = time.perf_counter()
     mesh, drive = start_parameters(mesh, drive, start)
     period = forcing_period(mesh, drive)
@@ -361,28 +468,25 @@ def run_start(mesh: MeshParameters, drive: DrivelineParameters, start: Start = S
     step_ns = round(step * 1e9)
     normal_mass = mesh.derived()["normal_mass"]
     record = _Record()
-    mesh_in, wheel = coupled_start_inputs(mesh, drive)
     result = StartRun(start.name, win, {})
-    with MeshUnit(mesh, mesh_in["pinion.phi"], mesh_in["pinion.w"], mesh_in["wheel.tau_load"],
-                  mesh_in["pinion.a"]) as m, \
-            DrivelineUnit(drive, wheel["wheel.phi"], wheel["wheel.w"]) as d:
+    runner = start_engine(mesh, drive, step, engine, fmu_dir)
+    try:
         done, first = 0.0, True
         while True:
             target = min_time if first else min(done + chunk, max_time)
             steps = round((target - done) * 1e9 / step_ns)
             if steps <= 0:
                 break
-            start_ns = round(m.time * 1e9)
-            run = run_coupled(m, d, step_ns, steps, ["GearMeshRattle.mesh.delta_peak",
-                                                     "GearMeshRattle.mesh.n_contact"])
-            record.add(run, start_ns, step_ns, first)
+            record.add(runner.advance(steps), first)
             first = False
-            done = m.time
+            done = runner.time
             result.windows = record.windows(win, normal_mass)
             result.seconds = done
             _settle(result)
             if result.settled or done >= max_time * (1 - 1e-9):
                 break
+    finally:
+        runner.close()
     result.wall = time.perf_counter() - wall
     return result
 
@@ -468,11 +572,20 @@ def study_point(load_fraction: float, backlash: float | None = None,
     return study([load_fraction], [backlash], mesh, drive, starts, workers, **options)[0]
 
 
+def _run_task(job) -> StartRun:
+    """``run_start`` of a job ``(mesh, drive, start, options)`` (a module function: a process
+    pool sends it by name)."""
+    mesh, drive, start, options = job
+    return run_start(mesh, drive, start, **options)
+
+
 def study(load_fractions, backlashes, mesh: MeshParameters | None = None,
           drive: DrivelineParameters | None = None, starts=STARTS, workers: int = 2,
           progress=None, **options) -> list[PointResult]:
     """The grid load (x M*, of the mesh and driveline given) x backlash [m] (None: the mesh's)
-    x starts on the paper's model (``vehicle.model`` = 1), ``workers`` runs at a time."""
+    x starts on the paper's model (``vehicle.model`` = 1), ``workers`` runs at a time (threads
+    on the library engine, processes on the FMU engine); ``options`` of :func:`run_start`
+    (``engine``, ``fmu_dir`` among them)."""
     mesh = mesh or MeshParameters()
     drive = drive or DrivelineParameters()
     m_star = separation_load(mesh, drive)
@@ -483,36 +596,34 @@ def study(load_fractions, backlashes, mesh: MeshParameters | None = None,
             points.append((f, mp, paper_driveline(f * m_star, drive)))
     tasks = [(i, s) for i in range(len(points)) for s in starts]
 
-    def work(task):
-        i, s = task
-        _, mp, dp = points[i]
-        r = run_start(mp, dp, s, **options)
-        if progress:
-            progress(points[i][0], mp.backlash, r)
-        return r
+    def run_all(pool, which: list[int], run_options: dict) -> list[StartRun]:
+        """The runs of the tasks ``which``, reported to ``progress`` in order."""
+        jobs = [(points[tasks[k][0]][1], points[tasks[k][0]][2], tasks[k][1], run_options)
+                for k in which]
+        out = []
+        for k, r in zip(which, pool.map(_run_task, jobs), strict=True):
+            if progress:
+                progress(points[tasks[k][0]][0], points[tasks[k][0]][1].backlash, r)
+            out.append(r)
+        return out
 
     def grouped(results):
         return [[r for (j, _), r in zip(tasks, results, strict=True) if j == i]
                 for i in range(len(points))]
 
-    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        results = list(pool.map(work, tasks))
+    # the library's calls release the GIL: threads; the harness's loop is Python: processes
+    engine = options.get("engine", "library")
+    pool_class = ThreadPoolExecutor if engine == "library" else ProcessPoolExecutor
+    with pool_class(max_workers=max(1, workers)) as pool:
+        results = run_all(pool, list(range(len(tasks))), options)
         # a point whose starts disagree: every run that stopped early is run again to the
         # cap, so that each attractor reported persists for the whole of it
         max_time = options.get("max_time", 60.0)
         split = [len(attractors(runs)) > 1 for runs in grouped(results)]
         again = [k for k, ((i, _), r) in enumerate(zip(tasks, results, strict=True))
                  if split[i] and r.seconds < max_time * (1 - 1e-9)]
-        longer = {**options, "min_time": max_time}
-
-        def rerun(k):
-            i, s = tasks[k]
-            r = run_start(points[i][1], points[i][2], s, **longer)
-            if progress:
-                progress(points[i][0], points[i][1].backlash, r)
-            return r
-
-        for k, r in zip(again, pool.map(rerun, again), strict=True):
+        for k, r in zip(again, run_all(pool, again, {**options, "min_time": max_time}),
+                        strict=True):
             results[k] = r
     out = []
     for (f, mp, dp), runs in zip(points, grouped(results), strict=True):
@@ -586,21 +697,16 @@ def _floats(text: str) -> list[float]:
     return [float(x) for x in text.split(",") if x.strip()]
 
 
-def _parse_set(items: list[str]) -> tuple[dict, dict]:
-    mesh, drive = {}, {}
-    for item in items:
-        name, _, value = item.partition("=")
-        unit, _, public = name.partition(".")
-        target = {"GearMeshRattle": mesh, "Driveline": drive}.get(unit)
-        if target is None or not value:
-            raise SystemExit(f"--set {item!r}: expected GearMeshRattle.NAME=VALUE or "
-                             "Driveline.NAME=VALUE")
-        target[public] = json.loads(value) if value in ("true", "false") else float(value)
-    return mesh, drive
-
-
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    """The command line: exit status 0, or 2 for a request refused before any work (one line
+    on stderr)."""
+    from drive_rattle.catalog import check_settings, parse_settings
+
+    from .cli import Parser
+    from .paths import DIST
+
+    ap = Parser(prog="python -m drive_rattle_cosim.multistability",
+                description=__doc__.splitlines()[0])
     ap.add_argument("--loads", default="0.3,0.4,0.5,0.6,0.8,1.0",
                     help="loads as fractions of M* (comma-separated)")
     ap.add_argument("--backlash", default="0.1e-3,0.2e-3", help="normal backlash [m]")
@@ -616,23 +722,44 @@ def main(argv=None) -> int:
                     help="window [s] (rounded to an even number of forcing periods)")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
     ap.add_argument("--workers", type=int, default=2, help="runs at a time (threads)")
+    ap.add_argument("--engine", choices=ENGINES, default="library",
+                    help="library: the model library's compiled loop (default); fmu: the FMUs "
+                         "of --fmu-dir (FMI 2.0 or 3.0) in the fmpy harness, the same "
+                         "trajectories bit for bit")
+    ap.add_argument("--fmu-dir", type=Path, default=DIST,
+                    help="folder of GearMeshRattle.fmu and Driveline.fmu, for --engine fmu")
     ap.add_argument("--set", action="append", default=[], metavar="UNIT.NAME=VALUE",
-                    help="a parameter of either unit (e.g. GearMeshRattle.contact.restitution"
-                         "=0.9)")
+                    help="a parameter of either unit by its declared type (SI units; an "
+                         "enumeration by its code or item name, a Boolean true/false), e.g. "
+                         "GearMeshRattle.contact.restitution=0.9; checked with the model "
+                         "library before the runs")
     ap.add_argument("--out", type=Path, default=Path("out") / "multistability.md")
     args = ap.parse_args(argv)
     try:
-        starts = [STARTS_BY_KEY[k.strip().replace(" ", "")] for k in args.starts.split(",")]
-    except KeyError as err:
-        raise SystemExit(f"unknown start {err}; known: {', '.join(STARTS_BY_KEY)}") from None
-    if args.phases:
-        try:
-            starts = with_phase_starts(starts, args.phases)
-        except ValueError as err:
-            raise SystemExit(f"--phases: {err}") from None
-    mesh_changes, drive_changes = _parse_set(args.set)
-    mesh = MeshParameters.from_public(mesh_changes)
-    drive = DrivelineParameters.from_public(drive_changes)
+        keys = [k.strip().replace(" ", "") for k in args.starts.split(",")]
+        unknown = [k for k in keys if k not in STARTS_BY_KEY]
+        if unknown:
+            raise ValueError(f"--starts: unknown start {unknown[0]!r}; allowed: "
+                             f"{', '.join(STARTS_BY_KEY)}")
+        starts = [STARTS_BY_KEY[k] for k in keys]
+        if args.phases:
+            try:
+                starts = with_phase_starts(starts, args.phases)
+            except ValueError as err:
+                raise ValueError(f"--phases: {err}") from None
+        settings = parse_settings(args.set)
+        check_settings(settings)
+        if args.engine == "fmu":
+            for name in ("GearMeshRattle.fmu", "Driveline.fmu"):
+                if not (args.fmu_dir / name).is_file():
+                    raise ValueError(f"--fmu-dir {args.fmu_dir} holds no {name}; allowed: a "
+                                     "folder of both FMUs (build them: python build_fmu.py)")
+    except ValueError as err:
+        ap.error(str(err))
+    mesh = MeshParameters.from_public({k.partition(".")[2]: v for k, v in settings.items()
+                                       if k.startswith("GearMeshRattle.")})
+    drive = DrivelineParameters.from_public({k.partition(".")[2]: v for k, v in settings.items()
+                                             if k.startswith("Driveline.")})
     wall = time.perf_counter()
 
     def progress(f, backlash, r):
@@ -640,14 +767,18 @@ def main(argv=None) -> int:
               f"{'settled' if r.settled else 'unsettled'} after {r.transient:.2f} s, "
               f"{r.wall:.1f} s", flush=True)
 
+    fmu_dir = args.fmu_dir if args.engine == "fmu" else None
     results = study(_floats(args.loads), _floats(args.backlash), mesh, drive, starts,
                     args.workers, progress, step=args.step, window=args.window,
-                    min_time=args.min_time, max_time=args.max_time)
+                    min_time=args.min_time, max_time=args.max_time, engine=args.engine,
+                    fmu_dir=fmu_dir)
     settings = {"M*": f"{separation_load(mesh, drive):.4g} N·m",
                 "starts": ", ".join(s.name for s in starts),
                 "runs": f"{args.min_time:g}–{args.max_time:g} s",
                 "window": f"{results[0].runs[0].window:.4g} s" if results else "",
                 "step": f"{args.step:g} s", "model": "vehicle.model = 1 (constant load)",
+                "engine": (f"the FMUs of {args.fmu_dir} in the fmpy harness" if fmu_dir
+                           else "the model library's compiled loop"),
                 "changed": ", ".join(args.set) or "none",
                 "wall time": f"{time.perf_counter() - wall:.0f} s"}
     text = report(results, settings)

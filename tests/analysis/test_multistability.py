@@ -113,9 +113,40 @@ def test_phase_starts_spread_over_the_cycle_and_skip_the_phases_already_started(
             ms.phase_starts(bad)
 
 
-def test_the_command_refuses_a_bad_phase_count(tmp_path):
-    with pytest.raises(SystemExit, match="--phases: phases = -1: expected an integer in"):
-        ms.main(["--phases", "-1", "--loads", "0.5", "--out", str(tmp_path / "x.md")])
+def refusal(main, args, capsys) -> str:
+    """The one line a command refuses ``args`` with (exit status 2), without its prefix."""
+    with pytest.raises(SystemExit) as end:
+        main(args)
+    err = capsys.readouterr().err
+    assert end.value.code == 2 and len(err.splitlines()) == 1, err
+    return err.partition(": error: ")[2]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--phases", "-1"], "--phases: phases = -1: expected an integer in [1, 360]"),
+    (["--starts", "smooth,kick+2"], "--starts: unknown start 'kick+2'; allowed: smooth, "),
+    (["--engine", "fmu", "--fmu-dir", "nowhere"], "--fmu-dir nowhere holds no "
+                                                  "GearMeshRattle.fmu; allowed"),
+])
+def test_the_command_refuses_a_bad_request_in_one_line(tmp_path, capsys, args, message):
+    out = tmp_path / "x.md"
+    assert message in refusal(ms.main, [*args, "--loads", "0.5", "--out", str(out)], capsys)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("setting", [
+    "GearMeshRattle.gear.backlash=-1", "GearMeshRattle.gear.backlas=1e-4",
+    "gear.backlash=1e-4", "GearMeshRattle.contact.dissipation=None",
+    "GearMeshRattle.friction.enabled=maybe", "Driveline.vehicle.drag=0x10",
+    "GearMeshRattle.gear.z_pinion=20.5", "=1"])
+def test_a_bad_setting_gets_the_harness_sentence(tmp_path, capsys, setting):
+    """--set is read and checked as the harness reads and checks it (the catalog's parser and
+    the model library's checks): the same sentence for the same bad value."""
+    from drive_rattle_cosim import harness
+
+    mine = refusal(ms.main, ["--set", setting, "--out", str(tmp_path / "x.md")], capsys)
+    theirs = refusal(harness.main, ["--set", setting, "--out", str(tmp_path / "x.csv")], capsys)
+    assert mine == theirs and "allowed" in mine, mine
 
 
 def test_kicked_and_free_starts():
