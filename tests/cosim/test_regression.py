@@ -1,22 +1,27 @@
 """Regression kit: committed cross-check references, packed into the FMUs, and a check tight
 enough to catch a 1 % change of a physical parameter."""
 
+import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import zipfile
 from pathlib import Path
 
 import pytest
+from fmpy.fmi1 import FMICallException
 
 from drive_rattle.parameters import DrivelineParameters, MeshParameters
 from drive_rattle_cosim.regression import (
     REFERENCE_ROOT,
     ReferenceFileError,
+    _read_csv,
     check,
     read_opt,
     reference_files,
+    simulate_on_inputs,
 )
 
 MODELS = ["GearMeshRattle", "Driveline"]
@@ -52,6 +57,56 @@ def test_one_percent_parameter_change_fails_the_check(fmus, model, parameter, va
     checks = check(fmus[model], start_values={parameter: value})
     failed = [c for c in checks if not c.passed]
     assert failed, f"a 1 % change of {parameter} went unnoticed"
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_the_fmi3_fmus_pass_with_their_fmi2_twins_numbers(fmi3_fmus, native_fmus, model):
+    """The FMI 3.0 FMUs pass their references (packed in the FMU, and the committed ones), and
+    the kit's run of each (fmpy's simulate_fmu, one grid for both standards) is its native FMI
+    2.0 twin's, bit for bit."""
+    for source in (None, REFERENCE_ROOT):
+        checks = check(fmi3_fmus[model], source)
+        assert len(checks) >= 5 and all(c.passed for c in checks), [
+            c for c in checks if not c.passed]
+    base = REFERENCE_ROOT / model / model
+    inputs, opt = _read_csv(Path(f"{base}_in.csv")), read_opt(Path(f"{base}_ref.opt"))
+    mine = simulate_on_inputs(fmi3_fmus[model], inputs, opt)
+    twin = simulate_on_inputs(native_fmus[model], inputs, opt)
+    assert mine.dtype.names == twin.dtype.names and len(mine) == 501
+    for name in twin.dtype.names:
+        assert [float(x).hex() for x in mine[name]] == [float(x).hex() for x in twin[name]], name
+
+
+@pytest.mark.parametrize("model, parameter, value", [
+    ("GearMeshRattle", "gear.backlash", 0.10e-3 * 1.01),
+    ("GearMeshRattle", "contact.dissipation", 0),
+    ("Driveline", "shaft.k", DrivelineParameters().k_shaft * 1.01),
+])
+def test_a_change_of_an_fmi3_fmu_fails_the_check(fmi3_fmus, model, parameter, value):
+    checks = check(fmi3_fmus[model], start_values={parameter: value})
+    assert [c for c in checks if not c.passed], f"a change of {parameter} went unnoticed"
+
+
+@pytest.mark.parametrize("flavour", ["native", "fmi3"])
+def test_a_failed_run_leaves_no_temporary_folder(native_fmus, fmi3_fmus, tmp_path, monkeypatch,
+                                                 flavour):
+    """A run the FMU refuses (a parameter out of range) raises and leaves nothing unpacked
+    in the temporary folder."""
+    fmu = (native_fmus if flavour == "native" else fmi3_fmus)["GearMeshRattle"]
+    private = tmp_path / "tmp"
+    private.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(private))
+    with pytest.raises(FMICallException, match=r"ExitInitializationMode failed with status 3"):
+        check(fmu, start_values={"gear.backlash": -1.0})
+    assert os.listdir(private) == []
+    assert all(c.passed for c in check(fmu)) and os.listdir(private) == []
+
+
+def test_the_cli_checks_the_fmi3_fmus(fmi3_fmus):
+    run = subprocess.run([sys.executable, "-m", "drive_rattle_cosim.regression", "check",
+                          str(fmi3_fmus["GearMeshRattle"]), str(fmi3_fmus["Driveline"])],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0 and run.stdout.count(": pass") == 2, run.stdout + run.stderr
 
 
 def test_cli_exit_codes(fmus):
