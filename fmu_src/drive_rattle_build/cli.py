@@ -8,8 +8,10 @@
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
 own system files (``native``; ``--no-native`` skips them), and as FMI 3.0 co-simulation FMUs
-into ``<out>/fmi3/`` (``fmi3``; ``--no-fmi3`` skips them).  The system files: ``DriveRattle.ssp``
-and ``DriveRattle_outputs.ssp`` (the same with every output a system output, ``system``).
+into ``<out>/fmi3/`` with theirs (``fmi3``; ``--no-fmi3`` skips them).  The system files:
+``DriveRattle.ssp`` and ``DriveRattle_outputs.ssp`` (the same with every output a system output,
+``system``); those of the FMI 3.0 units run in ecos and fmu-manipulation-toolbox's container
+(libcosim and fmpy's SSP runner read FMI 1.0 and 2.0 FMUs only).
 """
 
 from __future__ import annotations
@@ -88,10 +90,14 @@ def main(argv=None) -> int:
         if not args.no_fmi3:
             from .fmi3 import FMI3_SUBDIR, build_fmi3
 
-            for fmu in build_fmi3(args.out / FMI3_SUBDIR, not args.no_fmutool,
-                                  update_templates=args.update_templates):
+            fmi3 = build_fmi3(args.out / FMI3_SUBDIR, not args.no_fmutool,
+                              update_templates=args.update_templates)
+            for fmu in fmi3:
                 print(f"built and validated {fmu} (FMI 3.0 co-simulation, C only, "
                       "x86_64-linux and x86_64-windows)")
+            for system in write_systems(fmi3, args.out / FMI3_SUBDIR, not args.no_fmutool):
+                print(f"wrote the system {system} (FMI 3.0: ecos and fmu-manipulation-toolbox "
+                      "read it)")
     except BuildError as err:
         print(f"drive-rattle-build: {err}", file=sys.stderr)
         return 1

@@ -1,8 +1,9 @@
 """The system files of the build: ``DriveRattle.ssp`` and ``DriveRattle_outputs.ssp`` next to
-the FMUs.  Their FMUs are the FMUs of the build with the integer codes declared Integers
-(``drive_rattle_cosim.variants.integer_codes``; the same binaries), so that libcosim and ecos,
-which ignore FMI 2.0 Enumeration variables, load them with no warning and apply every binding;
-each bundled FMU is validated as the build's own are."""
+the FMUs (of each flavour, and of the FMI 3.0 units).  Their FMUs are the FMUs of the build
+with the integer codes declared integers (``drive_rattle_cosim.variants.integer_codes``: FMI
+2.0 Integer, FMI 3.0 Int64; the same binaries), so that libcosim and ecos, which ignore
+Enumeration variables, load them with no warning and apply every binding; each bundled FMU is
+validated as the build's own are."""
 
 from __future__ import annotations
 

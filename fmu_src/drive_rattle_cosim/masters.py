@@ -1,4 +1,5 @@
-"""The system in other FMI 2.0 masters, with the workarounds their own defects need.
+"""The system in other masters (FMI 2.0; ecos and the container also FMI 3.0), with the
+workarounds their own defects need.
 
 Each ``run_*`` function runs the system (``dist/DriveRattle.ssp`` or the two FMUs) in one
 master and returns a ``harness.Result`` holding the coupling signals (``"<Unit>.<output>"`` of
@@ -37,7 +38,7 @@ from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
 from . import variants
 from .harness import Result
-from .ssp import PARAMETER_SET, component_sources, read_bindings
+from .ssp import PARAMETER_SET, SSP_TYPE, component_sources, read_bindings
 
 #: The coupling signals every master exchanges, ``"<Unit>.<output>"``.
 COUPLING = [f"{src}.{out}" for src, out, _, _ in CONNECTIONS]
@@ -279,7 +280,7 @@ def run_ecos(ssp: Path, stop_time: float, step: float, outputs: list[str] | None
     try:
         if not sim.init(parameter_set=parameter_set):
             raise RuntimeError(f"ecos: init failed: {EcosLib.get_last_error()}")
-        getters = {name: (sim.get_integer if types[name] in ("Integer", "Enumeration")
+        getters = {name: (sim.get_integer if SSP_TYPE[types[name]] == "Integer"
                           else sim.get_real,
                           name.replace(".", "::", 1)) for name in outputs}
         result = Result(units=dict.fromkeys(outputs, ""))

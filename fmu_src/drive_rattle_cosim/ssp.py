@@ -55,6 +55,13 @@ NAMESPACES = (
     'xmlns:osp="http://opensimulationplatform.com/SSP/OSPAnnotations"'
 )
 _SSV_TYPE = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
+#: The SSP 1.0 type (SSV value, SSC connector) of each FMI 2.0 and 3.0 variable type: SSP 1.0
+#: names FMI 2.0's types, so an FMI 3.0 float is a Real and an integer an Integer, and an
+#: Enumeration is bound by its code (an Integer value).
+SSP_TYPE = {"Real": "Real", "Integer": "Integer", "Enumeration": "Integer",
+            "Boolean": "Boolean", "String": "String",
+            "Float64": "Real", "Float32": "Real",
+            **{f"{sign}Int{bits}": "Integer" for sign in ("", "U") for bits in (8, 16, 32, 64)}}
 _NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
        "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
 _FROM_SSV = {"Real": float, "Integer": int, "Boolean": lambda text: text in ("true", "1"),
@@ -79,8 +86,8 @@ def check_bindings(fmus: dict[str, Path], parameters: dict, causality: str = "pa
         if v is None or v.causality != causality:
             raise ValueError(f"SSP {what} binding '{qualified}': no such {causality}")
         expected = _SSV_TYPE.get(type(value))
-        declared = "Integer" if v.type == "Enumeration" else v.type  # set as an Integer
-        if declared != expected and not (v.type == "Real" and expected == "Integer"):
+        declared = SSP_TYPE.get(v.type, v.type)  # an Enumeration is set as an Integer
+        if declared != expected and not (declared == "Real" and expected == "Integer"):
             raise ValueError(
                 f"SSP {what} binding '{qualified}' = {value!r} is {expected or type(value)}; "
                 f"the FMU declares {v.type}")
@@ -88,9 +95,8 @@ def check_bindings(fmus: dict[str, Path], parameters: dict, causality: str = "pa
 
 def default_parameters(fmus: dict[str, Path]) -> dict:
     """Every parameter of the FMUs at its start value, ``{"<Unit>.<name>": value}``."""
-    convert = {"Real": float, "Integer": int, "Enumeration": int,
-               "Boolean": lambda v: v == "true", "String": str}
-    return {f"{unit}.{v.name}": convert[v.type](v.start)
+    convert = {"Real": float, "Integer": int, "Boolean": lambda v: v == "true", "String": str}
+    return {f"{unit}.{v.name}": convert[SSP_TYPE[v.type]](v.start)
             for unit, path in fmus.items()
             for v in read_model_description(str(path)).modelVariables
             if v.causality == "parameter"}
@@ -128,8 +134,9 @@ def enumeration_codes(fmus: dict[str, Path]) -> dict[str, str]:
 
 def unit_connectors(fmus: dict[str, Path]) -> dict[str, list[tuple[str, str, str]]]:
     """``{unit: [(name, kind, type), ...]}``: every input and output of each unit's FMU, in
-    the modelDescription's order (type ``Real``, ``Integer``, ``Boolean`` or ``String``)."""
-    return {unit: [(v.name, v.causality, v.type)
+    the modelDescription's order (its SSP type, ``SSP_TYPE``: ``Real``, ``Integer``,
+    ``Boolean`` or ``String``)."""
+    return {unit: [(v.name, v.causality, SSP_TYPE[v.type])
                    for v in read_model_description(str(path)).modelVariables
                    if v.causality in ("input", "output")]
             for unit, path in fmus.items()}
@@ -249,11 +256,12 @@ def _write(target: Path, ssd: str, fmus: dict[str, bytes]) -> Path:
 
 
 def bundled_fmu(fmu: Path, integer_codes: bool = True) -> bytes:
-    """The bytes of ``fmu`` as an SSP bundles it: with ``integer_codes``, an FMI 2.0 FMU's
-    integer codes declared Integers (``variants.integer_codes``; libcosim and ecos ignore FMI
-    2.0 Enumeration variables), any other FMU as it is."""
+    """The bytes of ``fmu`` (FMI 2.0 or 3.0) as an SSP bundles it: with ``integer_codes``,
+    its integer codes declared integers (``variants.integer_codes``: FMI 2.0 Integer, FMI 3.0
+    Int64; libcosim and ecos ignore FMI 2.0 Enumeration variables, ecos FMI 3.0 ones too),
+    else as it is."""
     data = Path(fmu).read_bytes()
-    if integer_codes and read_model_description(str(fmu)).fmiVersion == "2.0":
+    if integer_codes:
         return variants.fmu_copy(data, variants.integer_coded_model_description)
     return data
 

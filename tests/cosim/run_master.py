@@ -33,7 +33,8 @@ def run(kind: str, args: dict) -> dict:
                                        outputs=outputs)
     elif kind == "ecos":
         result = masters.run_ecos(Path(args["ssp"]), args["stop"], args["step"], outputs,
-                                  args.get("parameter_set", masters.PARAMETER_SET))
+                                  args.get("parameter_set", masters.PARAMETER_SET),
+                                  args.get("log_level", "warn"))
     elif kind == "gemseo":
         result = masters.run_gemseo(Path(args["mesh"]), Path(args["driveline"]), args["stop"],
                                     args["step"], args.get("parameters"))
