@@ -19,7 +19,15 @@ point from the starts of :data:`STARTS` --
 
 on the paper's model by default (``vehicle.model`` = 1: the pinion kinematic from the engine
 orders, the wheel under the constant load M_res; loads relative to the separation load M*,
-:func:`separation_load`), in the model library's compiled coupled loop.
+:func:`separation_load`), on one of two engines (``--engine``):
+
+* ``library`` (the default): the model library's compiled coupled loop (:class:`LibraryEngine`);
+* ``fmu``: the FMUs of ``--fmu-dir`` (FMI 2.0 or 3.0) coupled by the fmpy harness
+  (:class:`FmuEngine`): every parameter of the start set before initialization, the harness's
+  initialization and nanosecond grid.  These are the library's calls, so a start runs the same
+  trajectory bit for bit on both engines and reaches the same state (tested); only the onsets
+  differ in how they are known (the FMUs output counters, not located times), which can move
+  an onset into the next window where its step straddles a window's end.
 
 Each run is cut into windows of a whole, even number of forcing periods (about ``window``
 seconds; the forcing repeats with the greatest common period of the orders and the mesh, 36 ms
@@ -48,10 +56,11 @@ and *unsettled* when a start did not settle and the settled ones found at most o
     python -m drive_rattle_cosim.multistability [--loads 0.3,0.4,0.5,0.6,0.8,1.0]
         [--backlash 0.1e-3,0.2e-3] [--starts smooth,kick-1,...] [--phases 24] [--min-time 20]
         [--max-time 60] [--window 1] [--workers 2] [--set GearMeshRattle.NAME=VALUE]
-        [--out out/multistability.md]
+        [--engine library|fmu] [--fmu-dir dist/fmi3] [--out out/multistability.md]
 
-The runs go to a pool of threads (the library's calls release the GIL; its units share no
-state), ``--workers`` at a time.
+The runs go to a pool, ``--workers`` at a time: threads on the library engine (the library's
+calls release the GIL; its units share no state), processes on the FMU engine (the harness's
+loop is Python).
 """
 
 from __future__ import annotations
@@ -414,14 +423,16 @@ class FmuEngine:
                                                       "mesh.v_impact"))
 
     def __init__(self, mesh: MeshParameters, drive: DrivelineParameters, step: float,
-                 fmu_dir: Path):
+                 fmu_dir: Path, grid: str = "nanoseconds"):
+        """``grid``: how the points are placed (``harness.time_grid``; another master's
+        arithmetic, to see which state a start reaches there)."""
         from .harness import CoSimulation
 
         parameters = {**{f"GearMeshRattle.{k}": v for k, v in mesh.to_public().items()},
                       **{f"Driveline.{k}": v for k, v in drive.to_public().items()}}
         self.sim = CoSimulation(Path(fmu_dir) / "GearMeshRattle.fmu",
                                 Path(fmu_dir) / "Driveline.fmu", parameters, step=step)
-        self.step = step
+        self.step, self.grid = step, grid
 
     @property
     def time(self) -> float:
@@ -431,7 +442,7 @@ class FmuEngine:
         from .analysis import onsets_from_counters
 
         stop = (round(self.sim.time * 1e9) + steps * round(self.step * 1e9)) / 1e9
-        res = self.sim.run(stop, list(self.RECORDED))
+        res = self.sim.run(stop, list(self.RECORDED), grid=self.grid)
         delta, pairs, drive, coast, speed = (res[name] for name in self.RECORDED)
         times, speeds, flanks = onsets_from_counters(res.time, drive, coast, speed)
         return Chunk(np.asarray(res.time), np.asarray(delta), np.asarray(pairs), times, speeds,

@@ -5,12 +5,15 @@ of the model forced into different states, and the published finding -- a second
 
 import json
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from drive_rattle import DrivelineParameters, MeshParameters, Unit
+from drive_rattle.interface import MESH as MESH_NAME
 from drive_rattle.library import DRIVELINE, MESH
 from drive_rattle.units import run_coupled
 from drive_rattle_cosim import multistability as ms
@@ -293,3 +296,86 @@ def test_phase_starts_find_the_orbit_the_seven_starts_miss():
               and a.mean["coast_rate"] == pytest.approx(1 / period, rel=1e-3)]
     assert len(orbits) == 1 and "smooth" not in orbits[0].starts, ms.report([point], {})
     assert orbits[0].mean["delta_max"] == pytest.approx(2.45e-6, rel=0.01)
+
+
+# ------------------------------------------------------------------ the two engines
+def orbit_point() -> tuple[MeshParameters, DrivelineParameters]:
+    """0.4 M* and backlash 0.2 mm on the paper's model, default physics: the periodic orbit's
+    point."""
+    mesh = MeshParameters(backlash=2e-4)
+    return mesh, ms.paper_driveline(0.4 * ms.separation_load(mesh, DrivelineParameters()))
+
+
+@pytest.mark.parametrize("start", ["smooth", "kick-1", "free", "phase 11/24"])
+def test_the_fmu_engine_runs_the_librarys_trajectory(fmi3_fmus, native_fmus, start):
+    """A start through the FMUs (FMI 3.0 and FMI 2.0 native, in the harness) is the compiled
+    loop's run, bit for bit: the same points, peak penetrations and pairs in contact at every
+    point over 0.3 s; the onsets the FMU engine reads from the counters are the located ones,
+    each dated to the point that closes its step."""
+    s = (ms.STARTS_BY_KEY[start] if "/" not in start
+         else ms.Start(start, phase=11 / 24))
+    mesh, drive = ms.start_parameters(*orbit_point(), s)
+    reference = ms.LibraryEngine(mesh, drive, 1e-4)
+    try:
+        lib = reference.advance(3000)
+    finally:
+        reference.close()
+    assert len(lib.onset_times) > 5  # it rattles
+    for fmus in (fmi3_fmus, native_fmus):
+        engine = ms.FmuEngine(mesh, drive, 1e-4, fmus[MESH_NAME].parent)
+        try:
+            fmu = engine.advance(3000)
+        finally:
+            engine.close()
+        for name in ("time", "delta_peak", "n_contact"):
+            assert [float(x).hex() for x in getattr(fmu, name)] == \
+                [float(x).hex() for x in getattr(lib, name)], name
+        assert fmu.onset_flanks == lib.onset_flanks
+        dated = np.searchsorted(lib.time, lib.onset_times, side="left")
+        assert list(fmu.onset_times) == [float(lib.time[k]) for k in dated]
+
+
+@pytest.mark.slow
+def test_both_engines_reach_the_same_verdicts_at_the_orbits_point(fmi3_fmus):
+    """The study through the FMI 3.0 FMUs and in the compiled loop, from a phase start that
+    reaches the periodic orbit (11/24) and one that reaches the chaotic rattle (2/24): the same
+    verdict (multistable), the same attractors of the same starts, the same transients; the
+    peak penetration and the pairs of every window bit for bit (the onset statistics may
+    differ in a window where an onset's step straddles the window's end: the FMU engine dates
+    it to the step's end)."""
+    starts = [ms.Start("phase 2/24", phase=2 / 24), ms.Start("phase 11/24", phase=11 / 24)]
+    points = {engine: ms.study_point(0.4, 2e-4, starts=starts, workers=2, engine=engine,
+                                     fmu_dir=fmi3_fmus[MESH_NAME].parent)
+              for engine in ("library", "fmu")}
+    lib, fmu = points["library"], points["fmu"]
+    assert lib.verdict == fmu.verdict == "multistable", ms.report([lib, fmu], {})
+    assert [a.starts for a in fmu.attractors] == [a.starts for a in lib.attractors] == [
+        ["phase 2/24"], ["phase 11/24"]]
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+    orbit = fmu.attractors[1]
+    assert orbit.mean["drive_rate"] == pytest.approx(1 / period, rel=1e-3)
+    assert orbit.mean["coast_rate"] == pytest.approx(1 / period, rel=1e-3)
+    for a, b in zip(lib.runs, fmu.runs, strict=True):
+        assert (a.settled, a.transient_windows, a.seconds) == (
+            b.settled, b.transient_windows, b.seconds)
+        for name in ("delta_max", "pairs"):
+            assert a.windows[name] == b.windows[name], (a.start, name)
+
+
+@pytest.mark.slow
+def test_one_ulp_of_the_start_angle_decides_which_state_a_start_reaches(fmi3_fmus):
+    """Why an engine's last bits decide the state near a basin boundary: the phase start 11/24
+    at 0.4 M* and 0.2 mm reaches the periodic orbit in the compiled loop and through the FMUs
+    (the same arithmetic), and the chaotic rattle when the pinion's start angle is moved by one
+    unit in the last place either way (measured: ``python benchmarks/orbit_reach.py``,
+    docs/analysis.md section 7)."""
+    root = Path(__file__).resolve().parents[2]
+    run = subprocess.run([sys.executable, str(root / "benchmarks" / "orbit_reach.py"),
+                          "--select", "11", "--fmu-dir", str(fmi3_fmus[MESH_NAME].parent),
+                          "--variants", "library,fmu,angle+1ulp,angle-1ulp"],
+                         capture_output=True, text=True, timeout=1800)
+    assert run.returncode == 0, run.stderr
+    rows = {line.split("|")[1].strip(): line.split("|")[2].strip()
+            for line in run.stdout.splitlines()[2:]}
+    assert rows == {"library": "11", "fmu": "11", "angle+1ulp": "none",
+                    "angle-1ulp": "none"}, run.stdout
