@@ -284,7 +284,8 @@ def test_the_default_physics_has_two_states_at_0_4_and_0_2_mm():
 def test_phase_starts_find_the_orbit_the_seven_starts_miss():
     """The same point from the smooth start at 24 phases of the forcing cycle: measured on
     2026-11-29, 4 of the 23 phase starts reach the periodic orbit (11, 12, 19, 23 /24) and the
-    rest the chaotic rattle, while all seven named starts reach the rattle.  Which phases reach
+    rest the chaotic rattle (phase 1/24, entering the orbit after 31 s, unsettled), while all
+    seven named starts reach the rattle.  Which phases reach
     the orbit can change with rounding, as the phase-1/3 start's did; that none of 23 would
     is what this test would catch (the study then missing the state again)."""
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
