@@ -109,7 +109,8 @@ def test_an_installed_wheel_builds_and_runs_everything(installed):
     built = _run([bindir / "drive-rattle-build", "--out", "dist"], user, env, timeout=1800)
     for name in ("GearMeshRattle.fmu", "Driveline.fmu", "DriveRattle.ssp",
                  "DriveRattle_outputs.ssp", "native/GearMeshRattle.fmu", "native/Driveline.fmu",
-                 "native/DriveRattle.ssp", "fmi3/GearMeshRattle.fmu", "fmi3/Driveline.fmu"):
+                 "native/DriveRattle.ssp", "fmi3/GearMeshRattle.fmu", "fmi3/Driveline.fmu",
+                 "fmi3/DriveRattle.ssp", "fmi3/DriveRattle_outputs.ssp"):
         assert (user / "dist" / name).is_file(), (name, built.stdout)
     with zipfile.ZipFile(user / "dist" / "native" / "GearMeshRattle.fmu") as z:
         assert "documentation/licenses/license.txt" in z.namelist()

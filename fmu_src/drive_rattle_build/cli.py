@@ -96,8 +96,7 @@ def main(argv=None) -> int:
                 print(f"built and validated {fmu} (FMI 3.0 co-simulation, C only, "
                       "x86_64-linux and x86_64-windows)")
             for system in write_systems(fmi3, args.out / FMI3_SUBDIR, not args.no_fmutool):
-                print(f"wrote the system {system} (FMI 3.0: ecos and fmu-manipulation-toolbox "
-                      "read it)")
+                print(f"wrote the system {system} (of the FMI 3.0 units)")
     except BuildError as err:
         print(f"drive-rattle-build: {err}", file=sys.stderr)
         return 1
