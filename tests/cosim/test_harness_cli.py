@@ -29,9 +29,13 @@ def test_cli_runs_and_writes_csv_with_units(fmus, tmp_path):
     assert float(rows[1][2]) == 0.2
 
 
-def test_cli_sets_an_enumeration_by_its_item_name_and_a_boolean_by_its_word(fmus, tmp_path):
-    """``contact.dissipation=hunt_crossley_damping`` reaches the FMU as its code 2, and
-    ``friction.enabled=false`` as false (the values read back from the unit)."""
+@pytest.mark.parametrize("face", ["fmus", "fmi3_fmus"])
+def test_cli_sets_an_enumeration_by_its_item_name_and_a_boolean_by_its_word(face, request,
+                                                                            tmp_path):
+    """``contact.dissipation=hunt_crossley_damping`` reaches the FMU (FMI 2.0: an Integer;
+    FMI 3.0: an Int64) as its code 2, and ``friction.enabled=false`` as false (the values read
+    back from the unit)."""
+    fmus = request.getfixturevalue(face)
     out = tmp_path / "run.csv"
     run = subprocess.run(
         [sys.executable, "-m", "drive_rattle_cosim.harness", "--mesh", str(fmus["GearMeshRattle"]),
