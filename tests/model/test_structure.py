@@ -199,8 +199,7 @@ def oracle_names() -> set[str]:
 
 
 def python_outside_tests() -> list[Path]:
-    # .venv-masters: the environments of the masters that pin an older fmpy (test_masters)
-    skip = {"tests", ".venv", ".venv-masters", "build", "dist", "out", ".git"}
+    skip = {"tests", ".venv", "build", "dist", "out", ".git"}
     return sorted(p for p in ROOT.rglob("*.py")
                   if not skip & set(p.relative_to(ROOT).parts))
 
