@@ -191,6 +191,11 @@ def test_linux_binary_exports_every_fmi3_function_and_needs_only_libc(fmi3_fmus,
                              text=True, check=True).stdout
     needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
     assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
+    if platform == "aarch64-linux":  # docs/fmi3.md: glibc 2.29 or later (ziglang's default)
+        versions = subprocess.run([_tool("readelf"), "-V", "-W", str(binary)],
+                                  capture_output=True, text=True, check=True).stdout
+        assert max(tuple(map(int, v.split("."))) for v in re.findall(
+            r"Name: GLIBC_([0-9.]+)", versions)) == (2, 29)
     symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
                              capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in symbols.splitlines() if line.strip()}
