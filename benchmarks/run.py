@@ -325,7 +325,7 @@ def main(argv=None) -> int:
         work = Path(tmp)
         fmus = build_fmus(work / "dist")
         native = {p.stem: p for p in build_native(work / "native", use_fmutool=False,
-                                                  platforms=("linux64",))}
+                                                  platforms=("x86_64-linux",))}
         w_loop, last, run = compiled_loop(steps)
         measured = [("compiled loop: the two units in the library, one call", w_loop, last)]
         w_floor, floor_last = floor_wall(work, run, steps)

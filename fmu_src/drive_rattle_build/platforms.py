@@ -151,11 +151,13 @@ def cross_compile_html(model: str) -> str:
 
 
 # ------------------------------------------------------------------ into a finished FMU
-def fmu_sources(fmu: Path) -> tuple[str, int, list[str]]:
+def fmu_sources(fmu: Path, platform: str) -> tuple[str, int, list[str]]:
     """(model identifier, FMI major version, the C files to compile) of the co-simulation FMU
-    ``fmu``, its sources as the FMU lists them: FMI 2.0 ``<SourceFiles>``, FMI 3.0
-    ``sources/buildDescription.xml`` (its build configuration without a platform, the
-    fallback for every platform).  BuildError when the FMU lists none."""
+    ``fmu`` for ``platform``, its sources as the FMU lists them: FMI 2.0 ``<SourceFiles>``,
+    FMI 3.0 ``sources/buildDescription.xml`` (the build configuration of the model for that
+    platform, else the one without a platform: FMI 3.0.2, section 2.4.10).  The files are
+    compiled with the build's flags (``compile_for``: those the FMUs of this build list), not
+    a source set's own options.  BuildError when the FMU lists none."""
     try:
         with zipfile.ZipFile(fmu) as z:
             root = ElementTree.fromstring(z.read("modelDescription.xml"))
@@ -176,14 +178,18 @@ def fmu_sources(fmu: Path) -> tuple[str, int, list[str]]:
         files = [f.get("name") for f in cosim.findall("SourceFiles/File")]
     else:
         configs = [c for c in (build.findall("BuildConfiguration") if build is not None else [])
-                   if c.get("modelIdentifier") == model and not c.get("platform")]
-        files = [f.get("name") for c in configs[:1]
+                   if c.get("modelIdentifier") == model]
+        chosen = ([c for c in configs if c.get("platform") == platform]
+                  or [c for c in configs if not c.get("platform")])
+        files = [f.get("name") for c in chosen[:1]
                  for s in c.findall("SourceFileSet") for f in s.findall("SourceFile")]
     if not files:
-        raise BuildError(f"{fmu} lists no C sources to compile ("
-                         f"{'<SourceFiles>' if major == 2 else 'sources/buildDescription.xml'}"
-                         " is missing or empty); allowed: an FMU that ships its sources, "
-                         "such as the native and FMI 3.0 FMUs of drive-rattle-build")
+        where = ("<SourceFiles> is missing or empty" if major == 2 else
+                 "sources/buildDescription.xml has no "
+                 f"build configuration of {model} for {platform} or for every platform")
+        raise BuildError(f"{fmu} lists no C sources to compile for {platform} ({where}); "
+                         "allowed: an FMU that ships its sources, such as the native and FMI "
+                         "3.0 FMUs of drive-rattle-build")
     missing = [f for f in files if f"sources/{f}" not in names]
     if missing:
         raise BuildError(f"{fmu} lists sources it does not ship: {', '.join(missing)}")
@@ -200,7 +206,7 @@ def add_binary(fmu: Path, platform: str) -> str:
     target = platform_named(platform)
     if not fmu.is_file():
         raise BuildError(f"no FMU at {fmu}; allowed: the path of an .fmu file")
-    model, major, files = fmu_sources(fmu)
+    model, major, files = fmu_sources(fmu, platform)
     member = binary_member(model, major, platform)
     with tempfile.TemporaryDirectory(prefix="drive_rattle_platform_") as tmp:
         tmp = Path(tmp)
