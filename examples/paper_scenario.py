@@ -316,7 +316,7 @@ def pair_onsets_text(counts: dict[str, int]) -> str:
                             "taking up load on a flank in contact")}
     parts = [f"{counts[k]} {words[k][counts[k] > 1]}" for k in PAIR_ONSET_KINDS if counts[k]]
     return (f"{total} contact onset{'s' if total > 1 else ''} of this pair in this span "
-            "(its force rising from 0): " + ", ".join(parts))
+            "(its force rising from 0):\n" + ", ".join(parts))
 
 
 def _fig3(plt, t, s, ws, catalogue, out: Path) -> Path:
@@ -390,7 +390,7 @@ def _fig4(plt, t, s, ws, catalogue, out: Path) -> Path:
     span = (ta >= lo) & (ta <= hi)
     counts = pair_onsets(force[span], s["mesh.impacts_drive"][analysed][span],
                          s["mesh.impacts_coast"][analysed][span])
-    fig, ax = plt.subplots(figsize=(10, 4.4), dpi=DPI)
+    fig, ax = plt.subplots(figsize=(10, 4.6), dpi=DPI, layout="constrained")
     ax.plot(ta[span] * 1e3, s["mesh.W"][analysed][span], lw=0.6, color="0.7",
             label="total normal force of all pairs (mesh.W)")
     ax.plot(ta[span] * 1e3, force[span], lw=1.0, color="tab:blue",

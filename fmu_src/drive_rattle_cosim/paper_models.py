@@ -161,9 +161,10 @@ class ModelBand:
 
     def strongest_cell(self) -> str:
         """The model's strongest line at its defaults (frequency, name, in how many windows)
-        and, in brackets, the names of the band's strongest lines."""
+        and, in brackets, the strongest lines over the band (its defaults included)."""
         lines = [strongest_line(r.statistics) for r in (self.central, *self.band)]
-        names = list(dict.fromkeys(ln.name for ln in lines if ln is not None))
+        names = list(dict.fromkeys(f"{ln.frequency:.0f} Hz ({ln.name})" for ln in lines
+                                   if ln is not None))
         central = lines[0]
         text = central.text() if central is not None else "no line found in any window"
         return text + (f" [over the band: {', '.join(names)}]" if names else "")
