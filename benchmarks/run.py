@@ -59,6 +59,7 @@ from drive_rattle_build.native import build_native  # noqa: E402
 from drive_rattle_build.shim import fmi2_headers  # noqa: E402
 from drive_rattle_cosim.analysis import markdown_table  # noqa: E402
 from drive_rattle_cosim.harness import CoSimulation  # noqa: E402
+from drive_rattle_cosim.progress import Phases  # noqa: E402
 from drive_rattle_cosim.ssp import write_ssp  # noqa: E402
 from drive_rattle_cosim.sweep import grid_design, read_results, run_sweep  # noqa: E402
 from tests.oracle.reference import solve  # noqa: E402
@@ -106,10 +107,11 @@ def floor_wall(work: Path, run, steps: int) -> tuple[float, float]:
     """(best wall [s], last wheel speed) of benchmarks/floor.c on the compiled loop's recorded
     mesh inputs."""
     data = [float(steps)]
+    time = run.time
+    inputs = [run.columns[f"Driveline.{n}"]
+              for n in ("pinion.phi", "pinion.w", "pinion.a", "wheel.tau_load")]
     for k in range(steps):
-        data += [(run.time[k + 1] - run.time[k]),
-                 *(run.columns[f"Driveline.{n}"][k]
-                   for n in ("pinion.phi", "pinion.w", "pinion.a", "wheel.tau_load"))]
+        data += [time[k + 1] - time[k], *(column[k] for column in inputs)]
     path = work / "floor.bin"
     path.write_bytes(struct.pack(f"{len(data)}d", *data))
     exe = compile_c(work, "floor", [ROOT / "benchmarks" / "floor.c",
@@ -320,35 +322,46 @@ def main(argv=None) -> int:
         print(text, flush=True)
         report.append(text)
 
-    build_in_place()
+    phases = Phases("benchmarks")
+    with phases.phase("building the model library"):
+        build_in_place()
     with tempfile.TemporaryDirectory(prefix="bench_") as tmp:
         work = Path(tmp)
-        fmus = build_fmus(work / "dist")
-        native = {p.stem: p for p in build_native(work / "native", use_fmutool=False,
-                                                  platforms=("x86_64-linux",))}
-        w_loop, last, run = compiled_loop(steps)
+        with phases.phase("building the FMUs of both flavours"):
+            fmus = build_fmus(work / "dist")
+            native = {p.stem: p for p in build_native(work / "native", use_fmutool=False,
+                                                      platforms=("x86_64-linux",))}
+        with phases.phase("compiled loop"):
+            w_loop, last, run = compiled_loop(steps)
         measured = [("compiled loop: the two units in the library, one call", w_loop, last)]
-        w_floor, floor_last = floor_wall(work, run, steps)
+        with phases.phase("floor (benchmarks/floor.c)"):
+            w_floor, floor_last = floor_wall(work, run, steps)
         measured.insert(0, ("floor: the mesh's stepper alone in C (rm_wheel_step)", w_floor,
                             None))
-        measured.append(("C master on the native FMUs (the harness's calls, no Python)",
-                         *c_master_wall(work, native, T)))
-        measured.append(("raw ctypes Python loop on the native FMUs",
-                         *raw_ctypes_wall(work, native, steps)))
-        measured.append(("fmpy harness, native FMUs", *harness_wall(native, T)))
-        measured.append(("fmpy harness, pythonfmu FMUs", *harness_wall(fmus, T)))
+        for name, measure in (
+                ("C master on the native FMUs (the harness's calls, no Python)",
+                 lambda: c_master_wall(work, native, T)),
+                ("raw ctypes Python loop on the native FMUs",
+                 lambda: raw_ctypes_wall(work, native, steps)),
+                ("fmpy harness, native FMUs", lambda: harness_wall(native, T)),
+                ("fmpy harness, pythonfmu FMUs", lambda: harness_wall(fmus, T))):
+            with phases.phase(name):
+                measured.append((name, *measure()))
         for name, _wall, value in measured:
             if value is not None and value != last:
                 raise RuntimeError(f"{name}: last wheel speed {value!r} differs from the "
                                    f"compiled loop's {last!r}")
         if shutil.which("taskset"):
-            measured.append(("libcosim, native SSP, pinned to one core (taskset -c 0)",
-                             libcosim_wall(native, T, work, pinned=True), None))
-        measured.append(("libcosim, native SSP, not pinned",
-                         libcosim_wall(native, T, work, pinned=False), None))
+            name = "libcosim, native SSP, pinned to one core (taskset -c 0)"
+            with phases.phase(name):
+                measured.append((name, libcosim_wall(native, T, work, pinned=True), None))
+        name = "libcosim, native SSP, not pinned"
+        with phases.phase(name):
+            measured.append((name, libcosim_wall(native, T, work, pinned=False), None))
         t_ref = min(T, 2.0)
-        measured.append((f"monolithic reference (LSODA, rtol 1e-9; {t_ref:g} s)",
-                         reference_wall(t_ref) * T / t_ref, None))
+        name = f"monolithic reference (LSODA, rtol 1e-9; {t_ref:g} s)"
+        with phases.phase(name):
+            measured.append((name, reference_wall(t_ref) * T / t_ref, None))
         emit("Wall time per simulated second, and against the floor (every run's last wheel "
              f"speed equals the compiled loop's, {last!r} rad/s)",
              [(name, wall / T, wall / w_floor) for name, wall, _ in measured],
@@ -356,14 +369,16 @@ def main(argv=None) -> int:
         if floor_last is not None:
             print(f"(the floor ends at {floor_last!r} rad/s: the same trajectory)")
         case = 3.0 if args.quick else 12.0
+        with phases.phase("sweeps (library and native FMU engines, 1 and 2 workers)"):
+            sweep = sweep_rows(native["GearMeshRattle"].parent, case, 4 if args.quick else 16)
         emit(f"Sweep: seconds per {case:g} s case per worker (median of the rows' own wall "
              "time: units, run, metrics) and cases per minute (cluster started before the "
              "clock)",
-             sweep_rows(native["GearMeshRattle"].parent, case, 4 if args.quick else 16),
-             ("engine", "workers", "cases", "s per case", "cases / min"))
+             sweep, ("engine", "workers", "cases", "s per case", "cases / min"))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "report.md").write_text("\n".join(report), encoding="utf-8")
     print(f"wrote {args.out / 'report.md'}")
+    phases.done()
     return 0
 
 

@@ -108,9 +108,9 @@ def run(points: int = 5, transient: float = 1.0, window: float = 1.0, windows: i
     """Sweep both planes (``points`` values per parameter; each case ``transient`` +
     ``windows`` x ``window`` seconds, from each of ``starts``) and draw the maps; returns the
     written files, the sweep counts and the multistable cells per map."""
-    if not (points >= 1 and windows >= 1 and window > 0 and transient >= 0):
+    if not (points >= 2 and windows >= 1 and window > 0 and transient >= 0):
         raise ValueError(f"points = {points!r}, windows = {windows!r}, window = {window!r} s, "
-                         f"transient = {transient!r} s; allowed: points >= 1, windows >= 1, "
+                         f"transient = {transient!r} s; allowed: points >= 2, windows >= 1, "
                          "window > 0, transient >= 0")
     starts = [k.strip().replace(" ", "") for k in starts]
     unknown = [k for k in starts if k not in multistability.STARTS_BY_KEY]

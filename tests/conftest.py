@@ -14,13 +14,28 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
 
 ``slow`` (tests that take more than about 10 s) is set on the tests themselves.
+
+``seeded`` marks every test that draws at random (the property tests of hypothesis, found
+here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
+profile below, tests/seeds.py), so that one commit gives one answer; ``tests/soak.py`` runs
+them on fresh seeds.
 """
 
+import os
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from drive_rattle_build import build
+
+# The property tests draw the same examples on every run (derandomized: from each test's own
+# code) and use no example database, so a run depends on the commit alone; the soak profile
+# draws fresh examples from pytest's --hypothesis-seed (tests/soak.py).
+settings.register_profile("ci", derandomize=True, database=None, print_blob=True)
+settings.register_profile("soak", derandomize=False, database=None, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
 
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
@@ -40,6 +55,8 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
+        if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
+            item.add_marker(pytest.mark.seeded)
 
 
 @pytest.fixture(scope="session")
@@ -79,3 +96,19 @@ FLAVOURS = ("pythonfmu", "native")
 def flavour_fmus(request):
     """The FMUs of each flavour in turn: the pythonfmu FMUs and the native ones."""
     return request.getfixturevalue("fmus" if request.param == "pythonfmu" else "native_fmus")
+
+
+#: Seconds spent in the tests (setup, call and teardown), split by whether they are slow.
+_SECONDS = {"not slow": 0.0, "slow": 0.0}
+
+
+def pytest_runtest_logreport(report):
+    item_slow = "slow" in report.keywords
+    _SECONDS["slow" if item_slow else "not slow"] += report.duration
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The fast layer's time beside the slow one's (a session fixture's build counts for the
+    first test that uses it)."""
+    terminalreporter.write_line(
+        f"time in tests: {_SECONDS['not slow']:.0f} s not slow, {_SECONDS['slow']:.0f} s slow")

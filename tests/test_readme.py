@@ -78,3 +78,6 @@ def test_the_main_command_runs_in_a_clone_with_no_model_library(fmus, tmp_path):
         timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     assert library.is_file() and "The paper comparison" in run.stdout
+    # it says what it is doing while it works, each phase with its time, and the total
+    assert "paper scenario [" in run.stderr and "co-simulating the FMUs" in run.stderr
+    assert "done in" in run.stderr.splitlines()[-1]

@@ -6,7 +6,12 @@ Where the library is looked for, in order:
 * ``$RATTLE_MODEL_LIBRARY``, a path to it;
 * next to this package (``rattle_model.so`` on Linux, ``rattle_model.dll`` on Windows): where
   a pythonfmu FMU ships it, and where ``drive-rattle-build`` (every build, or
-  ``drive-rattle-build --library``) writes it in a source checkout.
+  ``drive-rattle-build --library``) writes it, in a source checkout and in an installed wheel.
+
+Where it is missing there and the project is installed with its build (an installed wheel or
+a checkout; not inside an FMU), the first load builds it from the sources, through the
+``drive_rattle.library`` entry point that the build declares (so that this runtime package
+imports nothing but the standard library).
 
 In a source checkout the library records the hash of the sources it was built from
 (``rm_build_id``); a library older than its sources is refused with the command that rebuilds
@@ -43,8 +48,14 @@ API_VERSION = 1
 
 LIBRARY_NAME = "rattle_model.dll" if sys.platform == "win32" else (
     "rattle_model.dylib" if sys.platform == "darwin" else "rattle_model.so")
-#: The C sources of the library in a source checkout (absent in an FMU).
-SOURCES = Path(__file__).resolve().parent.parent / "rattle_model"
+#: Where the C sources of the library are: a source checkout (``fmu_src/rattle_model``), or
+#: an installed wheel (package data of the build); neither exists inside an FMU.
+_SOURCE_FOLDERS = (Path(__file__).resolve().parent.parent / "rattle_model",
+                   Path(__file__).resolve().parent.parent / "drive_rattle_build" / "sources"
+                   / "rattle_model")
+SOURCES = next((p for p in _SOURCE_FOLDERS if p.is_dir()), _SOURCE_FOLDERS[0])
+#: The entry-point group of the builder of a missing library (drive_rattle_build.library).
+BUILDER_GROUP = "drive_rattle.library"
 
 
 class ModelError(ValueError):
@@ -166,6 +177,8 @@ def load(path: str | Path | None = None) -> ctypes.CDLL:
             return lib
         rebuild = ("build it from the sources with `drive-rattle-build --library` (or "
                    "`python build_fmu.py --library` in a clone)")
+        if not p.is_file() and path is None and "RATTLE_MODEL_LIBRARY" not in os.environ:
+            _build_missing(p)
         if not p.is_file():
             raise LibraryError(f"the model library {p} is missing: {rebuild}")
         try:
@@ -186,6 +199,24 @@ def load(path: str | Path | None = None) -> ctypes.CDLL:
                                    f"({built}) than those in {SOURCES} ({current}): {rebuild}")
         _LOADED[key] = lib
         return lib
+
+
+def _build_missing(path: Path) -> None:
+    """Build the missing default library with the builder the installed build declares (the
+    ``drive_rattle.library`` entry point), saying so on stderr; nothing where there is none
+    (inside an FMU).  A failed build raises LibraryError with the builder's message."""
+    from importlib.metadata import entry_points
+
+    builders = list(entry_points(group=BUILDER_GROUP))
+    if not builders or not SOURCES.is_dir():
+        return
+    print(f"drive-rattle: building the model library {path} from its sources (once)",
+          file=sys.stderr, flush=True)
+    try:
+        builders[0].load()()
+    except Exception as err:  # the builder's own error (no compiler, a failed compile)
+        raise LibraryError(f"the model library {path} is missing and could not be built: "
+                           f"{err}") from None
 
 
 def message(lib: ctypes.CDLL, unit) -> str:

@@ -108,9 +108,49 @@ class ParameterSpec:
         except (TypeError, ValueError, OverflowError):
             raise self._error(value, "must be a real number") from None
 
-    def _error(self, value: Any, reason: str = "is out of range") -> ValueError:
+    def parse(self, text: str, label: str | None = None) -> Any:
+        """The value a text gives the parameter (the VALUE of a command line's NAME=VALUE), by
+        its declared type: a Real a decimal number; an Integer a whole number; an
+        enumeration its code or its item name (``choice_names``, exactly as the
+        modelDescription spells it: ``none``, not ``None``); a Boolean ``true`` or ``false``
+        (any case) or ``1`` or ``0``; a String the text as it is, empty included.  Otherwise
+        ValueError naming the parameter (as ``label``, default its name), the text and what is
+        allowed.  The range is the model library's to check (:meth:`ParameterSet.__post_init__`)."""
+        fmi_type = self.fmi_type
+        if fmi_type == "String":
+            return text
+        word = text.strip()
+        if fmi_type == "Boolean":
+            if word.lower() in ("true", "false", "1", "0"):
+                return word.lower() in ("true", "1")
+            raise self._error(text, "is not a truth value", label, "true or false (or 1 or 0)")
+        codes = {name: code for code, name in (self.choice_names or {}).items()}
+        if word in codes:
+            return codes[word]
+        try:
+            number = float(word)
+        except ValueError:
+            number = None
+        if fmi_type == "Real":
+            if number is None:
+                raise self._error(text, "is not a number", label)
+            return number
+        if number is not None and _is_integral(number):
+            return self.convert(number)
+        if not codes:
+            raise self._error(text, "is not a whole number", label)
+        from difflib import get_close_matches
+
+        near = get_close_matches(word, list(codes), n=1)
+        guess = f" (did you mean '{near[0]}'?)" if near else ""
+        raise self._error(text, f"is neither a code nor an item name of the enumeration{guess}",
+                          label, ", ".join(f"{c} or '{n}'" for n, c in codes.items()))
+
+    def _error(self, value: Any, reason: str = "is out of range", label: str | None = None,
+               allowed: str | None = None) -> ValueError:
         return ValueError(
-            f"parameter '{self.name}' = {value!r} {reason}; allowed: {self.allowed()}"
+            f"parameter '{label or self.name}' = {value!r} {reason}; "
+            f"allowed: {allowed or self.allowed()}"
         )
 
 

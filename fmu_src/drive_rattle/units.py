@@ -349,6 +349,7 @@ class CoupledRun:
         self._index = {name: i for i, name in enumerate(names)}
         self._values = memoryview(buffer).cast("B").cast("d")
         self._columns: dict[str, list[float]] | None = None
+        self._time: list[float] | None = None
         self.onset_times = onsets[0::3]
         self.onset_speeds = onsets[1::3]
         self.onset_flanks = [int(f) for f in onsets[2::3]]
@@ -366,8 +367,11 @@ class CoupledRun:
 
     @property
     def time(self) -> list[float]:
-        """The communication points t_k = (t0_ns + k step_ns) / 1e9 [s]."""
-        return [(self._start_ns + k * self._step_ns) / 1e9 for k in range(self.steps + 1)]
+        """The communication points t_k = (t0_ns + k step_ns) / 1e9 [s] (made once)."""
+        if self._time is None:
+            self._time = [(self._start_ns + k * self._step_ns) / 1e9
+                          for k in range(self.steps + 1)]
+        return self._time
 
 
 def run_coupled(mesh: Unit, driveline: Unit, step_ns: int, steps: int,

@@ -1,7 +1,8 @@
 """The build of the drive-rattle FMUs: from the specs, the model library's C sources, the
 runtime packages and the slave modules to ``dist/GearMeshRattle.fmu``, ``dist/Driveline.fmu``,
-``dist/DriveRattle.ssp`` (with ``dist/DriveRattle_outputs.ssp``: every output a system output)
-the native FMUs in ``dist/native/`` and the FMI 3.0 FMUs in ``dist/fmi3/``.
+``dist/DriveRattle.ssp`` (with ``dist/DriveRattle_outputs.ssp``: every output a system output;
+both bundle the FMUs with the integer codes declared Integers, for libcosim and ecos), the
+native FMUs in ``dist/native/`` and the FMI 3.0 FMUs in ``dist/fmi3/``.
 
 Needs a source checkout (it reads ``fmu_src/`` and ``regression/``), pythonfmu, fmpy and a C
 compiler (``compiler.c_compiler``).  Command line: ``drive-rattle-build`` (or ``python

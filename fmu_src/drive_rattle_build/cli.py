@@ -119,7 +119,7 @@ def main(argv=None) -> int:
         fmus = build(args.out, args.update_templates, not args.no_fmutool)
         for fmu in fmus:
             print(f"built and validated {fmu}")
-        for system in write_systems(fmus, args.out):
+        for system in write_systems(fmus, args.out, not args.no_fmutool):
             print(f"wrote the system {system}")
         if not args.no_native:
             from .native import NATIVE_SUBDIR, build_native
@@ -129,7 +129,8 @@ def main(argv=None) -> int:
             for fmu in native:
                 print(f"built and validated {fmu} (native: C only, "
                       f"{listing(platforms, 2)})")
-            for system in write_systems(native, args.out / NATIVE_SUBDIR):
+            for system in write_systems(native, args.out / NATIVE_SUBDIR,
+                                        not args.no_fmutool):
                 print(f"wrote the system {system}")
         if not args.no_fmi3:
             from .fmi3 import FMI3_SUBDIR, build_fmi3

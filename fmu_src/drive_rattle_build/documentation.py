@@ -13,7 +13,23 @@ from drive_rattle.units import input_starts
 
 from .compiler import BuildError
 from .model_description import enumeration
-from .paths import FMI_DOCS
+from .paths import CHECKOUT, FMI_DOCS, ROOT
+
+#: Where the FMI standard's FMU layout places the licenses of an FMU's contents: the folder
+#: ``documentation/licenses/`` with the entry point ``license.txt`` (or .html).
+LICENSE_ENTRY = "documentation/licenses/license.txt"
+
+
+def license_text() -> str:
+    """The project's license (LICENSE of the checkout, or of the installed distribution)."""
+    if CHECKOUT:
+        return (ROOT / "LICENSE").read_text(encoding="utf-8")
+    from importlib.metadata import distribution
+
+    text = distribution("drive-rattle").read_text("licenses/LICENSE")
+    if text is None:
+        raise BuildError("the installed drive-rattle carries no licenses/LICENSE: reinstall it")
+    return text
 
 
 def interface_rows(unit: UnitSpec) -> list[tuple[str, str, str, str, str, str]]:

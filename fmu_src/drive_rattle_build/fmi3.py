@@ -42,7 +42,7 @@ from drive_rattle.interface import MODELS
 
 from . import model_description_fmi3, model_tables, templates
 from .compiler import BuildError, c_compiler
-from .documentation import html_page
+from .documentation import LICENSE_ENTRY, html_page, license_text
 from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
@@ -261,6 +261,7 @@ def package_fmi3(model: str, out_dir: Path, cc: str | Sequence[str] | None = Non
             for ref in reference_files:
                 z.write(ref, f"resources/regression/{Path(ref).name}")
             z.writestr("documentation/index.html", documentation_page(model, platforms))
+            z.writestr(LICENSE_ENTRY, license_text())
             add_terminals_and_icon(z, model)
         os.replace(part, fmu)
     return fmu

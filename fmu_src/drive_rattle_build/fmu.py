@@ -1,6 +1,6 @@
 """Building, checking and validating the pythonfmu FMUs.
 
-Each FMU bundles its slave module (``fmu_src/<Model>.py``), the runtime packages whole
+Each FMU bundles its slave module (``fmu_src/slaves/<Model>.py``), the runtime packages whole
 (``paths.RUNTIME_PACKAGES``: the specs and the ctypes binding, the pythonfmu face; standard
 library only), the model library compiled for linux64 next to the binding
 (``resources/drive_rattle/rattle_model.so``, where the slave loads it from), the regression
@@ -32,10 +32,10 @@ from drive_rattle.interface import MODELS
 
 from . import library, model_description, templates
 from .compiler import BuildError, c_compiler
-from .documentation import HOW_TO_RUN, html_page
+from .documentation import HOW_TO_RUN, LICENSE_ENTRY, html_page, license_text
 from .icon import add_icon
 from .identity import fmu_guid
-from .paths import DIST, RUNTIME_PACKAGES, SOURCE, slave_module
+from .paths import DIST, RUNTIME_PACKAGES, runtime_package, slave_module
 from .shim import COMMON_SOURCE, FMI2_COMMON_SOURCE, PORTABLE_SOURCE, SHIM_SOURCE, install_shim
 
 #: What is never copied from a runtime package: caches and a library built in place (the
@@ -49,7 +49,8 @@ PLATFORMS = ("linux64",)
 
 
 def slave_class(name: str, script: Path | None = None):
-    """The slave class ``name`` from its module (``script``, default ``fmu_src/<name>.py``)."""
+    """The slave class ``name`` from its module (``script``, default
+    ``fmu_src/slaves/<name>.py``)."""
     script = Path(script) if script is not None else slave_module(name)
     if str(script.parent) not in sys.path:
         sys.path.insert(0, str(script.parent))
@@ -88,7 +89,7 @@ def stage_runtime(staging: Path, libraries: list[Path]) -> list[Path]:
     out = []
     for package in RUNTIME_PACKAGES:
         dest = staging / package
-        shutil.copytree(SOURCE / package, dest, ignore=_NOT_SHIPPED)
+        shutil.copytree(runtime_package(package), dest, ignore=_NOT_SHIPPED)
         out.append(dest)
     for lib in libraries:
         shutil.copy2(lib, staging / LIBRARY_FOLDER / Path(lib).name)
@@ -98,7 +99,7 @@ def stage_runtime(staging: Path, libraries: list[Path]) -> list[Path]:
 def glue_sources(name: str) -> list[Path]:
     """What the pythonfmu flavour adds to the model library in the FMU of ``name``: the slave
     module, the face's package and the status shim's C."""
-    face = sorted((SOURCE / "drive_rattle_fmi").glob("*.py"))
+    face = sorted(runtime_package("drive_rattle_fmi").glob("*.py"))
     return [slave_module(name), *face, SHIM_SOURCE, COMMON_SOURCE,
             COMMON_SOURCE.with_suffix(".h"), FMI2_COMMON_SOURCE,
             FMI2_COMMON_SOURCE.with_suffix(".h"), PORTABLE_SOURCE,
@@ -186,6 +187,9 @@ def package(script: Path, out_dir: Path, references: bool = True,
         doc.mkdir()
         (doc / "index.html").write_text(
             html_page(UNITS[name], HOW_TO_RUN.format(name=name)), encoding="utf-8")
+        licenses = doc / Path(LICENSE_ENTRY).relative_to("documentation")
+        licenses.parent.mkdir()
+        licenses.write_text(license_text(), encoding="utf-8")
         with _describing(cls, name):
             FmuBuilder.build_FMU(script, dest=fmu, project_files=packages,
                                  documentation_folder=doc, canGetAndSetFMUstate=True,

@@ -43,7 +43,7 @@ from drive_rattle.interface import (
 
 from . import model_description, model_tables, templates
 from .compiler import BuildError, c_compiler
-from .documentation import html_page
+from .documentation import LICENSE_ENTRY, html_page, license_text
 from .fmu import validate
 from .icon import model_png
 from .identity import fmu_guid
@@ -232,6 +232,7 @@ def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = N
             for ref in reference_files:
                 z.write(ref, f"resources/regression/{Path(ref).name}")
             z.writestr("documentation/index.html", page)
+            z.writestr(LICENSE_ENTRY, license_text())
             z.writestr("model.png", model_png())
         os.replace(part, fmu)
     return fmu

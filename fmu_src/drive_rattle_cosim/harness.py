@@ -19,10 +19,10 @@ Command line: ``python -m drive_rattle_cosim.harness --help``.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import csv
 import itertools
+import math
 import shutil
 import sys
 from ctypes import c_double, c_int, c_uint
@@ -35,7 +35,8 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
-from .system import communication_points
+from .paths import DIST
+from .system import communication_points, step_nanoseconds
 
 #: Rounds of output-to-input exchange in initialization mode (libcosim does one per unit).
 INIT_ROUNDS = 2
@@ -368,7 +369,14 @@ class CoSimulation:
 
 
 #: How masters place communication points (``time_grid``).
-GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied")
+GRIDS = ("nanoseconds", "accumulated", "accumulated-clipped", "multiplied", "fmpy")
+
+
+def steps_between(points: list[float]) -> list[float]:
+    """The step sizes of a master that steps from each point to the next: ``t_{k+1} - t_k``
+    in floating point (what libcosim and fmpy's ``simulate_fmu`` pass; read a master's points
+    from its own result and get its steps from them)."""
+    return [b - a for a, b in itertools.pairwise(points)]
 
 
 def time_grid(start: float, step: float, stop: float,
@@ -384,17 +392,21 @@ def time_grid(start: float, step: float, stop: float,
       ``t_k < stop``, each step ``min(step, t_{k+1} - t_k)`` (gemseo-fmu's
       ``TimeSteppingSystem``; its last step can be a rounding residue of 1e-14 s);
     * ``"multiplied"``: ``t_k = start + k step``, every step ``step`` but a last one that
-      ends at ``stop`` (fmpy's ``simulate_fmu`` from a zero start; fmu-manipulation-toolbox's
-      container inside).
+      ends at ``stop`` (fmu-manipulation-toolbox's container inside);
+    * ``"fmpy"``: ``t_k = start + k step``, each step ``t_{k+1} - t_k`` (fmpy 0.3.32's
+      ``simulate_fmu``: ``steps_between`` its points).
 
     The sums end at the first point at or past ``stop``."""
     if grid == "nanoseconds":
         points = communication_points(start, step, stop)
-        return points, [b - a for a, b in itertools.pairwise(points)]
+        return points, steps_between(points)
     if grid not in GRIDS:
         raise ValueError(f"grid = {grid!r}; allowed: {', '.join(GRIDS)}")
     if not (step > 0.0 and stop - start < 1e9 * step):
         raise ValueError(f"communication step {step!r} s is invalid for {start!r}..{stop!r} s")
+    if grid == "fmpy":
+        points = time_grid(start, step, stop, "multiplied")[0]
+        return points, steps_between(points)
     points, sizes = [start], []
     while (t := points[-1]) < stop:
         if grid == "accumulated":
@@ -413,43 +425,41 @@ def time_grid(start: float, step: float, stop: float,
     return points, sizes
 
 
-def _parse_value(text: str):
-    low = text.lower()
-    if low in ("true", "false"):
-        return low == "true"
-    try:
-        return int(text)
-    except ValueError:
-        pass
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
 def main(argv=None) -> int:
-    root = Path(__file__).resolve().parents[2]
-    ap = argparse.ArgumentParser(
+    """The command line: exit status 0 on success, 1 when a unit refused a call during the
+    run, 2 for a request refused before any work (one line on stderr)."""
+    from drive_rattle.catalog import check_settings, parse_settings
+
+    from .cli import Parser
+
+    ap = Parser(
         prog="python -m drive_rattle_cosim.harness",
         description="Co-simulate GearMeshRattle with Driveline (fmpy, fixed step, Jacobi).")
-    ap.add_argument("--mesh", type=Path, default=root / "dist" / f"{MESH}.fmu")
-    ap.add_argument("--driveline", type=Path, default=root / "dist" / f"{DRIVELINE}.fmu")
+    ap.add_argument("--mesh", type=Path, default=DIST / f"{MESH}.fmu")
+    ap.add_argument("--driveline", type=Path, default=DIST / f"{DRIVELINE}.fmu")
     ap.add_argument("--start-time", type=float, default=0.0, help="[s]")
     ap.add_argument("--stop-time", type=float, default=0.1, help="[s]")
     ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
     ap.add_argument("--set", action="append", default=[], metavar="UNIT.NAME=VALUE",
-                    help="parameter value (SI units), e.g. GearMeshRattle.gear.backlash=1.2e-4")
+                    help="parameter value by its declared type (SI units), e.g. "
+                         "GearMeshRattle.gear.backlash=1.2e-4; an enumeration by its code or "
+                         "item name (GearMeshRattle.contact.dissipation=none), a Boolean "
+                         "true/false; checked with the model library before the run")
     ap.add_argument("--record", action="append", default=None, metavar="UNIT.OUTPUT",
                     help="output to record (repeatable; default: all outputs)")
     ap.add_argument("--out", type=Path, default=Path("out") / "cosim.csv", help="result CSV")
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
-    params = {}
-    for item in args.set:
-        key, sep, value = item.partition("=")
-        if not sep:
-            ap.error(f"--set {item!r}: expected UNIT.NAME=VALUE")
-        params[key] = _parse_value(value)
+    try:
+        params = parse_settings(args.set)
+        check_settings(params)
+        step_nanoseconds(args.step)
+        if not (math.isfinite(args.start_time) and math.isfinite(args.stop_time)
+                and args.stop_time > args.start_time):
+            raise ValueError(f"--stop-time {args.stop_time!r} s after --start-time "
+                             f"{args.start_time!r} s; allowed: finite times, stop after start")
+    except ValueError as err:
+        ap.error(str(err))
     try:
         with CoSimulation(args.mesh, args.driveline, params, args.start_time, args.step) as sim:
             result = sim.run(args.stop_time, args.record, progress=not args.no_progress)

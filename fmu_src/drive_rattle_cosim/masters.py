@@ -6,7 +6,10 @@ master and returns a ``harness.Result`` holding the coupling signals (``"<Unit>.
 Each master places its points with its own arithmetic (``MASTER_GRIDS``,
 ``harness.time_grid``): the harness run on the same grid gives the same numbers bit for bit
 (tests/cosim/test_masters.py), so these functions are also the reference for what each master
-computes.  docs/tools.md explains each workaround for users of the masters directly.
+computes.  pathsim-fmi is the exception: it steps the units one after the other (Gauss-Seidel),
+which the harness does not do; its run is the model library's units stepped in its order, bit
+for bit (``pathsim_system``).  docs/tools.md explains each workaround for users of the
+masters directly.
 
 The SSP masters that ignore the SSD's parameter bindings (fmpy's SSP runner,
 fmu-manipulation-toolbox's container) get them from their runners here (``ssp.read_bindings``);
@@ -14,7 +17,8 @@ ecos applies them only when the set is named, which ``run_ecos`` does; gemseo-fm
 parameters its own way (``gemseo_system(..., parameters)``).
 
 Measured with fmpy 0.3.19 (the newest gemseo-fmu accepts), fmu-manipulation-toolbox 2.0,
-gemseo-fmu 3.1.1 and ecospy 0.7.2.  Run one master per process where a master can abort at
+gemseo-fmu 3.1.1, ecospy 0.7.2 and pathsim-fmi 0.1.1.  ``main`` writes the copies of the FMUs
+that some masters need (``variants``).  Run one master per process where a master can abort at
 exit (libcosim and fmpy in one process).
 """
 
@@ -31,6 +35,7 @@ from pathlib import Path
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
+from . import variants
 from .harness import Result
 from .ssp import PARAMETER_SET, component_sources, read_bindings
 
@@ -444,67 +449,53 @@ def run_cofmupy(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: flo
                    {name: rows[tuple(name.split(".", 1))] for name in COUPLING})
 
 
-# ---------------------------------------------------------------- libcosim and ecos
-def _integer_coded_model_description(xml: bytes) -> bytes:
-    """``xml`` (a modelDescription) with every Enumeration variable declared an Integer of the
-    same start and limits, and no TypeDefinitions."""
-    from xml.etree import ElementTree
+# ---------------------------------------------------------------- pathsim-fmi
+def pathsim_system(mesh_fmu: Path, driveline_fmu: Path, step: float,
+                   parameters: dict | None = None):
+    """``(simulation, scope)``: pathsim-fmi's ``CoSimulationFMU`` blocks of both units, the
+    mesh first, connected as ``CONNECTIONS``, and a ``Scope`` recording ``COUPLING``.
 
-    root = ElementTree.fromstring(xml)
-    for types in root.findall("TypeDefinitions"):
-        root.remove(types)
-    for variable in root.iter("ScalarVariable"):
-        typed = variable.find("Enumeration")
-        if typed is not None:
-            typed.tag = "Integer"
-            for attribute in ("declaredType", "quantity"):
-                typed.attrib.pop(attribute, None)
-    return (b'<?xml version="1.0" encoding="UTF-8"?>\n'
-            + ElementTree.tostring(root, encoding="utf-8", xml_declaration=False) + b"\n")
+    pathsim-fmi 0.1.1 (on pathsim 0.27) reads every output with fmi2GetReal/fmi3GetFloat64 and
+    fails at construction on an FMU with an Integer output (give it ``variants.real_outputs``
+    copies); it takes the default experiment's step as the string fmpy reads (``TypeError``
+    in its schedule), so ``step`` is passed as ``dt``; it sets ``parameters``
+    (``"<Unit>.<name>"``: Real, Integer, Boolean) during initialization and exchanges nothing
+    then.  At each communication point it steps the blocks one after the other, each from the
+    outputs of the blocks before it (Gauss-Seidel in the order of the blocks): the mesh steps
+    from the Driveline's outputs at the point, the Driveline from the mesh's at the step's end,
+    and at its first step settles behind them (``init.settle_first_step``, fmi2Warning)."""
+    from pathsim import Connection, Simulation
+    from pathsim.blocks import Scope
+    from pathsim_fmi import CoSimulationFMU
+
+    parameters = parameters or {}
+    blocks = {}
+    for unit, path in ((MESH, mesh_fmu), (DRIVELINE, driveline_fmu)):
+        own = {k.partition(".")[2]: v for k, v in parameters.items()
+               if k.partition(".")[0] == unit}
+        blocks[unit] = CoSimulationFMU(str(path), instance_name=unit, start_values=own or None,
+                                       dt=step)
+    scope = Scope(labels=COUPLING)
+    links = [Connection(blocks[src][out], blocks[dst][inp]) for src, out, dst, inp in CONNECTIONS]
+    links += [Connection(blocks[src][out], scope[k])
+              for k, (src, out, _, _) in enumerate(CONNECTIONS)]
+    return Simulation([*blocks.values(), scope], links, dt=step, log=False), scope
 
 
-def _rewrite_zip(source: Path, target: Path, convert: dict) -> None:
-    """Copy the zip ``source`` to ``target``, member ``name`` through ``convert[name]`` (a
-    function of its bytes)."""
-    target.parent.mkdir(parents=True, exist_ok=True)
-    part = target.with_name(f".{target.name}.part")
-    with zipfile.ZipFile(source) as src, zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as dst:
-        for info in src.infolist():
-            data = src.read(info)
-            if info.filename in convert:
-                data = convert[info.filename](data)
-            dst.writestr(info, data)
-    part.replace(target)
-
-
-def integer_codes(source: Path, target: Path) -> Path:
-    """A copy of an FMU or SSP (``source``) whose integer codes are declared ``Integer``
-    instead of ``Enumeration``, for libcosim and ecos, which ignore FMI 2.0 Enumeration
-    variables (libcosim: "FMI 2.0 Enumeration variable type not supported, variable ... will be
-    ignored"; ecos: "No variable named ... of type int"): there the parameters
-    ``contact.hertz_law``, ``contact.dissipation``, ``friction.form`` ... can be set (from the
-    SSD's bindings too) only in such a copy.  Only the modelDescription changes: the binaries,
-    the GUID and the value references are the FMU's, so the numbers are the same."""
-    source, target = Path(source), Path(target)
-    if source.suffix == ".fmu":
-        _rewrite_zip(source, target, {"modelDescription.xml": _integer_coded_model_description})
-        return target
-
-    def fmu(data: bytes) -> bytes:
-        buffer = io.BytesIO()
-        with zipfile.ZipFile(io.BytesIO(data)) as src, \
-                zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as dst:
-            for info in src.infolist():
-                member = src.read(info)
-                if info.filename == "modelDescription.xml":
-                    member = _integer_coded_model_description(member)
-                dst.writestr(info, member)
-        return buffer.getvalue()
-
-    with zipfile.ZipFile(source) as z:
-        fmus = [n for n in z.namelist() if n.endswith(".fmu")]
-    _rewrite_zip(source, target, dict.fromkeys(fmus, fmu))
-    return target
+def run_pathsim(mesh_fmu: Path, driveline_fmu: Path, stop_time: float, step: float,
+                parameters: dict | None = None, copy_to: Path | None = None) -> Result:
+    """``pathsim_system`` run to ``stop_time``; ``copy_to``: the ``variants.real_outputs``
+    copies of the FMUs written into this folder and run (None: the FMUs as given).  pathsim's
+    ``Scope`` records at its time ``t`` the outputs of the step taken at ``t``: the result
+    holds, per communication point ``t_k = k step`` from 0, the coupling signals at the end of
+    that step, under pathsim's own clock (``t`` accumulated)."""
+    if copy_to is not None:
+        mesh_fmu, driveline_fmu = (variants.real_outputs(path, Path(copy_to) / Path(path).name)
+                                   for path in (mesh_fmu, driveline_fmu))
+    simulation, scope = pathsim_system(mesh_fmu, driveline_fmu, step, parameters)
+    simulation.run(stop_time)
+    time, data = scope.read()
+    return _result(time, dict(zip(COUPLING, data, strict=True)))
 
 
 # ---------------------------------------------------------------- fmpy alone
@@ -521,18 +512,36 @@ def run_alone(fmu: Path, stop_time: float | None = None) -> tuple[Result, float]
             float(rows["time"][1] - rows["time"][0]))
 
 
+#: The copies of ``python -m drive_rattle_cosim.masters COMMAND SOURCE TARGET``.
+COPIES = {
+    "integer-codes": (variants.integer_codes,
+                      "a copy of an FMU or SSP whose integer codes (FMI enumerations) are "
+                      "declared integers: for libcosim and ecos, which ignore FMI 2.0 "
+                      "enumerations (the SSPs of the build are such copies already)"),
+    "real-outputs": (variants.real_outputs,
+                     "a copy of an FMU whose outputs are all floats (the integer counters "
+                     "local variables) and whose integer codes are integers: for masters "
+                     "that read every output as a float (pathsim-fmi)"),
+}
+
+
 def main(argv=None) -> int:
     import argparse
 
     ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.masters",
-                                 description="Workarounds of the masters' own defects.")
+                                 description="Copies of the FMUs for masters with defects of "
+                                             "their own (docs/tools.md).")
     sub = ap.add_subparsers(dest="command", required=True)
-    codes = sub.add_parser("integer-codes", help="a copy of an FMU or SSP with its "
-                           "enumerations declared as Integers (for libcosim and ecos)")
-    codes.add_argument("source", type=Path, help="an .fmu or .ssp")
-    codes.add_argument("target", type=Path)
+    for command, (_, text) in COPIES.items():
+        copy = sub.add_parser(command, help=text, description=text)
+        copy.add_argument("source", type=Path, help="an .fmu or .ssp file")
+        copy.add_argument("target", type=Path, help="the copy to write")
     args = ap.parse_args(argv)
-    print(f"wrote {integer_codes(args.source, args.target)}")
+    try:
+        target = COPIES[args.command][0](args.source, args.target)
+    except ValueError as err:
+        ap.exit(2, f"{ap.prog} {args.command}: {err}\n")
+    print(f"wrote {target}")
     return 0
 
 

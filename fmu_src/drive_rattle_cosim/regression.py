@@ -23,8 +23,8 @@ the check failing) and far above rounding differences between platforms over 500
 
 from __future__ import annotations
 
-import argparse
 import csv
+import io
 import math
 import sys
 import tempfile
@@ -37,8 +37,10 @@ from fmpy import read_model_description, simulate_fmu
 
 from drive_rattle.interface import CONNECTIONS, MODELS
 
-ROOT = Path(__file__).resolve().parents[2]
-REFERENCE_ROOT = ROOT / "regression"
+from .paths import DIST, REFERENCES
+
+#: The committed references, a folder per model (``paths.REFERENCES``).
+REFERENCE_ROOT = REFERENCES
 #: Horizon of the references: 500 communication steps of the paper scenario.
 START, STOP, STEP = 0.0, 0.05, 1e-4
 REL_TOL = 1e-6
@@ -63,13 +65,46 @@ class ColumnCheck:
         return self.max_error <= self.tolerance
 
 
-def read_opt(path: Path) -> dict[str, float]:
-    """Read a cross-check ``.opt`` file (``Key,value`` per line)."""
+class ReferenceFileError(ValueError):
+    """A reference file that cannot be trusted: the message names the file (and the row and
+    column where one is wrong), the value and what is allowed."""
+
+
+#: The keys of a ``.opt`` file, each a finite number.
+OPT_KEYS = ("StartTime", "StopTime", "StepSize", "RelTol", "AbsTol")
+
+
+def _text(path: Path, label: str) -> str:
+    """The UTF-8 text of a reference file."""
+    data = Path(path).read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ReferenceFileError(
+            f"reference {label} is not UTF-8 text (byte {data[err.start]:#04x} at offset "
+            f"{err.start}); allowed: a CSV file of numbers under a header row") from None
+
+
+def read_opt(path: Path, label: str | None = None) -> dict[str, float]:
+    """Read a cross-check ``.opt`` file (``Key,value`` per line, every key of ``OPT_KEYS``
+    with a finite number); ReferenceFileError naming the file and line otherwise."""
+    label = label or str(path)
     out = {}
-    for line in Path(path).read_text(encoding="utf-8").splitlines():
+    for k, line in enumerate(_text(path, label).splitlines(), start=1):
         if line.strip():
             key, _, value = line.partition(",")
-            out[key.strip()] = float(value)
+            try:
+                number = float(value)
+            except ValueError:
+                number = math.nan
+            if not math.isfinite(number):
+                raise ReferenceFileError(f"reference {label} line {k}: {line!r} is not "
+                                         "Key,number; allowed: a finite number per key")
+            out[key.strip()] = number
+    missing = [key for key in OPT_KEYS if key not in out]
+    if missing:
+        raise ReferenceFileError(f"reference {label} lacks {', '.join(missing)}; allowed: a "
+                                 f"line Key,number for each of {', '.join(OPT_KEYS)}")
     return out
 
 
@@ -78,12 +113,64 @@ def write_opt(path: Path) -> None:
                     f"RelTol,{REL_TOL!r}\nAbsTol,{ABS_TOL!r}\n", encoding="utf-8")
 
 
-def _read_csv(path: Path) -> np.ndarray:
-    with Path(path).open(encoding="utf-8") as f:
-        rows = list(csv.reader(f))
-    names = [n.strip('"') for n in rows[0]]
-    data = np.array([[float(x) for x in r] for r in rows[1:]], dtype=float)
-    return np.rec.fromarrays(data.T, names=names)
+def _read_csv(path: Path, label: str | None = None, columns=None) -> np.recarray:
+    """A reference CSV: ``time`` and further columns of distinct names (each one of
+    ``columns`` when given: the FMU's inputs or outputs), every cell a finite number.
+    ReferenceFileError naming the file, and the row (its line) and column where one is
+    wrong, for an empty file, a file that is not UTF-8 text, a header that does not match, a
+    row of another length (a file cut short) and a cell that is not a finite number (a NaN
+    would pass every comparison unnoticed)."""
+    label = label or str(path)
+    reader = csv.reader(io.StringIO(_text(path, label)))
+    names, data = None, []
+    try:
+        for row in reader:
+            if not row:
+                continue
+            if names is None:
+                names = [n.strip().strip('"') for n in row]
+                _check_header(names, label, columns)
+                continue
+            if len(row) != len(names):
+                raise ReferenceFileError(
+                    f"reference {label} row {reader.line_num} has {len(row)} fields, the "
+                    f"header {len(names)}; allowed: one number per column (a shorter last "
+                    "row is a file cut short)")
+            data.append([_cell(cell, label, reader.line_num, name)
+                         for cell, name in zip(row, names, strict=True)])
+    except csv.Error as err:  # a NUL byte, an open quote: not a CSV file
+        raise ReferenceFileError(f"reference {label} line {reader.line_num} is not CSV "
+                                 f"({err}); allowed: a CSV file of numbers under a header "
+                                 "row") from None
+    if names is None:
+        raise ReferenceFileError(f"reference {label} is empty; allowed: a header row and "
+                                 "rows of numbers")
+    if not data:
+        raise ReferenceFileError(f"reference {label} has a header and no rows; allowed: a "
+                                 "row of numbers per communication point")
+    return np.rec.fromarrays(np.array(data, dtype=float).T, names=names)
+
+
+def _check_header(names: list[str], label: str, columns) -> None:
+    wrong = [n for n in names[1:] if columns is not None and n not in columns]
+    if names[0] != "time" or len(set(names)) != len(names) or wrong:
+        what = (f"{wrong[0]!r} is not one of the FMU's variables of that kind" if wrong else
+                f"the first column is {names[0]!r}" if names[0] != "time" else
+                "a column name repeats")
+        raise ReferenceFileError(f"reference {label} has the header {','.join(names)[:200]!r}, "
+                                 f"whose {what}; allowed: time, then distinct names of the "
+                                 "FMU's variables")
+
+
+def _cell(text: str, label: str, line: int, name: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value):
+        raise ReferenceFileError(f"reference {label} row {line}, column {name!r}: {text!r} is "
+                                 "not a finite number; allowed: finite numbers")
+    return value
 
 
 def _write_csv(path: Path, names: list[str], columns: list) -> None:
@@ -182,15 +269,25 @@ def check(fmu: Path, reference_dir: Path | None = None,
 
     ``start_values`` override parameters, to demonstrate what the check catches."""
     fmu = Path(fmu)
-    model = read_model_description(str(fmu)).coSimulation.modelIdentifier
+    md = read_model_description(str(fmu))
+    model = md.coSimulation.modelIdentifier
+    causality = {v.name: v.causality for v in md.modelVariables}
     with tempfile.TemporaryDirectory() as tmp:
         if reference_dir is None:
             base = _references_in_fmu(fmu, Path(tmp))
         else:
             base = Path(reference_dir) / model / model
-        inputs = _read_csv(Path(f"{base}_in.csv"))
-        ref = _read_csv(Path(f"{base}_ref.csv"))
-        opt = read_opt(Path(f"{base}_ref.opt"))
+
+        def label(suffix: str) -> str:
+            name = f"{model}{suffix}"
+            return (f"{fmu} (resources/regression/{name})" if reference_dir is None
+                    else f"{base}{suffix}")
+
+        inputs = _read_csv(Path(f"{base}_in.csv"), label("_in.csv"),
+                           [n for n, c in causality.items() if c == "input"])
+        ref = _read_csv(Path(f"{base}_ref.csv"), label("_ref.csv"),
+                        [n for n, c in causality.items() if c == "output"])
+        opt = read_opt(Path(f"{base}_ref.opt"), label("_ref.opt"))
     result = simulate_on_inputs(fmu, inputs, opt, start_values)
     if len(result) != len(ref) or not np.array_equal(result["time"], ref["time"]):
         raise ValueError(f"{model}: the run has {len(result)} points, the reference "
@@ -241,15 +338,20 @@ def reference_files(model: str, root: Path = REFERENCE_ROOT) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.regression",
-                                 description="Regression kit for the drive-rattle FMUs.")
+    from .cli import Parser
+
+    ap = Parser(prog="python -m drive_rattle_cosim.regression",
+                description="Regression kit for the drive-rattle FMUs.",
+                epilog="Exit status of check: 0 every FMU passed, 1 an FMU failed its "
+                       "references, 2 a request refused before the check (a reference file "
+                       "that is missing or cannot be trusted: one line naming it).")
     sub = ap.add_subparsers(dest="command", required=True)
     c = sub.add_parser("check", help="check built FMUs against their references")
     c.add_argument("fmus", nargs="+", type=Path)
     c.add_argument("--reference-dir", type=Path, default=None,
                    help="folder with <Model>/<Model>_{in,ref}.csv, _ref.opt (default: in the FMU)")
     g = sub.add_parser("generate", help="rewrite the committed references from built FMUs")
-    g.add_argument("--fmu-dir", type=Path, default=ROOT / "dist")
+    g.add_argument("--fmu-dir", type=Path, default=DIST)
     g.add_argument("--out", type=Path, default=REFERENCE_ROOT)
     args = ap.parse_args(argv)
     if args.command == "generate":
@@ -258,7 +360,10 @@ def main(argv=None) -> int:
         return 0
     failed = False
     for fmu in args.fmus:
-        checks = check(fmu, args.reference_dir)
+        try:
+            checks = check(fmu, args.reference_dir)
+        except (ReferenceFileError, FileNotFoundError) as err:
+            ap.error(str(err))
         bad = [c for c in checks if not c.passed]
         failed |= bool(bad)
         print(f"{fmu}: {'FAIL' if bad else 'pass'} ({len(checks)} outputs)")

@@ -98,6 +98,10 @@ def welch_dof(window: np.ndarray, step: int, segments: int) -> float:
     return 2.0 * segments / (1.0 + 2.0 * total)
 
 
+#: Fewest samples of a signal whose Welch spectrum is taken (one segment of 16).
+MIN_SAMPLES = 16
+
+
 def welch_spectrum(time, values, segment_seconds: float = 0.25) -> Spectrum:
     """Welch PSD of a uniformly sampled signal: Hann window, 50 % overlap, the mean removed
     per segment, with its equivalent degrees of freedom and the periodogram of each
@@ -114,13 +118,13 @@ def welch_spectra(time, rows, segment_seconds: float = 0.25) -> list[Spectrum]:
     points), computed in one batch."""
     t = np.asarray(time, dtype=float)
     x = np.asarray(rows, dtype=float)
-    if x.ndim != 2 or t.ndim != 1 or t.shape[0] != x.shape[1] or len(t) < 16:
+    if x.ndim != 2 or t.ndim != 1 or t.shape[0] != x.shape[1] or len(t) < MIN_SAMPLES:
         raise ValueError(f"welch_spectrum: time and values must be 1-D of equal length >= 16; "
                          f"got shapes {t.shape} and {x.shape[1:]}")
     if not segment_seconds > 0:
         raise ValueError(f"welch_spectrum: segment_seconds = {segment_seconds!r}; allowed: > 0")
     fs = 1.0 / float(np.median(np.diff(t)))
-    nper = min(t.size, max(16, round(segment_seconds * fs)))
+    nper = min(t.size, max(MIN_SAMPLES, round(segment_seconds * fs)))
     step = nper - nper // 2
     segments = 1 + (t.size - nper) // step
     window = signal.get_window(WINDOW, nper)

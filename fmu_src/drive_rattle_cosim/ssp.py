@@ -4,9 +4,13 @@
 ``.ssp`` with both FMUs, the connections of ``interface.CONNECTIONS``, every input and output of
 each unit as a connector, one parameter set per component (``PARAMETER_SET``: the parameter
 bindings and the inputs' start values together) and the OSP fixed-step annotation libcosim
-needs.  The input starts are what each unit's partner outputs at the start time
-(``consistent_input_starts``), so that masters which exchange no values during initialization
-still start the pair consistent.  With ``system_outputs=True`` the system also declares every
+needs.  The FMI 2.0 FMUs it bundles declare the integer codes as Integers
+(``variants.integer_codes``: libcosim and ecos ignore FMI 2.0 Enumeration variables, so they
+would neither apply a code's binding nor load the SSD without a warning per code), and the
+binding of each code names its codes (``description="codes: 0 = none, 1 = ..."``).  The input
+starts are what each unit's partner outputs at the start time (``consistent_input_starts``),
+so that masters which exchange no values during initialization still start the pair
+consistent.  With ``system_outputs=True`` the system also declares every
 output of both units as a system connector of kind output, connected to the unit's output, so
 that a container built from the SSP exposes them (libcosim and ecos refuse such an SSD: see
 ``write_ssp``).  ``run_libcosim`` loads it with libcosimpy (a native C++ master: Jacobi
@@ -28,7 +32,6 @@ modelDescriptions first.
 
 from __future__ import annotations
 
-import shutil
 import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -37,6 +40,7 @@ from fmpy import read_model_description
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
 
+from . import variants
 from .harness import Result
 from .system import communication_points
 
@@ -112,6 +116,16 @@ def consistent_input_starts(parameters: dict | None = None, start_time: float = 
             **{f"{DRIVELINE}.{k}": v for k, v in driveline_inputs.items()}}
 
 
+def enumeration_codes(fmus: dict[str, Path]) -> dict[str, str]:
+    """``{"<Unit>.<name>": "0 = none, 1 = ..."}``: the codes and item names of every
+    Enumeration variable of the FMUs (``variants.code_list``)."""
+    return {f"{unit}.{v.name}": variants.code_list((int(i.value), i.name)
+                                                   for i in v.declaredType.items)
+            for unit, path in fmus.items()
+            for v in read_model_description(str(path)).modelVariables
+            if v.type == "Enumeration"}
+
+
 def unit_connectors(fmus: dict[str, Path]) -> dict[str, list[tuple[str, str, str]]]:
     """``{unit: [(name, kind, type), ...]}``: every input and output of each unit's FMU, in
     the modelDescription's order (type ``Real``, ``Integer``, ``Boolean`` or ``String``)."""
@@ -140,13 +154,16 @@ def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
                      start_time: float = 0.0, stop_time: float = 2.0,
                      input_starts: dict | None = None,
                      connectors: dict[str, list[tuple[str, str, str]]] | None = None,
-                     system_outputs: bool = False) -> str:
+                     system_outputs: bool = False, codes: dict[str, str] | None = None) -> str:
     """The SSD text; ``fmu_names`` maps unit to its file name under resources/.  Each
     component gets one parameter set named ``PARAMETER_SET`` holding its parameter bindings
     and then its input starts.  ``connectors`` (``unit_connectors``; default: the coupling
     signals only) are declared on the components; ``system_outputs`` also declares every
-    output among them as a system connector, connected to the unit's output."""
+    output among them as a system connector, connected to the unit's output.  ``codes``
+    (``enumeration_codes``) become the description of the bindings of those parameters, where
+    an engineer editing the SSD reads them."""
     input_starts = input_starts or {}
+    codes = codes or {}
     if connectors is None:
         connectors = {unit: [] for unit in fmu_names}
         for src, out, dst, inp in CONNECTIONS:
@@ -186,8 +203,10 @@ def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
                       "<ssv:Parameters>"]
             for name, value in bound.items():
                 kind = _SSV_TYPE[type(value)]
-                lines.append(f"            <ssv:Parameter name={quoteattr(name)}><ssv:{kind} "
-                             f"value={quoteattr(_value(value))}/></ssv:Parameter>")
+                described = codes.get(f"{unit}.{name}")
+                described = f" description={quoteattr(f'codes: {described}')}" if described else ""
+                lines.append(f"            <ssv:Parameter name={quoteattr(name)}{described}>"
+                             f"<ssv:{kind} value={quoteattr(_value(value))}/></ssv:Parameter>")
             lines += ["          </ssv:Parameters></ssv:ParameterSet>",
                       "          </ssd:ParameterValues></ssd:ParameterBinding>",
                       "        </ssd:ParameterBindings>"]
@@ -211,27 +230,38 @@ def system_structure(fmu_names: dict[str, str], parameters: dict, step: float,
     return "\n".join(lines)
 
 
-def _write(target: Path, ssd: str, fmus: list[Path]) -> Path:
-    """The SSD and the FMUs under resources/ as a directory, or zipped if ``target`` ends in
-    ``.ssp``."""
+def _write(target: Path, ssd: str, fmus: dict[str, bytes]) -> Path:
+    """The SSD and the FMUs (``{file name: bytes}``) under resources/ as a directory, or zipped
+    if ``target`` ends in ``.ssp``."""
     target = Path(target)
     if target.suffix == ".ssp":
         target.parent.mkdir(parents=True, exist_ok=True)
         with zipfile.ZipFile(target, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr(SSD_NAME, ssd)
-            for p in fmus:
-                z.write(p, f"resources/{p.name}")
+            for name, data in fmus.items():
+                z.writestr(f"resources/{name}", data)
         return target
     (target / "resources").mkdir(parents=True, exist_ok=True)
     (target / SSD_NAME).write_text(ssd, encoding="utf-8")
-    for p in fmus:
-        shutil.copy2(p, target / "resources" / p.name)
+    for name, data in fmus.items():
+        (target / "resources" / name).write_bytes(data)
     return target
+
+
+def bundled_fmu(fmu: Path, integer_codes: bool = True) -> bytes:
+    """The bytes of ``fmu`` as an SSP bundles it: with ``integer_codes``, an FMI 2.0 FMU's
+    integer codes declared Integers (``variants.integer_codes``; libcosim and ecos ignore FMI
+    2.0 Enumeration variables), any other FMU as it is."""
+    data = Path(fmu).read_bytes()
+    if integer_codes and read_model_description(str(fmu)).fmiVersion == "2.0":
+        return variants.fmu_copy(data, variants.integer_coded_model_description)
+    return data
 
 
 def write_ssp(target: Path, mesh_fmu: Path, driveline_fmu: Path, parameters: dict | None = None,
               step: float = 1e-4, start_time: float = 0.0, stop_time: float = 2.0,
-              input_starts: dict | str | None = None, system_outputs: bool = False) -> Path:
+              input_starts: dict | str | None = None, system_outputs: bool = False,
+              integer_codes: bool = True) -> Path:
     """Write the system as a directory, or as a zipped SSP when ``target`` ends in ``.ssp``.
 
     ``parameters`` and ``input_starts`` map ``"<Unit>.<name>"`` to values bound in the SSD
@@ -243,7 +273,9 @@ def write_ssp(target: Path, mesh_fmu: Path, driveline_fmu: Path, parameters: dic
     and fmpy's SSP runner records; libcosim (0.0.6: ``No such node
     (<xmlattr>.endElement)``) and ecos (0.7.2: ``No element named: GearMeshRattle``) refuse an
     SSD with a connection to a system connector, so the build writes that system to a file
-    of its own."""
+    of its own.  The SSP bundles the FMUs as ``bundled_fmu`` gives them: by default the
+    FMI 2.0 ones with their integer codes declared Integers (``integer_codes=False``: as they
+    are), and each code's binding says its codes (``enumeration_codes``)."""
     parameters = parameters or {}
     if input_starts == "consistent":
         input_starts = consistent_input_starts(parameters, start_time)
@@ -254,8 +286,9 @@ def write_ssp(target: Path, mesh_fmu: Path, driveline_fmu: Path, parameters: dic
     check_bindings(fmus, parameters)
     check_bindings(fmus, input_starts, causality="input")
     ssd = system_structure({u: p.name for u, p in fmus.items()}, parameters, step, start_time,
-                           stop_time, input_starts, unit_connectors(fmus), system_outputs)
-    return _write(target, ssd, list(fmus.values()))
+                           stop_time, input_starts, unit_connectors(fmus), system_outputs,
+                           enumeration_codes(fmus))
+    return _write(target, ssd, {p.name: bundled_fmu(p, integer_codes) for p in fmus.values()})
 
 
 def _read_member(ssp: Path, name: str) -> bytes:

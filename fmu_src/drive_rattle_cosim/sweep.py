@@ -4,7 +4,11 @@ A design (full grid or Latin hypercube) over any FMU parameters becomes a list o
 case is a full co-simulation run in a dask worker process.  Results are appended to a CSV file
 case by case, as they finish, so that an interrupted sweep resumes without redoing finished
 cases; a failed case is recorded with its error and the sweep goes on.  One client writes a
-result file at a time (a lock file beside it refuses a second).
+result file at a time (``ResultWriter``: the lock of ``<out>.lock`` held for the writer's life,
+released by the system when a client dies); a last row cut short is dropped on resuming and its
+case run again.  A request is checked before any work (``check_request``, the designs), at most
+``MAX_CASES`` cases.  Exit statuses of the command line: ``EXIT_OK``, ``EXIT_STOPPED``,
+``EXIT_BAD_REQUEST``, ``EXIT_CASES_FAILED`` (docs/cosim.md).
 
 Two engines, named in every result row (``engine``):
 
@@ -41,6 +45,7 @@ import argparse
 import contextlib
 import csv
 import hashlib
+import io
 import itertools
 import json
 import math
@@ -54,7 +59,8 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .paths import DIST
+
 #: Frequency bands [Hz] of the normal-force spectrum reported per case.
 BANDS = ((20.0, 100.0), (100.0, 500.0), (500.0, 1500.0), (1500.0, 5000.0))
 #: Outputs a case records (the rattle metrics need no more).
@@ -98,37 +104,122 @@ class Case:
         return Case(hashlib.sha1(blob).hexdigest()[:12], dict(parameters))
 
 
-def _ranges(params: dict[str, tuple[float, float]]):
+#: Most cases a design may hold, checked before it is built: 1e5 cases of 0.3 s are about a
+#: day of one core on the library engine, and a design far beyond (3 parameters x 2000 values
+#: are 8e9 cases) would only exhaust the client's memory; a larger study is several sweeps,
+#: each with its own result file.
+MAX_CASES = 100_000
+
+
+def _sweepable(name: str):
+    """The spec of a swept parameter: a Real or Integer (an enumeration by its codes)."""
+    from drive_rattle.catalog import parameter_spec
+
+    spec = parameter_spec(name)
+    if spec.fmi_type not in ("Real", "Integer"):
+        raise ValueError(f"sweep parameter {name} is a {spec.fmi_type}; allowed: Real and "
+                         "Integer parameters (an enumeration by its codes)")
+    return spec
+
+
+def _ranges(params: dict[str, tuple[float, float]]) -> dict[str, tuple[float, float]]:
+    """The ranges of a design, checked: known Real or Integer parameters, finite ends with
+    lo <= hi (lo == hi holds the parameter at that value), each end accepted by the model
+    library (the other parameters at their defaults)."""
+    from drive_rattle.catalog import check_settings
+
+    if not params:
+        raise ValueError("a design of no parameters; allowed: one range or more")
+    out = {}
     for name, (lo, hi) in params.items():
+        _sweepable(name)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
             raise ValueError(f"sweep parameter {name}: range {lo!r}..{hi!r} is invalid; "
                              "allowed: finite numbers with lo <= hi")
-    return params
+        for end in dict.fromkeys((lo, hi)):
+            try:
+                check_settings({name: end})
+            except ValueError as err:
+                raise ValueError(f"sweep parameter {name}: {err}") from None
+        out[name] = (float(lo), float(hi))
+    return out
+
+
+def _check_size(cases: int, what: str) -> None:
+    if cases > MAX_CASES:
+        raise ValueError(f"{what} holds {cases} cases; allowed: at most {MAX_CASES} "
+                         "(a larger study is several sweeps, each with its own --out)")
+
+
+def _distinct(cases: list[Case]) -> list[Case]:
+    """``cases``, refused when two are the same point: a case runs once, under its id."""
+    seen: dict[str, Case] = {}
+    for case in cases:
+        if case.case_id in seen:
+            raise ValueError(f"the cases repeat case {case.case_id} ({case.parameters}); "
+                             "allowed: distinct points (a range wider than the rounding of "
+                             "its values)")
+        seen[case.case_id] = case
+    return cases
+
+
+def _count(value, what: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{what} = {value!r}; allowed: a whole number >= {minimum}")
+    return int(value)
 
 
 def grid_design(params: dict[str, tuple[float, float]], points: int | dict[str, int]) -> list[Case]:
-    """Full factorial grid: ``points`` values per parameter (evenly spaced, ends included)."""
+    """Full factorial grid: ``points`` values per parameter (evenly spaced, ends included; at
+    least 2), one value for a parameter held at lo == hi.  An Integer parameter's values must
+    be whole numbers.  At most ``MAX_CASES`` cases, checked before the grid is built."""
     params = _ranges(params)
-    counts = {n: (points[n] if isinstance(points, dict) else points) for n in params}
+    counts = {}
+    for name, (lo, hi) in params.items():
+        if lo == hi:
+            counts[name] = 1
+            continue
+        n = _count(points[name] if isinstance(points, dict) else points,
+                   f"grid (values of {name})", 2)
+        if _sweepable(name).fmi_type == "Integer" and (hi - lo) % (n - 1):
+            raise ValueError(f"grid of {n} values of the Integer parameter {name} from {lo:g} "
+                             f"to {hi:g} falls between whole numbers; allowed: n - 1 dividing "
+                             f"{hi - lo:g} (e.g. n = {int(hi - lo) + 1})")
+        counts[name] = n
+    _check_size(math.prod(counts.values()),
+                "a grid of " + " x ".join(str(n) for n in counts.values()) + " values")
     axes = [np.linspace(lo, hi, counts[n]) if counts[n] > 1 else np.array([lo])
             for n, (lo, hi) in params.items()]
     names = list(params)
-    return [Case.of({n: float(v) for n, v in zip(names, values, strict=True)})
-            for values in itertools.product(*axes)]
+    return _distinct([Case.of({n: float(v) for n, v in zip(names, values, strict=True)})
+                      for values in itertools.product(*axes)])
 
 
 def latin_hypercube_design(params: dict[str, tuple[float, float]], samples: int,
                            seed: int = 0) -> list[Case]:
-    """Latin hypercube of ``samples`` cases (scipy.stats.qmc, reproducible by ``seed``)."""
+    """Latin hypercube of ``samples`` cases (scipy.stats.qmc, reproducible by ``seed``) over
+    Real parameters (an Integer one only held at lo == hi); at most ``MAX_CASES``."""
     from scipy.stats import qmc
 
     params = _ranges(params)
+    samples = _count(samples, "Latin hypercube samples", 1)
+    _check_size(samples, f"a Latin hypercube of {samples} samples")
+    ranged = [n for n, (lo, hi) in params.items() if lo < hi]
+    if samples > 1 and not ranged:
+        raise ValueError(f"a Latin hypercube of {samples} samples with every parameter held "
+                         "fixed repeats one case; allowed: one range lo < hi or more")
+    integers = [n for n in ranged if _sweepable(n).fmi_type == "Integer"]
+    if integers:
+        raise ValueError(f"a Latin hypercube draws real values, and {integers[0]} is an "
+                         "Integer parameter; allowed: Real parameters (sweep an Integer one "
+                         "by a grid)")
     unit = qmc.LatinHypercube(d=len(params), seed=seed).random(samples)
     lo = np.array([r[0] for r in params.values()])
     hi = np.array([r[1] for r in params.values()])
     scaled = qmc.scale(unit, lo, hi) if np.all(hi > lo) else lo + unit * (hi - lo)
     names = list(params)
-    return [Case.of({n: float(v) for n, v in zip(names, row, strict=True)}) for row in scaled]
+    return _distinct([Case.of({n: float(v) for n, v in zip(names, row, strict=True)})
+                      for row in scaled])
 
 
 def rattle_metrics(time_s, signals: dict, normal_mass: float, transient: float = 0.0,
@@ -288,86 +379,227 @@ def run_case(case: Case, fmus: FmuBundle | str | Path | None, stop_time: float, 
     return row
 
 
+def _row_bytes(fields: list) -> bytes:
+    """One CSV row as the result file holds it (csv's excel dialect, ``\\r\\n`` ended)."""
+    text = io.StringIO()
+    csv.writer(text).writerow(fields)
+    return text.getvalue().encode("utf-8")
+
+
+def _whole_rows(data: bytes) -> tuple[list[str], list[list[str]], int]:
+    """``(header, rows, end)`` of a result file's bytes: the rows up to the last whole one and
+    the byte offset where it ends.  A last line without its newline (a write cut short: a
+    killed client, a full disk), or with another field count than the header's, is not a
+    whole row: ``end`` leaves it out, so that a resumed sweep runs its case again."""
+    header: list[str] = []
+    rows: list[list[str]] = []
+    end = start = 0
+    while (stop := data.find(b"\n", start)) >= 0:
+        [fields] = list(csv.reader([data[start:stop + 1].decode("utf-8", "replace")])) or [[]]
+        start = stop + 1
+        if not header:
+            header, end = fields, start
+        elif fields:
+            rows.append(fields)
+            end = start
+    if rows and len(rows[-1]) != len(header):
+        rows.pop()
+        end = data.rfind(b"\n", 0, end - 1) + 1
+    return header, rows, end
+
+
+def _finished_errors(path: Path) -> dict[str, str]:
+    """``{case id: error}`` of the whole rows of a result file (empty error: the case ran)."""
+    if not path.exists():
+        return {}
+    header, rows, _ = _whole_rows(path.read_bytes())
+    if "case_id" not in header or "error" not in header:
+        return {}
+    k, e = header.index("case_id"), header.index("error")
+    return {r[k]: r[e] for r in rows if len(r) == len(header)}
+
+
 def finished_case_ids(path: Path, retry_failed: bool = False) -> set[str]:
     """Ids of the cases already in the result file (failed ones too, unless retried)."""
-    if not path.exists():
-        return set()
-    with path.open(newline="", encoding="utf-8") as f:
-        return {r["case_id"] for r in csv.DictReader(f)
-                if not (retry_failed and r.get("error"))}
+    return {c for c, error in _finished_errors(Path(path)).items()
+            if not (retry_failed and error)}
 
 
-class ResultWriter:
-    """Appends one CSV row per finished case, flushed at once (resume-safe).  A lock file
-    beside the result (``<out>.lock``, holding the writer's process id) refuses a second
-    client writing the same file: their rows would repeat cases."""
-
-    def __init__(self, path: Path, parameter_names: list[str]):
-        self.path = Path(path)
-        self.columns = ["case_id", *parameter_names, *METRICS, "error"]
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.lock = self.path.with_name(self.path.name + ".lock")
-        self._take_lock()
-        try:
-            self._open()
-        except BaseException:
-            self.lock.unlink(missing_ok=True)
-            raise
-
-    def _take_lock(self) -> None:
-        for _ in range(2):
-            try:
-                fd = os.open(self.lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-            except FileExistsError:
-                owner = self.lock.read_text(encoding="utf-8").strip() if self.lock.exists() else ""
-                if owner.isdigit() and not _alive(int(owner)):
-                    self.lock.unlink(missing_ok=True)  # left by a client that died
-                    continue
-                raise ValueError(
-                    f"{self.path} is being written by another sweep (process {owner or '?'}, "
-                    f"lock {self.lock}); wait for it, or use another --out") from None
-            with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(f"{os.getpid()}\n")
-            return
-
-    def _open(self) -> None:
-        if self.path.exists() and self.path.stat().st_size > 0:
-            with self.path.open(newline="", encoding="utf-8") as f:
-                header = next(csv.reader(f))
-            if header != self.columns:
-                raise ValueError(f"{self.path} holds another sweep (columns {header}); "
-                                 "use another --out")
-            self._file = self.path.open("a", newline="", encoding="utf-8")
-            self._csv = csv.DictWriter(self._file, fieldnames=self.columns)
-        else:
-            self._file = self.path.open("w", newline="", encoding="utf-8")
-            self._csv = csv.DictWriter(self._file, fieldnames=self.columns)
-            self._csv.writeheader()
-            self._file.flush()
-
-    def write(self, row: dict) -> None:
-        self._csv.writerow({c: row.get(c, "") for c in self.columns})
-        self._file.flush()
-
-    def close(self) -> None:
-        self._file.close()
-        self.lock.unlink(missing_ok=True)
-
-
-def _alive(pid: int) -> bool:
-    """Whether a process of this machine with ``pid`` exists."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OSError):
-        return True
-    return True
+class ResultFileBusyError(RuntimeError):
+    """Another sweep holds the result file's lock."""
 
 
 class SweepInterruptedError(RuntimeError):
-    """The cluster lost what the cases needed (every worker died): the message says how to
-    resume."""
+    """The sweep stopped before its end, its finished rows kept: the cluster lost what the
+    cases needed (every worker died), or the result file could not be written (a full disk).
+    The message says how to resume."""
+
+
+class ResultWriteError(SweepInterruptedError):
+    """A row could not be written (``OSError``: a full disk); the file is cut back to its
+    whole rows."""
+
+
+#: Tries at the lock when its file is replaced between opening and locking it (a writer
+#: ending in between removes it).
+LOCK_TRIES = 50
+
+
+def _try_lock(fd: int) -> bool:
+    """Whether the exclusive lock of the open file ``fd`` was taken (never waits).  The lock
+    belongs to the open file, and the system releases it when the process ends however it
+    ends, so a client that died leaves no lock behind, only a lock file nobody holds."""
+    try:
+        import fcntl
+    except ImportError:  # Windows: a lock on the first byte, released with the handle
+        import msvcrt
+
+        try:
+            msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+        except OSError:
+            return False
+        return True
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    return True
+
+
+class ResultWriter:
+    """Appends one CSV row per finished case, each in one unbuffered write (resume-safe).
+
+    One client writes a result file at a time: the writer holds the exclusive lock
+    (``flock``) of ``<out>.lock`` beside it for its life, so a second client is refused and a
+    dead client's lock is free at once (the system drops it with the process; no process ids
+    to judge).  Opening an existing file drops a last row cut short (:func:`_whole_rows`); a
+    write that fails (a full disk) cuts the file back to its whole rows and raises
+    :class:`ResultWriteError` naming the file and ``resume_hint``."""
+
+    def __init__(self, path: Path, parameter_names: list[str],
+                 resume_hint: str = "run the same sweep again"):
+        self.path = Path(path)
+        self.columns = ["case_id", *parameter_names, *METRICS, "error"]
+        self.resume_hint = resume_hint
+        self.lock = self.path.with_name(self.path.name + ".lock")
+        self._file = self._lock_fd = None
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._lock_fd = self._take_lock()
+            self._open()
+        except OSError as err:  # a folder, a file of no permission: a bad --out
+            self.close()
+            where = f": {err.filename}" if err.filename else ""
+            raise ValueError(f"cannot write the result file {self.path} ({err.strerror or err}"
+                             f"{where}); allowed: a file in a folder this user can write"
+                             ) from None
+        except BaseException:
+            self.close()
+            raise
+
+    def _take_lock(self) -> int:
+        """An open descriptor of the lock file holding its lock.  Locking the file that is at
+        the lock's path when the lock is held is what counts: a file a finished writer
+        removed between our opening and our locking it is let go and the lock file opened
+        again (never a FileNotFoundError)."""
+        for _ in range(LOCK_TRIES):
+            fd = os.open(self.lock, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                if not _try_lock(fd):
+                    owner = os.read(fd, 32).decode("ascii", "replace").strip()
+                    raise ResultFileBusyError(
+                        f"{self.path} is being written by another sweep (process "
+                        f"{owner or '?'}, lock {self.lock}); wait for it to end, or use "
+                        "another --out")
+                if self._is_lock_file(fd):
+                    os.ftruncate(fd, 0)
+                    os.write(fd, f"{os.getpid()}\n".encode("ascii"))
+                    return fd
+            except BaseException:
+                os.close(fd)
+                raise
+            os.close(fd)
+        raise ResultFileBusyError(f"{self.lock} was replaced {LOCK_TRIES} times while this "
+                                  f"sweep took it; allowed: one sweep at a time on {self.path}")
+
+    def _is_lock_file(self, fd: int) -> bool:
+        """Whether ``fd`` is the file now at the lock's path."""
+        try:
+            return os.path.samestat(os.fstat(fd), os.stat(self.lock))
+        except FileNotFoundError:
+            return False
+
+    def _open(self) -> None:
+        header = _row_bytes(self.columns)
+        data = self.path.read_bytes() if self.path.exists() else b""
+        found, rows, end = _whole_rows(data)
+        if found != self.columns and not (not found and header.startswith(data)):
+            raise ValueError(f"{self.path} is not a result file of this sweep (its first "
+                             "line is not the header of these parameters' results); allowed: "
+                             "the result file of the same parameters, or another --out")
+        self._file = self.path.open("r+b" if data else "wb", buffering=0)
+        self._file.truncate(end)  # a row (or header) cut short is dropped: its case reruns
+        self._file.seek(end)
+        self._end, self.rows = end, len(rows)
+        if not found:
+            self._append(header)
+
+    def write(self, row: dict) -> None:
+        self._append(_row_bytes([row.get(c, "") for c in self.columns]))
+        self.rows += 1
+
+    def drop(self, case_ids: set[str]) -> None:
+        """Remove the rows of ``case_ids`` (failed cases about to run again, so that each case
+        keeps one row): the file rewritten beside itself and renamed into place, under the
+        lock, so that a crash leaves either the old file or the new one."""
+        if not case_ids:
+            return
+        header, rows, _ = _whole_rows(self.path.read_bytes())
+        k = header.index("case_id")
+        kept = [r for r in rows if r[k] not in case_ids]
+        part = self.path.with_name(f".{self.path.name}.{os.getpid()}.part")
+        try:
+            with part.open("wb") as f:
+                f.write(b"".join(_row_bytes(r) for r in [header, *kept]))
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(part, self.path)
+        except OSError as err:
+            part.unlink(missing_ok=True)
+            raise ResultWriteError(
+                f"cannot rewrite {self.path} without the failed rows to retry "
+                f"({err.strerror or err}); it is unchanged: make room, then "
+                f"{self.resume_hint}") from None
+        self._file.close()
+        self._file = None
+        self._open()
+
+    def _append(self, data: bytes) -> None:
+        view = memoryview(data)
+        try:
+            while view:
+                view = view[self._file.write(view):]
+        except OSError as err:
+            with contextlib.suppress(OSError):  # only whole rows stay (truncating needs no space)
+                self._file.truncate(self._end)
+            raise ResultWriteError(
+                f"cannot write {self.path} ({err.strerror or err}); its {self.rows} finished "
+                f"rows are kept: make room, then {self.resume_hint} to run the rest") from None
+        self._end += len(data)
+
+    def close(self) -> None:
+        """Close the file and let the lock go (its file removed while still held, so that no
+        client locks a file that is no longer the lock)."""
+        try:
+            if self._file is not None:
+                self._file.close()
+        finally:
+            self._file = None
+            fd, self._lock_fd = self._lock_fd, None
+            if fd is not None:
+                if os.name == "posix" and self._is_lock_file(fd):
+                    self.lock.unlink()
+                os.close(fd)
 
 
 def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
@@ -375,26 +607,39 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
               scheduler: str | None = None, progress: bool = True,
               retry_failed: bool = False, stop_after: int | None = None,
               transient: float = 0.0, window: float | None = None,
-              resume_hint: str = "run the same command again") -> dict:
+              resume_hint: str = "run the same sweep again") -> dict:
     """Run the cases not yet in ``out`` on dask (a LocalCluster of ``workers`` processes, or
     the cluster at ``scheduler``); metrics after ``transient`` seconds in windows of
     ``window`` seconds (``rattle_metrics``).  ``fmu_dir`` None runs the model library's
     compiled loop (engine "library"), else the FMUs of that folder in the fmpy harness
     (engine "fmu").  ``stop_after`` ends the sweep after that many new cases (an
-    interruption, for tests).  Returns counts of done, skipped and failed cases;
-    :class:`SweepInterruptedError` when the cluster lost every worker (the finished rows are
-    kept)."""
+    interruption, for tests).
+
+    The request is checked before any work (ValueError: :func:`check_request`).  Returns
+    counts: ``total``, ``skipped`` (already in ``out``) and of those ``failed_before`` (with
+    an error, not retried), ``done`` (run now) and of those ``failed``.  Raises
+    :class:`ResultFileBusyError` when another sweep writes ``out``, and
+    :class:`SweepInterruptedError` when the cluster lost every worker or a row could not be
+    written (the finished rows are kept; the message says how to resume)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
+    check_request(cases, stop_time, step, transient, window, workers)
     out = Path(out)
     bundle = FmuBundle.from_dir(fmu_dir) if fmu_dir is not None else None
     names = sorted({n for c in cases for n in c.parameters})
-    writer = ResultWriter(out, names)
-    done = finished_case_ids(out, retry_failed)
-    todo = [c for c in cases if c.case_id not in done]
+    writer = ResultWriter(out, names, resume_hint)
+    finished = _finished_errors(out)
+    todo = [c for c in cases
+            if c.case_id not in finished or (retry_failed and finished[c.case_id])]
     cluster = None
-    counts = {"total": len(cases), "skipped": len(cases) - len(todo), "done": 0, "failed": 0}
+    counts = {"total": len(cases), "skipped": len(cases) - len(todo), "done": 0, "failed": 0,
+              "failed_before": sum(1 for c in cases if finished.get(c.case_id)
+                                   and not retry_failed)}
     try:
+        if retry_failed:  # a retried case's failed row gives way to its new one
+            writer.drop({c.case_id for c in todo if finished.get(c.case_id)})
+        if not todo:
+            return counts
         if scheduler:
             client = Client(scheduler)
         else:
@@ -403,35 +648,35 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
             client = Client(cluster)
         with client:
             fmus = None
-            if bundle is not None and todo:
+            if bundle is not None:
                 # One copy of the FMUs per worker, not per task (and none read from a path).
                 [fmus] = client.scatter([bundle], broadcast=True)
             futures = [client.submit(run_case, c, fmus, stop_time, step, transient, window,
                                      pure=False)
                        for c in todo]
             stream = as_completed(futures)
-            if progress and todo:
+            if progress:
                 from tqdm import tqdm
 
                 stream = tqdm(stream, total=len(todo), unit="case", desc="sweep",
                               disable=None)  # no bar where stderr is not a terminal
-            for future in stream:
-                try:
-                    row = future.result()
-                except Exception as err:  # the cluster, not the case: the case never ran
-                    for f in futures:
-                        f.cancel()
-                    raise SweepInterruptedError(
-                        f"the sweep lost its workers ({type(err).__name__}) after "
-                        f"{counts['done']} new cases; {out} keeps them: {resume_hint} to run "
-                        "the rest") from None
-                writer.write(row)
-                counts["done"] += 1
-                counts["failed"] += bool(row["error"])
-                if stop_after is not None and counts["done"] >= stop_after:
-                    for f in futures:
-                        f.cancel()
-                    break
+            try:
+                for future in stream:
+                    try:
+                        row = future.result()
+                    except Exception as err:  # the cluster, not the case: it never ran
+                        raise SweepInterruptedError(
+                            f"the sweep lost its workers ({type(err).__name__}) after "
+                            f"{counts['done']} new cases; {out} keeps them: {resume_hint} to "
+                            "run the rest") from None
+                    writer.write(row)
+                    counts["done"] += 1
+                    counts["failed"] += bool(row["error"])
+                    if stop_after is not None and counts["done"] >= stop_after:
+                        break
+            finally:
+                for f in futures:
+                    f.cancel()
     finally:
         writer.close()
         if cluster is not None:
@@ -439,71 +684,195 @@ def run_sweep(cases: list[Case], out: Path, fmu_dir: Path | None = None,
     return counts
 
 
+#: Most communication points of a case: its recorded outputs (8 float64 columns) are held in
+#: a worker's memory, 640 MB at this limit (1000 s at the default step).
+MAX_POINTS = 10_000_000
+
+
+def check_run_options(stop_time: float, step: float, transient: float = 0.0,
+                      window: float | None = None) -> None:
+    """ValueError, one sentence with the value and what is allowed, unless every case can be
+    run and measured with these options: a step of whole nanoseconds
+    (``system.step_nanoseconds``), a stop time of a whole number of steps (at most
+    ``MAX_POINTS``), a transient and windows that fit the run (``analysis.window_layout``),
+    each window long enough for the band levels' spectrum (``spectral_lines.MIN_SAMPLES``)."""
+    from .analysis import window_layout
+    from .spectral_lines import MIN_SAMPLES
+    from .system import step_nanoseconds
+
+    step_nanoseconds(step)
+    if not (math.isfinite(stop_time) and stop_time > 0):
+        raise ValueError(f"stop time {stop_time!r} s; allowed: a finite time > 0")
+    steps = stop_time / step
+    if abs(steps - round(steps)) > 1e-6 * steps:
+        raise ValueError(f"stop time {stop_time!r} s is {steps:.6g} steps of {step!r} s; "
+                         "allowed: a whole number of steps")
+    if round(steps) + 1 > MAX_POINTS:
+        raise ValueError(f"stop time {stop_time!r} s at a {step!r} s step is {round(steps)} "
+                         f"steps; allowed: at most {MAX_POINTS - 1} (the recorded outputs of "
+                         "a case are held in memory)")
+    _, width, _ = window_layout(round(steps) + 1, step, transient, window, stop_time)
+    if width < MIN_SAMPLES:
+        what = (f"window {window!r} s" if window is not None else
+                f"the {stop_time - transient:g} s after the transient of {transient!r} s")
+        raise ValueError(f"{what} is {width} steps of {step!r} s; allowed: {MIN_SAMPLES} steps "
+                         f"({MIN_SAMPLES * step:g} s) or more, for the band levels' spectrum")
+
+
+def check_request(cases: list[Case], stop_time: float, step: float, transient: float = 0.0,
+                  window: float | None = None, workers: int = 1) -> None:
+    """ValueError, one sentence with the value and what is allowed, unless ``run_sweep`` can
+    do what it is given: 1 to ``MAX_CASES`` distinct cases of known parameter names, run
+    options that every case can be run and measured with (:func:`check_run_options`), a whole
+    number of workers >= 1.  The values of a case are the model library's to check when it
+    runs (a refused one is that case's error)."""
+    from drive_rattle.catalog import parameter_spec
+
+    _count(workers, "workers", 1)
+    if not cases:
+        raise ValueError("no cases to run; allowed: 1 case or more")
+    _check_size(len(cases), "the list of cases")
+    _distinct(cases)
+    for name in sorted({n for c in cases for n in c.parameters}):
+        parameter_spec(name)
+    check_run_options(stop_time, step, transient, window)
+
+
 def read_results(path: Path) -> list[dict]:
-    """Rows of a result file, numbers as floats (empty strings as NaN)."""
-    rows = []
-    with Path(path).open(newline="", encoding="utf-8") as f:
-        for r in csv.DictReader(f):
-            rows.append({k: (v if k in TEXT_COLUMNS else
-                             (float(v) if v != "" else math.nan)) for k, v in r.items()})
-    return rows
+    """The whole rows of a result file (a last row cut short left out: :func:`_whole_rows`),
+    numbers as floats (empty strings as NaN)."""
+    header, rows, _ = _whole_rows(Path(path).read_bytes())
+    for k, r in enumerate(rows, start=2):
+        if len(r) != len(header):
+            raise ValueError(f"{path} row {k} has {len(r)} fields, the header {len(header)}; "
+                             "allowed: one field per column (the file was edited or spoilt)")
+    return [{k: (v if k in TEXT_COLUMNS else (float(v) if v != "" else math.nan))
+             for k, v in zip(header, r, strict=True)} for r in rows]
 
 
 def _parse_param(text: str) -> tuple[str, tuple[float, float]]:
+    """``(name, (lo, hi))`` of ``--param NAME=LO:HI`` (a range, LO < HI) or ``NAME=VALUE``
+    (the parameter held at VALUE in every case); LO, HI and VALUE read by the parameter's
+    declared type (``ParameterSpec.parse``: an enumeration's item names too)."""
     name, sep, rng = text.partition("=")
-    lo, colon, hi = rng.partition(":")
+    name = name.strip()
     if not sep or not name:
-        raise argparse.ArgumentTypeError(f"--param {text!r}: expected UNIT.NAME=LO:HI")
+        raise ValueError(f"--param {text!r} is not NAME=LO:HI or NAME=VALUE; allowed: e.g. "
+                         "GearMeshRattle.gear.backlash=0.05e-3:0.2e-3")
+    spec = _sweepable(name)
+    lo_text, colon, hi_text = rng.partition(":")
+    lo = spec.parse(lo_text, name)
+    hi = spec.parse(hi_text, name) if colon else lo
+    if colon and lo == hi:
+        raise ValueError(f"--param {text!r} is a range of one point, which every case of the "
+                         f"grid would repeat; allowed: LO < HI, or {name}={lo_text} to hold it "
+                         "fixed")
+    if lo > hi:
+        raise ValueError(f"--param {text!r} runs from {lo!r} down to {hi!r}; allowed: LO < HI")
+    return name, (lo, hi)
+
+
+def _whole_number(text: str) -> int:
+    """A count on the command line: ``20``, or ``1e5`` when it is whole."""
     try:
-        return name, (float(lo), float(hi if colon else lo))
+        return int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--param {text!r}: LO and HI must be numbers") from None
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value == int(value)):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number; allowed: a whole "
+                                         "number such as 20 or 1e4")
+    return int(value)
+
+
+#: Exit statuses of the command line.
+EXIT_OK, EXIT_STOPPED, EXIT_BAD_REQUEST, EXIT_CASES_FAILED = 0, 1, 2, 3
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.sweep",
-                                 description="Parameter sweep of the rattle co-simulation.")
-    ap.add_argument("--param", type=_parse_param, action="append", required=True,
-                    metavar="UNIT.NAME=LO:HI", help="a swept parameter and its range (SI)")
+    from .cli import Parser
+    from .spectral_lines import MIN_SAMPLES
+
+    ap = Parser(prog="python -m drive_rattle_cosim.sweep",
+                description="Parameter sweep of the rattle co-simulation.",
+                epilog=f"Exit status: {EXIT_OK} every case of the design ran without error; "
+                       f"{EXIT_STOPPED} the sweep could not start or stopped before its end "
+                       "(the result file held by another sweep, the workers lost, the disk "
+                       "full: the message says how to resume); "
+                       f"{EXIT_BAD_REQUEST} the request was refused before any work (one "
+                       f"line); {EXIT_CASES_FAILED} the sweep ran, but cases failed (their "
+                       "count printed, their errors in the error column; --retry-failed "
+                       "runs them again).")
+    ap.add_argument("--param", action="append", required=True,
+                    metavar="UNIT.NAME=LO:HI",
+                    help="a swept parameter (Real or Integer; an enumeration by its codes or "
+                         "item names) and its range, LO < HI (SI units); UNIT.NAME=VALUE holds "
+                         "it at VALUE in every case; each parameter once")
     design = ap.add_mutually_exclusive_group(required=True)
-    design.add_argument("--grid", type=int, metavar="N", help="N values per parameter")
-    design.add_argument("--lhs", type=int, metavar="N", help="N Latin-hypercube cases")
+    design.add_argument("--grid", type=_whole_number, metavar="N",
+                        help=f"N >= 2 values per parameter (at most {MAX_CASES} cases in all)")
+    design.add_argument("--lhs", type=_whole_number, metavar="N",
+                        help=f"N Latin-hypercube cases, 1 <= N <= {MAX_CASES}, Real "
+                             "parameters")
     ap.add_argument("--seed", type=int, default=0, help="Latin-hypercube seed")
-    ap.add_argument("--stop-time", type=float, default=0.3, help="simulated time per case [s]")
-    ap.add_argument("--step", type=float, default=1e-4, help="communication step [s]")
+    ap.add_argument("--stop-time", type=float, default=0.3,
+                    help="simulated time per case [s]: a whole number of steps")
+    ap.add_argument("--step", type=float, default=1e-4,
+                    help="communication step [s]: a whole number of nanoseconds")
     ap.add_argument("--transient", type=float, default=0.0,
-                    help="start transient left out of the metrics [s]")
+                    help="start transient left out of the metrics [s], below the stop time")
     ap.add_argument("--window", type=float, default=None,
-                    help="window of the statistics [s] (default: all after the transient)")
+                    help=f"window of the statistics [s], at least {MIN_SAMPLES} steps and at "
+                         "most what follows the transient (default: all after the transient)")
     ap.add_argument("--engine", choices=ENGINES, default="library",
                     help="library: the model library's compiled loop (default; the FMUs' "
                          "numbers at the model's cost); fmu: the FMUs of --fmu-dir in the "
                          "fmpy harness")
-    ap.add_argument("--fmu-dir", type=Path, default=ROOT / "dist",
+    ap.add_argument("--fmu-dir", type=Path, default=DIST,
                     help="folder of the FMUs on this machine, for --engine fmu (they are sent "
                          "to the workers)")
-    ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv")
-    ap.add_argument("--workers", type=int, default=2, help="LocalCluster worker processes")
+    ap.add_argument("--out", type=Path, default=Path("out") / "sweep.csv",
+                    help="result CSV, appended case by case; run the same command again to "
+                         "resume (a last row cut short is dropped and its case run again); "
+                         "one sweep at a time (<out>.lock)")
+    ap.add_argument("--workers", type=int, default=2,
+                    help="LocalCluster worker processes (>= 1)")
     ap.add_argument("--scheduler", default=None, help="address of an existing dask scheduler")
-    ap.add_argument("--retry-failed", action="store_true")
+    ap.add_argument("--retry-failed", action="store_true",
+                    help="run the cases that failed before again")
     args = ap.parse_args(argv)
-    params = dict(args.param)
-    cases = (grid_design(params, args.grid) if args.grid
-             else latin_hypercube_design(params, args.lhs, args.seed))
+    resume = ("run `python -m drive_rattle_cosim.sweep "
+              + " ".join(argv if argv is not None else sys.argv[1:]) + "` again")
     try:
+        params: dict[str, tuple[float, float]] = {}
+        for text in args.param:
+            name, rng = _parse_param(text)
+            if name in params:
+                raise ValueError(f"--param {name} is given twice; allowed: each parameter once")
+            params[name] = rng
+        cases = (grid_design(params, args.grid) if args.grid is not None
+                 else latin_hypercube_design(params, args.lhs, args.seed))
         counts = run_sweep(cases, args.out, args.fmu_dir if args.engine == "fmu" else None,
                            args.stop_time, args.step, args.workers, args.scheduler,
                            retry_failed=args.retry_failed, transient=args.transient,
-                           window=args.window,
-                           resume_hint="run `python -m drive_rattle_cosim.sweep "
-                                       + " ".join(argv if argv is not None else sys.argv[1:])
-                                       + "` again")
-    except (FileNotFoundError, ValueError, SweepInterruptedError) as err:
+                           window=args.window, resume_hint=resume)
+    except (ValueError, FileNotFoundError) as err:
+        ap.error(str(err))
+    except (ResultFileBusyError, SweepInterruptedError) as err:
         print(f"error: {err}", file=sys.stderr)
-        return 1
+        return EXIT_STOPPED
     print(f"{counts['done']} cases run ({counts['failed']} failed), {counts['skipped']} "
-          f"already done, {counts['total']} in the design -> {args.out}")
-    return 0
+          f"already done ({counts['failed_before']} of them failed), {counts['total']} in the "
+          f"design -> {args.out}")
+    failed = counts["failed"] + counts["failed_before"]
+    if failed:
+        print(f"error: {failed} of {counts['total']} cases failed (their errors are in the "
+              f"error column of {args.out}; --retry-failed runs them again)", file=sys.stderr)
+        return EXIT_CASES_FAILED
+    return EXIT_OK
 
 
 if __name__ == "__main__":

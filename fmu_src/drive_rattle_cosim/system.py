@@ -10,6 +10,7 @@ output.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from drive_rattle.interface import (
@@ -40,16 +41,23 @@ class Record:
     onset_flanks: list[int] = field(default_factory=list)
 
 
+def step_nanoseconds(step: float) -> int:
+    """The communication step ``step`` [s] in whole nanoseconds, or ValueError for a step that
+    is not a positive whole number of nanoseconds (within 1e-6 of one)."""
+    step_ns = round(step * 1e9) if math.isfinite(step) else 0
+    if step_ns <= 0 or abs(step_ns - step * 1e9) > 1e-6 * step * 1e9:
+        raise ValueError(
+            f"communication step {step!r} s must be a positive whole number of nanoseconds")
+    return step_ns
+
+
 def communication_points(start: float, step: float, stop: float) -> list[float]:
     """Communication points ``t_k = (t0_ns + k step_ns) / 1e9`` from ``start`` to ``stop`` [s].
 
     Integer nanoseconds, as libcosim places them; the step from t_k is ``t_{k+1} - t_k``, so
     every master using this grid passes bit-identical times and steps to the units.  Raises
     ValueError for a step that is not a positive whole number of nanoseconds."""
-    step_ns = round(step * 1e9)
-    if step_ns <= 0 or abs(step_ns - step * 1e9) > 1e-6 * step * 1e9:
-        raise ValueError(
-            f"communication step {step!r} s must be a positive whole number of nanoseconds")
+    step_ns = step_nanoseconds(step)
     t0_ns = round(start * 1e9)
     n = round((stop - start) * 1e9 / step_ns)
     return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]

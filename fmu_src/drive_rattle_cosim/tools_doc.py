@@ -32,11 +32,14 @@ from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DEFAULT_EXPERIMENT, MESH_OUTPUTS, MODELS
 from drive_rattle.parameters import RPM, specs
 
-from . import step_accuracy
+from . import environments, step_accuracy
 from .harness import time_grid
+from .variants import code_list
 
-#: The masters whose versions the document was measured with (distribution names).
-MASTERS = ("fmpy", "libcosimpy", "ecospy", "fmu-manipulation-toolbox", "gemseo-fmu", "cofmupy")
+#: The masters of the project's environment whose versions the document was measured with
+#: (distribution names); gemseo-fmu and cofmupy run in environments of their own
+#: (``environments.PINNED``).
+MASTERS = ("fmpy", "libcosimpy", "ecospy", "fmu-manipulation-toolbox", "pathsim-fmi")
 
 
 def _g(x: float, digits: int = 3) -> str:
@@ -165,7 +168,7 @@ def held_mesh() -> str:
     s = input_starts(MESH)
     mp = MeshParameters()
     mesh = _mesh_alone()
-    _, sizes = time_grid(0.0, step, stop, "multiplied")
+    _, sizes = time_grid(0.0, step, stop, "fmpy")
     phi, w = s["pinion.phi"], s["pinion.w"]
     rows = [mesh.outputs()]
     for h in sizes:
@@ -196,7 +199,7 @@ def held_driveline() -> str:
     dp = DrivelineParameters()
     d = input_starts(DRIVELINE)
     drive = DrivelineUnit(dp, d["wheel.phi"], d["wheel.w"])
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
+    times, sizes = time_grid(0.0, step, stop, "fmpy")
     phi, w = d["wheel.phi"], d["wheel.w"]
     torque = [drive.outputs()["wheel.tau_load"]]
     for t, h in zip(times, sizes, strict=False):
@@ -214,6 +217,19 @@ def outputs_count() -> str:
     return str(sum(len(UNITS[m].outputs) for m in MODELS))
 
 
+def integer_codes() -> str:
+    """Every integer-coded parameter of both units (a spec with ``choices``): its unit, name,
+    default and codes with their item names (the specs' ``choice_names``), in the form the
+    SSD's bindings and the integer-coded copies give them (``variants.code_list``)."""
+    rows = ["| unit | parameter | default | codes |", "|---|---|---|---|"]
+    for model in MODELS:
+        for _, spec in specs(UNITS[model].parameters):
+            if spec.choices:
+                rows.append(f"| {model} | `{spec.name}` | {spec.default} | "
+                            f"{code_list(spec.choice_names.items())} |")
+    return "\n" + "\n".join(rows) + "\n"
+
+
 def versions() -> str:
     def version(name: str) -> str:
         try:
@@ -221,11 +237,11 @@ def versions() -> str:
         except metadata.PackageNotFoundError:
             return "not installed"
 
-    fmpy_pin = next((r for r in metadata.requires("gemseo-fmu") or [] if r.startswith("fmpy")),
-                    "fmpy") if version("gemseo-fmu") != "not installed" else "fmpy"
     listed = ", ".join(f"{name} {version(name)}" for name in MASTERS)
-    return (f"{listed} (gemseo-fmu requires `{re.sub(r';.*', '', fmpy_pin).strip()}`, which is "
-            "why the project's test environment runs that fmpy)")
+    own = "; ".join(" with ".join(p.replace("==", " ") for p in pins)
+                    for pins in environments.PINNED.values())
+    return (f"{listed}; {own}, each in an environment of its own, since they pin an older "
+            "fmpy (`python -m drive_rattle_cosim.environments`)")
 
 
 def messages() -> str:
@@ -280,8 +296,8 @@ def messages() -> str:
     mesh = _mesh_alone()
     integer = next(x.name for x in MESH_OUTPUTS if x.fmi_type == "Integer")
     rows.append((_get_integer_as_real(mesh, integer),
-                 "the master reads an Integer output with fmi2GetReal (gemseo-fmu, cofmupy)",
-                 "name only Real outputs (below)"))
+                 "the master reads an Integer output with fmi2GetReal (gemseo-fmu, cofmupy, "
+                 "pathsim-fmi)", "*Masters that read every output as a float* (above)"))
     mesh = _mesh_alone()
     rows.append((_refusal(lambda: mesh.call("rm_setup", 0.0)),
                  "setupExperiment on a running FMU (cofmupy's fixed-point initialization)",
@@ -343,6 +359,7 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "held mesh": held_mesh,
     "held driveline": held_driveline,
     "outputs count": outputs_count,
+    "integer codes": integer_codes,
     "versions": versions,
     "messages": messages,
     "native host command": native_host_command,

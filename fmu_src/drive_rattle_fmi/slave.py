@@ -22,13 +22,13 @@ which are generated from the same specs: a value reference is the library's inde
 hidden variables of the status channel are registered last.
 
 The slave classes are made once per process, here (``slave_class``), and the slave modules
-(``fmu_src/GearMeshRattle.py``, ``fmu_src/Driveline.py``) only name them: pythonfmu 0.7.0's
-wrapper executes the slave module's source anew at every fmi2Instantiate and keeps a reference
-to every class that source creates, so a class defined in the slave module stayed alive once
-per instantiation (about 17 kiB each; tests/adversarial/test_endurance.py).  What the wrapper
-still leaks per call (about 1 kiB) the status shim avoids by keeping freed instances idle for
-reuse; and the wrapper's release of a reference to the module's namespace that it never took
-is made good by ``hold_namespace``.
+(``fmu_src/slaves/GearMeshRattle.py``, ``fmu_src/slaves/Driveline.py``) only name them:
+pythonfmu 0.7.0's wrapper executes the slave module's source anew at every fmi2Instantiate and
+keeps a reference to every class that source creates, so a class defined in the slave module
+stayed alive once per instantiation (about 17 kiB each; tests/adversarial/test_endurance.py).
+What the wrapper still leaks per call (about 1 kiB) the status shim avoids by keeping freed
+instances idle for reuse; and the wrapper's release of a reference to the module's namespace
+that it never took is made good by ``hold_namespace``.
 """
 
 from __future__ import annotations

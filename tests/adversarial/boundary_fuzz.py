@@ -310,8 +310,10 @@ def damaged(blob: bytes, how: str, at: int) -> bytes:
     if how == "flip" and len(blob) > HEADER:
         i = HEADER + at % (len(blob) - HEADER)
         return blob[:i] + bytes([blob[i] ^ 0x40]) + blob[i + 1:]
-    if how == "truncate":
-        return blob[:at % max(1, len(blob))]
+    if how == "truncate":  # cut within the state itself: a blob serialized into a larger
+        # buffer carries zeros after it, and a cut among them leaves the whole state
+        whole = min(len(blob), HEADER + len(state_payload(blob)))
+        return blob[:at % max(1, whole)]
     if how == "pad":
         return blob + bytes(at % 5000)
     if how == "guid":

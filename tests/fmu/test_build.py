@@ -140,7 +140,8 @@ def test_guid_is_derived_from_the_sources(fmus, name):
     assert guid != fmu_guid(name, "native", fmu.glue_id(name))
     assert fmu_guid(name, "pythonfmu", "another face") != guid
     sources = fmu.glue_sources(name)
-    assert SOURCE / f"{name}.py" in sources and SOURCE / "drive_rattle_fmi" / "slave.py" in sources
+    assert SOURCE / "slaves" / f"{name}.py" in sources
+    assert SOURCE / "drive_rattle_fmi" / "slave.py" in sources
     # the status shim refuses another GUID and was compiled with this one
     with zipfile.ZipFile(fmus[name]) as z:
         assert guid.encode() in z.read(f"binaries/linux64/{name}.so")
@@ -185,7 +186,7 @@ def test_a_state_saved_by_one_build_restores_in_another_of_the_same_sources(fmus
     restored by another build of the same source."""
     from drive_rattle_cosim.harness import Unit
 
-    other = fmu.package(SOURCE / "GearMeshRattle.py", tmp_path, references=False)
+    other = fmu.package(SOURCE / "slaves" / "GearMeshRattle.py", tmp_path, references=False)
     assert read_model_description(str(other)).guid == read_model_description(
         str(fmus["GearMeshRattle"])).guid
     units = [Unit(path, f"u{k}") for k, path in enumerate((fmus["GearMeshRattle"], other))]

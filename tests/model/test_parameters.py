@@ -163,3 +163,46 @@ def test_public_round_trip(cls):
 def test_check_parameters_refuses_an_unknown_name(kind):
     with pytest.raises(ModelError, match="unknown variable"):
         check_parameters(kind, {"no.such": 1.0})
+
+
+def spec_of(cls, name):
+    return next(spec for _, spec in specs(cls) if spec.name == name)
+
+
+@pytest.mark.parametrize("cls, name, text, value", [
+    (MeshParameters, "gear.backlash", "1.2e-4", 1.2e-4),
+    (MeshParameters, "gear.backlash", " 0 ", 0.0),
+    (MeshParameters, "gear.z_pinion", "20", 20),
+    (MeshParameters, "gear.z_pinion", "2e1", 20),
+    (MeshParameters, "friction.enabled", "false", False),
+    (MeshParameters, "friction.enabled", "TRUE", True),
+    (MeshParameters, "friction.enabled", "1", True),
+    (MeshParameters, "contact.dissipation", "2", 2),
+    # every item name of every enumeration gives its code
+    *((MeshParameters, spec.name, item, code) for _, spec in specs(MeshParameters)
+      if spec.choice_names for code, item in spec.choice_names.items()),
+    *((DrivelineParameters, spec.name, item, code) for _, spec in specs(DrivelineParameters)
+      if spec.choice_names for code, item in spec.choice_names.items()),
+    (DrivelineParameters, "engine.speed_table", "", ""),
+    (DrivelineParameters, "engine.speed_table", " a b.csv", " a b.csv"),
+])
+def test_a_text_is_read_by_the_declared_type(cls, name, text, value):
+    parsed = spec_of(cls, name).parse(text)
+    assert parsed == value and type(parsed) is type(value)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("gear.backlash", "", "'gear.backlash' = '' is not a number; allowed: [0, 0.005] m"),
+    ("gear.backlash", "0x10", "= '0x10' is not a number"),
+    ("gear.z_pinion", "20.5", "= '20.5' is not a whole number; allowed: [5, 400]"),
+    ("gear.z_pinion", "nan", "= 'nan' is not a whole number"),
+    ("friction.enabled", "maybe", "= 'maybe' is not a truth value; allowed: true or false"),
+    ("contact.dissipation", "None",
+     "= 'None' is neither a code nor an item name of the enumeration (did you mean 'none'?); "
+     "allowed: 0 or 'none', 1 or 'hunt_crossley_restitution'"),
+    ("contact.dissipation", "2.5", "neither a code nor an item name"),
+])
+def test_a_text_that_is_not_of_the_declared_type_is_refused(name, text, message):
+    with pytest.raises(ValueError) as err:
+        spec_of(MeshParameters, name).parse(text)
+    assert message in str(err.value)

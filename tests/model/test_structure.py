@@ -19,7 +19,7 @@ SOURCE = ROOT / "fmu_src"
 ORACLE = ROOT / "tests" / "oracle"
 RUNTIME = ("drive_rattle", "drive_rattle_fmi")
 PACKAGES = (*RUNTIME, "drive_rattle_build", "drive_rattle_cosim")
-#: The slave modules (fmu_src/<Model>.py): runtime, next to the packages in each FMU.
+#: The slave modules (fmu_src/slaves/<Model>.py): runtime, next to the packages in each FMU.
 SLAVES = ("GearMeshRattle", "Driveline")
 #: The modules of the Python API: specs and the binding, no physics (the model is the C
 #: library).  A new module here is either physics, which belongs in fmu_src/rattle_model, or
@@ -36,7 +36,8 @@ ALLOWED = {
     "slaves": {"drive_rattle", "drive_rattle_fmi", "pythonfmu"},
     "drive_rattle_cosim": {"drive_rattle", "drive_rattle_cosim", "numpy", "scipy", "fmpy",
                            "tqdm", "dask", "distributed", "libcosimpy", "lxml", "gemseo_fmu",
-                           "fmu_manipulation_toolbox", "ecospy", "cofmupy", "matplotlib"},
+                           "fmu_manipulation_toolbox", "ecospy", "cofmupy", "pathsim",
+                           "pathsim_fmi", "matplotlib"},
     "drive_rattle_build": {"drive_rattle", "drive_rattle_fmi", "drive_rattle_build",
                            "drive_rattle_cosim", "pythonfmu", "fmpy", "ziglang"},
 }
@@ -50,7 +51,7 @@ PHYSICS_MATH = {"sqrt", "cbrt", "pow", "exp", "expm1", "log", "log1p", "log2", "
 
 def module_files() -> dict[str, Path]:
     """``{module name: file}`` of every first-party module."""
-    out = {name: SOURCE / f"{name}.py" for name in SLAVES}
+    out = {name: SOURCE / "slaves" / f"{name}.py" for name in SLAVES}
     for package in PACKAGES:
         for path in sorted((SOURCE / package).glob("*.py")):
             name = package if path.stem == "__init__" else f"{package}.{path.stem}"

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import random
 import shutil
 import subprocess
 import sys
@@ -19,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..adversarial.variants import rebuild
+from ..seeds import fuzz_seed
 from .sanitizers import ASAN_FLAGS, python_environment, python_reports
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is needed")
@@ -81,11 +81,12 @@ def test_every_row_under_the_sanitizers(sanitized, tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.seeded
 @pytest.mark.parametrize("model", MODELS)
 def test_the_fuzzer_under_the_sanitizers(sanitized, model, tmp_path):
-    """Random call sequences (a new seed every run, printed; RATTLE_FUZZ_SEED replays one),
-    the FMU and its shadow both sanitized."""
-    seed = int(os.environ.get("RATTLE_FUZZ_SEED", random.randrange(2**32)))
+    """Random call sequences from the unit's fixed seed (tests/seeds.py; RATTLE_FUZZ_SEED
+    replaces it), the FMU and its shadow both sanitized."""
+    seed = fuzz_seed(model)
     run, reports = _run([ADVERSARIAL / "boundary_fuzz.py", sanitized[model], FUZZ_EXAMPLES,
                          seed, tmp_path / "work"], tmp_path, 900,
                         {"RATTLE_MODEL_LIBRARY": str(sanitized["library"])})
