@@ -13,7 +13,7 @@ package (a dependency).  What ships where (tested here; docs/native_fmu.md, docs
 * the FMI 3.0 FMUs: ``x86_64-linux``, ``x86_64-windows`` and ``aarch64-linux`` (the last run
   under qemu-user in the tests);
 * the FMI 2.0 native FMUs: ``linux64`` and ``win64`` only.  FMI 2.0 importers load
-  ``binaries/linux64/`` on aarch64 Linux too (fmpy 0.3.20 to 0.3.30 ``fmpy.platform``, the
+  ``binaries/linux64/`` on aarch64 Linux too (fmpy 0.3.20 to 0.3.32 ``fmpy.platform``, the
   Reference-FMUs' fmusim ``FMI_PLATFORM``, the FMI Library's ``FMI_PLATFORM`` for every LP64
   Linux), where the x86-64 binary is, so none of them would find an ``aarch64-linux`` one;
   on ARM use the FMI 3.0 FMUs, which fmpy and fmusim load from ``binaries/aarch64-linux/``;
