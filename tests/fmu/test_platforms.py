@@ -47,7 +47,7 @@ FMI3_SYSTEMS = {"darwin", "linux", "windows"}
 #: platform uses the FMI 3.0 platform tuple.
 FMI2_X86_64_FOLDERS = {"linux": "linux64", "windows": "win64", "darwin": "darwin64"}
 #: Mach-O (<mach-o/loader.h>, <mach-o/nlist.h>, <mach/machine.h>).
-MH_MAGIC_64, MH_DYLIB, LC_SYMTAB = 0xFEEDFACF, 6, 0x2
+MH_MAGIC_64, MH_DYLIB, LC_SYMTAB, LC_CODE_SIGNATURE = 0xFEEDFACF, 6, 0x2, 0x1D
 N_STAB, N_TYPE, N_EXT, N_SECT = 0xE0, 0x0E, 0x01, 0x0E
 CPU_TYPES = {"x86_64": 0x01000007, "aarch64": 0x0100000C}
 #: What the macOS linker itself exports from every shared library.
@@ -56,14 +56,15 @@ LINKER_SYMBOLS = {"__dso_handle", "_mh_dylib_header"}
 FMI2_CO_SIMULATION_FUNCTIONS = 34
 
 
-def macho_dylib(data: bytes) -> tuple[int, int, set[str]]:
-    """(CPU type, file type, the C names of the defined external symbols) of a 64-bit Mach-O
-    file, read from its LC_SYMTAB."""
+def macho_dylib(data: bytes) -> tuple[int, int, set[str], set[int]]:
+    """(CPU type, file type, the C names of the defined external symbols, the load commands)
+    of a 64-bit Mach-O file, the symbols read from its LC_SYMTAB."""
     magic, cpu, _, filetype, ncmds, _, _, _ = struct.unpack_from("<IiiIIIII", data, 0)
     assert magic == MH_MAGIC_64, hex(magic)
-    offset, exported = 32, set()
+    offset, exported, commands = 32, set(), set()
     for _ in range(ncmds):
         cmd, size = struct.unpack_from("<II", data, offset)
+        commands.add(cmd)
         if cmd == LC_SYMTAB:
             symoff, nsyms, stroff, _ = struct.unpack_from("<IIII", data, offset + 8)
             for k in range(nsyms):
@@ -72,7 +73,7 @@ def macho_dylib(data: bytes) -> tuple[int, int, set[str]]:
                     name = data[stroff + strx:data.index(b"\0", stroff + strx)].decode()
                     exported.add(name[1:])  # C names carry a leading underscore
         offset += size
-    return cpu, filetype, exported
+    return cpu, filetype, exported, commands
 
 
 def copy_of(fmu: Path, folder: Path) -> Path:
@@ -114,17 +115,19 @@ def test_macos_binaries_from_an_fmi3_fmus_sources(fmi3_fmus, tmp_path, capsys):
     assert set(added) == {"binaries/x86_64-darwin/GearMeshRattle.dylib",
                           "binaries/aarch64-darwin/GearMeshRattle.dylib"}
     for arch in ("x86_64", "aarch64"):
-        cpu, filetype, exported = macho_dylib(added[f"binaries/{arch}-darwin/"
-                                                   "GearMeshRattle.dylib"])
+        cpu, filetype, exported, commands = macho_dylib(added[f"binaries/{arch}-darwin/"
+                                                             "GearMeshRattle.dylib"])
         assert (cpu, filetype) == (CPU_TYPES[arch], MH_DYLIB)
         assert exported - LINKER_SYMBOLS == set(header_functions())
+        if arch == "aarch64":  # Apple Silicon runs no arm64 code without a signature
+            assert LC_CODE_SIGNATURE in commands
 
 
 @pytest.mark.slow
 def test_an_fmi2_fmu_gets_its_x86_64_macos_binary_in_darwin64(native_fmus, tmp_path):
     fmu = copy_of(native_fmus["Driveline"], tmp_path)
     assert main(["--platform", "x86_64-darwin", "--fmu", str(fmu)]) == 0
-    cpu, filetype, exported = macho_dylib(members(fmu)["binaries/darwin64/Driveline.dylib"])
+    cpu, filetype, exported, _ = macho_dylib(members(fmu)["binaries/darwin64/Driveline.dylib"])
     assert (cpu, filetype) == (CPU_TYPES["x86_64"], MH_DYLIB)
     exported -= LINKER_SYMBOLS
     assert all(name.startswith("fmi2") for name in exported), sorted(exported)
