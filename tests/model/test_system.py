@@ -1,6 +1,7 @@
-"""The co-simulation against the monolithic reference (tests/oracle/reference.py: scipy's LSODA
-on the mesh and the driveline as one system, the exact engine-order kinematics, the shaft
-torque acting continuously, the forces from the oracle's readable equations).
+"""system.c, the two units coupled in a compiled loop (drive_rattle_cosim.system.simulate),
+against its oracle, the monolithic reference (tests/oracle/reference.py: scipy's LSODA on the
+mesh and the driveline as one system, the exact engine-order kinematics, the shaft torque
+acting continuously, the forces from the oracle's readable equations).
 
 The co-simulation holds the shaft torque over a communication step (Jacobi coupling), so the
 trajectories converge at first order in the step; rattle is chaotic, so beyond a few impacts

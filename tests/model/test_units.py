@@ -1,8 +1,8 @@
-"""The compiled coupled loop (fmu_src/rattle_model/system.c) through the Python API
-(``drive_rattle.units.run_coupled`` and its ``CoupledRun``)."""
+"""The Python API's units (fmu_src/drive_rattle/units.py): the compiled coupled loop's run
+(``run_coupled`` and its ``CoupledRun``)."""
 
-from drive_rattle import DrivelineParameters, MeshParameters
-from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs, run_coupled
+from drive_rattle import DrivelineParameters, DrivelineUnit, MeshParameters, MeshUnit
+from drive_rattle.units import coupled_start_inputs, run_coupled
 
 
 def _pair():
