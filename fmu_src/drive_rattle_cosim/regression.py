@@ -201,7 +201,7 @@ def _fmi3_on_inputs(fmu: Path, inputs: np.ndarray, opt: dict, start_values: dict
     """An FMI 3.0 FMU on the reference inputs with fmpy's FMI 2.0 co-simulation loop (its
     ``Input`` and ``Recorder``; points t_k = k h, every step h).  fmpy's own FMI 3.0 loop steps
     by (k + 1) h - k h, which differs from h in the last bits; the outputs stay within the
-    references' tolerance there (tests/model/test_conditioning.py holds the model to that),
+    references' tolerance there (tests/model/test_stepper.py holds the model to that),
     but on the FMI 2.0 grid the FMI 3.0 FMUs compute the FMI 2.0 FMUs' numbers bit for bit
     (tests/fmi3), the stronger check."""
     import shutil
