@@ -330,7 +330,7 @@ def main(argv=None) -> int:
         with phases.phase("building the FMUs of both flavours"):
             fmus = build_fmus(work / "dist")
             native = {p.stem: p for p in build_native(work / "native", use_fmutool=False,
-                                                      platforms=("linux64",))}
+                                                      platforms=("x86_64-linux",))}
         with phases.phase("compiled loop"):
             w_loop, last, run = compiled_loop(steps)
         measured = [("compiled loop: the two units in the library, one call", w_loop, last)]

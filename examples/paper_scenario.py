@@ -29,10 +29,14 @@ from drive_rattle_build import build_fmus
 from drive_rattle_build.library import build_in_place
 from drive_rattle_cosim.analysis import (
     catalogue_for,
+    extent_result_text,
     further_statistics,
     markdown_table,
+    number_text,
     onsets_from_counters,
     paper_comparison,
+    strongest_line,
+    subharmonic_result_text,
     windowed_statistics,
 )
 from drive_rattle_cosim.harness import CoSimulation
@@ -41,6 +45,7 @@ from drive_rattle_cosim.paper_models import report as models_report
 from drive_rattle_cosim.progress import Phases
 from drive_rattle_cosim.spectral_lines import (
     KINDS,
+    MIN_SEGMENTS_STABILITY,
     RESONANCE,
     UNEXPLAINED,
     ExtentSearch,
@@ -110,8 +115,7 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
         full = detect_lines(full_spec, search, catalogue)
         full_extent = spectral_extent(full_spec, ExtentSearch())
         full_sub = subharmonic_test(full_spec, catalogue.fundamental, SubharmonicSearch())
-        per_window = [detect_lines(welch_spectrum(t[sl][1:], s["mesh.W"][sl][1:], SEGMENT_SECONDS),
-                                   search, catalogue) for sl in ws.slices]
+        per_window = ws.detections
         rows = paper_comparison(ws)
         table = markdown_table(rows, headers=("quantity", "this run: mean ± scatter (min–max "
                                               "over windows)", "paper"))
@@ -127,24 +131,19 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
             return f"{hits} of {len(per_window)}"
 
         peaks = sorted(full.lines + full.resonances, key=lambda ln: ln.frequency)
+        not_measured = "not measured"
+        too_few = f"not measured (under {MIN_SEGMENTS_STABILITY} segments)"
         lines = markdown_table(
             [(f"{ln.frequency:.1f}", ln.name or ("—" if ln.kind == RESONANCE else "unexplained"),
-              ln.kind, f"{ln.ratio_db:.1f}", f"{ln.width_ratio:.2f}", f"{ln.fluctuation:.2f}",
-              windows_with(ln)) for ln in peaks],
+              ln.kind, f"{ln.ratio_db:.1f}", number_text(ln.width_ratio, not_measured, spec=".2f"),
+              number_text(ln.fluctuation, too_few, spec=".2f"), windows_with(ln))
+             for ln in peaks],
             headers=("peak [Hz]", "name", "kind", "above floor [dB]", "width / a tone's",
                      "fluctuation", "found in windows"))
         spec = full.spectrum
         setting = ", ".join(f"`{k}={v}`" for k, v in parameters.items()) or "defaults"
-        if full_extent.censored:
-            extent = (f"≥ {full_extent.frequency:.0f} Hz: the 1/3-octave PSD stays within 10 dB of "
-                      "its 100–500 Hz mean up to the band top next to Nyquist "
-                      f"({spec.sample_rate / 2:g} Hz)")
-        else:
-            extent = f"{full_extent.frequency:.0f} Hz"
-        subharmonic = (f"{'flagged' if full_sub.flag else 'not flagged'} (f0 = "
-                       f"{full_sub.fundamental:.2f} Hz, {full_sub.positions} positions, statistic "
-                       f"{full_sub.statistic:.3g} against the threshold {full_sub.threshold:.3g}; "
-                       f"sub-harmonic comb over the comb {full_sub.ratio_db:.1f} dB)")
+        extent = extent_result_text(full_extent, spec.sample_rate)
+        subharmonic = subharmonic_result_text(full_sub)
         report = out / "comparison.md"
         report.write_text(
             f"# Paper scenario: {stop_time:g} s co-simulated (GearMeshRattle + Driveline FMUs, "
@@ -197,12 +196,12 @@ def run(stop_time: float = 11.0, transient: float = 1.0, window: float = 2.0,
     models_file.write_text("# The paper comparison: two contact models, each as a band\n\n"
                            + models_text, encoding="utf-8")
     with phases.phase("figures"):
-        figures = _figures(t, s, ws, full, catalogue, out, show_plot)
+        figures, fig5_names = _figures(t, s, ws, full, catalogue, out, show_plot)
     files = [report, models_file, out / "cosim.csv", *figures]
     phases.done()
     return {"statistics": ws, "rows": rows, "lines": full, "files": files, "table": table,
             "models": results, "models_table": comparison_table(results),
-            "wall_seconds": wall}
+            "fig5_names": fig5_names, "wall_seconds": wall}
 
 
 def _with_parameters(parameters: dict):
@@ -223,41 +222,163 @@ def _unit_parameters(parameters: dict, unit: str) -> dict:
     return {k.split(".", 1)[1]: v for k, v in parameters.items() if k.startswith(unit + ".")}
 
 
-def _figures(t, s, ws, full, catalogue, out: Path, show_plot: bool) -> list[Path]:
+def _figures(t, s, ws, full, catalogue, out: Path, show_plot: bool
+             ) -> tuple[list[Path], list[str]]:
+    """Figures 3-5 as PNG files, and the line names Fig. 5 writes."""
     import matplotlib
 
     if not show_plot:
         matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    files = [_fig3(plt, t, s, ws, out), _fig4(plt, t, s, ws, catalogue, out),
-             _fig5(plt, full, catalogue, out)]
+    fig5, names = _fig5(plt, full, strongest_line(ws), catalogue, out)
+    files = [_fig3(plt, t, s, ws, catalogue, out), _fig4(plt, t, s, ws, catalogue, out), fig5]
     if show_plot:
         plt.show()
     plt.close("all")
-    return files
+    return files, names
 
 
-def _fig3(plt, t, s, ws, out: Path) -> Path:
-    fig, ax = plt.subplots(figsize=(9, 4))
-    ax.plot(t, s["wheel.w"], lw=0.5, color="tab:blue", label="wheel speed")
-    ax.axvspan(t[0], t[0] + ws.transient, color="0.85", zorder=0,
-               label=f"start transient ({ws.transient:g} s, left out)")
+#: Resolution of the saved figures [dots per inch]; the figures are drawn at it, so that a
+#: pixel column of an axes is one column of the PNG.
+DPI = 120
+#: Forcing periods shown at full resolution in Fig. 3's lower panel.
+ZOOM_PERIODS = 3
+
+
+def envelope(t, y, columns: int):
+    """The record ``y(t)`` as ``columns`` equal spans of time, each with the smallest and the
+    largest sample in it: ``(centre, low, high)`` of every span holding a sample.  Drawn as a
+    band, one span per pixel column, it shows every sample's value and nothing else -- a line
+    through 110,000 samples on 1000 pixel columns shows only the samples it happens to join
+    (aliasing: a 27.7 Hz forcing turns into slow false strokes)."""
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if columns < 1 or t.size < 1:
+        raise ValueError(f"envelope: columns = {columns!r}, {t.size} samples; allowed: "
+                         "columns >= 1 and one sample or more")
+    edges = np.linspace(t[0], t[-1], columns + 1)
+    column = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, columns - 1)
+    first = np.flatnonzero(np.diff(column, prepend=-1))  # first sample of each column used
+    centre = 0.5 * (edges[column[first]] + edges[column[first] + 1])
+    return centre, np.minimum.reduceat(y, first), np.maximum.reduceat(y, first)
+
+
+def zoom_span(t, start: float, period: float, periods: int = ZOOM_PERIODS) -> slice:
+    """The samples of ``periods`` forcing periods of ``period`` [s] from ``start`` [s] (cut
+    at the record's end): the span Fig. 3 draws at full resolution."""
+    t = np.asarray(t, dtype=float)
+    if not (period > 0 and periods >= 1 and t[0] <= start <= t[-1]):
+        raise ValueError(f"zoom_span: start = {start!r} s, period = {period!r} s, periods = "
+                         f"{periods!r}; allowed: a start within the record's "
+                         f"{t[0]:g}–{t[-1]:g} s, period > 0, periods >= 1")
+    h = (t[-1] - t[0]) / (t.size - 1)
+    lo = int(np.searchsorted(t, start - 1e-6 * h))
+    hi = int(np.searchsorted(t, start + periods * period + 1e-6 * h, side="right"))
+    return slice(lo, hi)
+
+
+def onset_samples(counter) -> np.ndarray:
+    """Indices of the samples where a cumulative onset counter grew (the step ending there
+    holds one or more onsets)."""
+    c = np.asarray(counter)
+    return np.flatnonzero(np.diff(c, prepend=c[:1]) > 0)
+
+
+#: The ways a pair's force rises from 0 in a step, by the mesh's onset counters in it.
+PAIR_ONSET_KINDS = ("drive", "coast", "both", "under load")
+
+
+def pair_onsets(force, drive_counter, coast_counter) -> dict[str, int]:
+    """The contact onsets of one tooth pair -- the samples where its normal force goes from 0
+    to above 0 -- by the mesh's onset counters in the same step: an impact on the drive or
+    the coast flank (that flank's counter grew), ``both`` (both grew: flank not told), or
+    ``under load`` (neither grew: the pair took up load on a flank already in contact, as
+    a pair entering the zone of action does)."""
+    w = np.asarray(force, dtype=float)
+    rises = np.flatnonzero((w[1:] > 0) & (w[:-1] <= 0)) + 1
+    drive = np.diff(np.asarray(drive_counter), prepend=drive_counter[0])[rises] > 0
+    coast = np.diff(np.asarray(coast_counter), prepend=coast_counter[0])[rises] > 0
+    return {"drive": int(np.sum(drive & ~coast)), "coast": int(np.sum(coast & ~drive)),
+            "both": int(np.sum(drive & coast)), "under load": int(np.sum(~drive & ~coast))}
+
+
+def pair_onsets_text(counts: dict[str, int]) -> str:
+    """``pair_onsets`` in words, for Fig. 4's title."""
+    total = sum(counts.values())
+    if total == 0:
+        return "no contact onset of this pair in this span (its force never rises from 0)"
+    words = {"drive": ("impact on the drive flank", "impacts on the drive flank"),
+             "coast": ("impact on the coast flank", "impacts on the coast flank"),
+             "both": ("in a step with onsets on both flanks",
+                      "in steps with onsets on both flanks"),
+             "under load": ("taking up load on a flank in contact",
+                            "taking up load on a flank in contact")}
+    parts = [f"{counts[k]} {words[k][counts[k] > 1]}" for k in PAIR_ONSET_KINDS if counts[k]]
+    return (f"{total} contact onset{'s' if total > 1 else ''} of this pair in this span "
+            "(its force rising from 0):\n" + ", ".join(parts))
+
+
+def _fig3(plt, t, s, ws, catalogue, out: Path) -> Path:
+    """The wheel speed: the whole run as a min/max band per pixel column, and a few forcing
+    periods after the transient at full resolution, with the impacts marked."""
+    fig, (whole, zoom) = plt.subplots(2, 1, figsize=(9, 7), dpi=DPI, layout="constrained",
+                                      gridspec_kw={"height_ratios": [1, 1.25]})
+    w = s["wheel.w"]
+    whole.set(xlim=(t[0], t[-1]), xlabel="time [s]", ylabel="wheel speed [rad/s]",
+              title=f"Wheel speed (paper Fig. 3), the whole run; dotted: the "
+                    f"{len(ws.windows)} windows of {ws.window:g} s")
+    fig.canvas.draw()  # the layout, hence the axes' width in pixels
+    columns = max(1, int(whole.get_window_extent().width))
+    centre, low, high = envelope(t, w, columns)
+    whole.fill_between(centre, low, high, step="mid", lw=0, color="tab:blue",
+                       label=f"wheel speed: min–max of the {len(t) / columns:.0f} samples in "
+                             "each pixel column")
+    whole.axvspan(t[0], t[0] + ws.transient, color="0.85", zorder=0,
+                  label=f"start transient ({ws.transient:g} s, left out)")
     for start in ws.starts[1:]:
-        ax.axvline(start, color="0.6", lw=0.6, ls=":")
+        whole.axvline(start, color="0.6", lw=0.6, ls=":")
     mean = ws.scatter("mean_wheel_speed")
-    ax.hlines(mean.mean, ws.starts[0], ws.starts[-1] + ws.window, color="k", ls="--", lw=0.9,
-              label=f"mean after the transient: {mean.text(digits=4)} rad/s")
-    ax.set(xlabel="time [s]", ylabel="wheel speed [rad/s]",
-           title=f"Wheel speed (paper Fig. 3); dotted: the {len(ws.windows)} windows "
-                 f"of {ws.window:g} s")
-    ax.legend(loc="lower right", fontsize=8)
+    whole.hlines(mean.mean, ws.starts[0], ws.starts[-1] + ws.window, color="k", ls="--",
+                 lw=0.9, label=f"mean after the transient: {mean.text(digits=4)} rad/s")
+    period = 1.0 / catalogue.fundamental
+    span = zoom_span(t, ws.starts[0], period)
+    whole.axvspan(t[span][0], t[span][-1], color="tab:orange", alpha=0.5, lw=0,
+                  label="the span of the panel below")
+    _headroom(whole, low.min(), high.max(), above=0.45)
+    whole.legend(loc="upper center", fontsize=7, ncol=2)
+
+    tz = t[span]
+    zoom.plot(tz * 1e3, w[span], lw=0.8, color="tab:blue", label="wheel speed, every sample")
+    counts = []
+    for counter, marker, colour, flank in (("mesh.impacts_drive", "v", "tab:red", "drive"),
+                                           ("mesh.impacts_coast", "^", "tab:green", "coast")):
+        k = onset_samples(s[counter][span])
+        k = k[k > 0]  # an onset in the step ending at the span's first sample lies before it
+        counts.append(len(k))
+        zoom.plot(tz[k] * 1e3, w[span][k], marker, ms=5, color=colour, ls="none",
+                  label=f"{flank}-flank onsets ({len(k)}): an impact in the step ending there")
+    zoom.set(xlim=(tz[0] * 1e3, tz[-1] * 1e3), xlabel="time [ms]",
+             ylabel="wheel speed [rad/s]")
+    zoom.set_title(f"{ZOOM_PERIODS} forcing periods after the transient ({ZOOM_PERIODS} × "
+                   f"{period * 1e3:.1f} ms, f0 = {catalogue.fundamental:.2f} Hz), all "
+                   f"{len(tz)} samples: {counts[0]} drive and {counts[1]} coast onsets",
+                   fontsize=10)
+    _headroom(zoom, np.min(w[span]), np.max(w[span]), below=0.3)
+    zoom.legend(loc="lower center", fontsize=7, ncol=3)
     return _save(fig, out / "fig3_wheel_speed.png")
+
+
+def _headroom(ax, low: float, high: float, above: float = 0.0, below: float = 0.0) -> None:
+    """Y limits around ``low``–``high`` with ``above`` / ``below`` of the range left free for
+    a legend, which then hides no data."""
+    r = (high - low) or 1.0
+    ax.set_ylim(low - (0.04 + below) * r, high + (0.04 + above) * r)
 
 
 def _fig4(plt, t, s, ws, catalogue, out: Path) -> Path:
     """One tooth pair's normal force over three passages through the zone of action, around
-    its largest force after the transient."""
+    its largest force after the transient; the title counts that pair's onsets."""
     analysed = slice(ws.slices[0].start, ws.slices[-1].stop)
     ta = t[analysed]
     slot = max(range(MAX_PAIR_SLOTS), key=lambda k: np.max(s[f"pair[{k}].W"][analysed]))
@@ -267,35 +388,39 @@ def _fig4(plt, t, s, ws, catalogue, out: Path) -> Path:
     lo = max(ta[0], centre - 1.5 * period)
     hi = min(ta[-1], lo + 3 * period)
     span = (ta >= lo) & (ta <= hi)
-    drive = np.ptp(s["mesh.impacts_drive"][analysed][span])
-    coast = np.ptp(s["mesh.impacts_coast"][analysed][span])
-    if drive + coast == 0:
-        flank = "no contact onset in this span (the flanks stay in contact)"
-    elif coast == 0:
-        flank = f"drive flank: all {drive} contact onsets in this span"
-    elif drive == 0:
-        flank = f"coast flank: all {coast} contact onsets in this span"
-    else:
-        flank = f"both flanks: {drive} onsets on the drive, {coast} on the coast flank"
-    fig, ax = plt.subplots(figsize=(9, 4.2))
+    counts = pair_onsets(force[span], s["mesh.impacts_drive"][analysed][span],
+                         s["mesh.impacts_coast"][analysed][span])
+    fig, ax = plt.subplots(figsize=(10, 4.6), dpi=DPI, layout="constrained")
     ax.plot(ta[span] * 1e3, s["mesh.W"][analysed][span], lw=0.6, color="0.7",
             label="total normal force of all pairs (mesh.W)")
     ax.plot(ta[span] * 1e3, force[span], lw=1.0, color="tab:blue",
             label=f"normal force of the pair in slot {slot} (pair[{slot}].W)")
     ax.set(xlabel="time [ms]", ylabel="normal force [N]")
-    ax.set_title(f"Normal force of one tooth pair (slot {slot}) as it passes through the zone "
-                 f"of action (paper Fig. 4)\n{flank}; a new pair takes this slot every "
-                 f"{period * 1e3:.1f} ms", fontsize=10)
+    ax.set_title(f"Normal force of one tooth pair (slot {slot}) through the zone of action "
+                 f"(paper Fig. 4); a new pair takes this slot every {period * 1e3:.1f} ms\n"
+                 f"{pair_onsets_text(counts)}", fontsize=9)
     ax.legend(loc="upper right", fontsize=8)
     return _save(fig, out / "fig4_pair_force.png")
 
 
-def _fig5(plt, full, catalogue, out: Path) -> Path:
-    """The spectrum after the transient with its noise floor, the detection threshold, and
-    every detected line marked and named; names staggered in a strip above the plot."""
+#: Lines named in Fig. 5 (the strongest); every line is marked, and listed in comparison.md.
+NAMED_LINES = 10
+
+
+def named_lines(lines, count: int = NAMED_LINES) -> list:
+    """The ``count`` detected lines with the highest PSD, in order of frequency: the lines
+    Fig. 5 names (the others are marked and listed in comparison.md's line table)."""
+    return sorted(sorted(lines, key=lambda ln: -ln.psd)[:count], key=lambda ln: ln.frequency)
+
+
+def _fig5(plt, full, strongest, catalogue, out: Path) -> tuple[Path, list[str]]:
+    """The spectrum after the transient with its noise floor, the detection threshold, every
+    detected line marked, the strongest named in a strip above the plot, and the strongest
+    line over the windows (the comparison's) starred."""
     spec = full.spectrum
     f_max = min(full.search.f_max, spec.frequency[-1])
-    fig, (strip, ax) = plt.subplots(2, 1, figsize=(12, 6.5), sharex=True, layout="constrained",
+    fig, (strip, ax) = plt.subplots(2, 1, figsize=(12, 6.5), dpi=DPI, sharex=True,
+                                    layout="constrained",
                                     gridspec_kw={"height_ratios": [1, 3.2]})
     shown = spec.frequency <= f_max
     ax.semilogy(spec.frequency[shown], spec.psd[shown], lw=0.7, color="tab:blue",
@@ -307,43 +432,64 @@ def _fig5(plt, full, catalogue, out: Path) -> Path:
                 label=f"line threshold ({full.search.significance:.0%} family-wise)")
     for ln in full.lines:
         ax.plot(ln.frequency, ln.psd * 1.6, "v", ms=4, color=KIND_COLOURS[ln.kind])
-        strip.axvline(ln.frequency, color=KIND_COLOURS[ln.kind], lw=0.4, alpha=0.5)
+    named = named_lines(full.lines)
+    for ln in named:
+        strip.axvline(ln.frequency, color=KIND_COLOURS[ln.kind], lw=0.6, alpha=0.7)
     for kind in (*KINDS, UNEXPLAINED):  # legend entries for the marker colours
         ax.plot([], [], "v", color=KIND_COLOURS[kind], label=f"detected line: {kind}")
-    _staggered_names(fig, strip, full.lines, f_max)
+    if strongest is not None:
+        near = np.abs(spec.frequency - strongest.frequency) <= spec.resolution
+        ax.plot(strongest.frequency, float(np.max(spec.psd[near])) * 4.0, "*", ms=10,
+                color="gold", mec="k", mew=0.5,
+                label=f"the strongest line 100–1500 Hz over the windows (comparison.md): "
+                      f"{strongest.frequency:.1f} Hz, {strongest.name}, found in "
+                      f"{strongest.found_in} of {strongest.windows} windows")
     ax.set(xlim=(0, f_max), xlabel="frequency [Hz]", ylabel="PSD [N²/Hz]")
-    ax.legend(loc="lower center", fontsize=7, ncol=2)
+    fig.legend(loc="outside lower center", fontsize=7, ncol=3)
+    names = _staggered_names(fig, strip, named, f_max)
+    unnamed = len(full.lines) - len(named)
     strip.set_title(
         f"Normal-force spectrum after the transient (paper Fig. 5): Welch, {spec.segments} "
         f"Hann segments, {spec.resolution:g} Hz bins; mesh {catalogue.mesh_frequency:.1f} Hz, "
-        f"engine order 1 = {catalogue.shaft_frequency:.2f} Hz", fontsize=10)
-    return _save(fig, out / "fig5_force_spectrum.png")
+        f"engine order 1 = {catalogue.shaft_frequency:.2f} Hz\n{len(full.lines)} detected "
+        f"lines marked ▼, the {len(named)} strongest named"
+        + (f"; the other {unnamed} and the {len(full.resonances)} resonances (not drawn) are "
+           "listed in comparison.md" if unnamed or full.resonances else ""), fontsize=10)
+    return _save(fig, out / "fig5_force_spectrum.png"), names
 
 
-def _staggered_names(fig, strip, lines, f_max: float, tiers: int = 4) -> None:
+#: Size of the line names in Fig. 5 [pt].
+FONT_PT = 8.0
+
+
+def _staggered_names(fig, strip, lines, f_max: float, tiers: int = 2) -> list[str]:
     """Names of the lines as vertical text in ``strip``, each in the lowest tier where it
-    keeps a text height from its neighbours (the tier counter wraps if all are taken)."""
+    keeps a text height from its neighbours (the tier counter wraps if all are taken); the
+    names written, in order of frequency."""
     strip.set(ylim=(0, tiers), yticks=[])
     for side in ("left", "right", "top"):
         strip.spines[side].set_visible(False)
     fig.canvas.draw()
     width_px = strip.get_window_extent().width
-    text_px = 9.0  # height of 6.5 pt text at 120 dpi, plus a gap
+    text_px = FONT_PT / 72 * DPI + 2  # the height of a name's text, plus a gap
     min_df = text_px / width_px * f_max
     last = [-math.inf] * tiers
+    names = []
     for n, ln in enumerate(sorted(lines, key=lambda x: x.frequency)):
         free = [k for k in range(tiers) if ln.frequency - last[k] >= min_df]
         tier = free[0] if free else n % tiers
         last[tier] = ln.frequency
         name = ln.name or f"{ln.frequency:.0f} Hz ?"
-        strip.text(ln.frequency, tier + 0.05, name, rotation=90, fontsize=6.5,
+        strip.text(ln.frequency, tier + 0.05, name, rotation=90, fontsize=FONT_PT,
                    ha="center", va="bottom", color=KIND_COLOURS[ln.kind], clip_on=True)
+        names.append(name)
+    return names
 
 
 def _save(fig, path: Path) -> Path:
     if fig.get_layout_engine() is None:
         fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=DPI)
     return path
 
 

@@ -1,10 +1,16 @@
 """Every example runs (short horizons)."""
 
 import importlib.util
+import itertools
+import math
+import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from drive_rattle_cosim.analysis import strongest_line
+from drive_rattle_cosim.spectral_lines import SpectralLine
 from drive_rattle_cosim.sweep import read_results
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -46,9 +52,90 @@ def test_paper_scenario_example(tmp_path, fmus):
     assert all(" ± " in c and c.endswith("]") for c in cells[1:3]) and "3–4" in cells[3]
     text = (tmp_path / "models.md").read_text()
     assert "hypothesis" in text and "381.4 Hz" in text
+    # No statistic reads nan or inf: a missing one says why in words.
+    assert not re.search(r"\b(nan|inf)\b", report + text, re.IGNORECASE)
+    # Fig. 5 names only detected lines, the strongest few; the rest are in the line table.
+    full = result["lines"]
+    named = mod.named_lines(full.lines)
+    assert result["fig5_names"] == [ln.name or f"{ln.frequency:.0f} Hz ?" for ln in named]
+    assert 0 < len(named) <= min(mod.NAMED_LINES, len(full.lines))
+    assert all(any(ln is d for d in full.lines) for ln in named)
+    # The strongest line of the comparison is one of the lines the windows found.
+    line = strongest_line(ws)
+    if line is not None:
+        assert any(d.near(line.frequency) is not None for d in ws.detections)
+        assert f"| {line.text()} |" in report
     with pytest.raises(ValueError, match="transient"):
         mod.run(stop_time=0.5, transient=0.4, window=0.2, out_dir=tmp_path,
                 fmu_dir=fmus["GearMeshRattle"].parent)
+
+
+def test_the_envelope_holds_every_sample_where_a_thinned_line_aliases():
+    """A 200.2 Hz sine over 5 s on 1000 columns (200 per second): one sample per column
+    joined by a line shows a false 0.2 Hz wave; the min/max band of each column holds the
+    sine's full swing in every column, and equals a brute-force min/max per column."""
+    mod = load("paper_scenario")
+    t = np.arange(50_001) * 1e-4
+    y = np.sin(2 * np.pi * 200.2 * t)
+    centre, low, high = mod.envelope(t, y, 1000)
+    edges = np.linspace(t[0], t[-1], 1001)
+    brute = []
+    for a, b in itertools.pairwise(edges):  # [a, b), the last column with its end
+        inside = y[(t >= a) & ((t < b) | (b == edges[-1]))]
+        brute.append((inside.min(), inside.max()))
+    assert centre == pytest.approx(0.5 * (edges[:-1] + edges[1:]))
+    assert np.column_stack([low, high]) == pytest.approx(np.array(brute))
+    assert low.max() < -0.99 and high.min() > 0.99  # the full swing in every column
+    thinned = y[::50]  # one sample per column: a 0.2 Hz wave, one period over the 5 s
+    assert np.ptp(thinned) > 1.99 and np.all(np.abs(np.diff(thinned)) < 0.01)
+    # Fewer samples than columns: only the columns that hold one.
+    centre, low, high = mod.envelope(t[:7], y[:7], 100)
+    assert len(centre) == 7 and low == pytest.approx(y[:7]) and high == pytest.approx(y[:7])
+    with pytest.raises(ValueError, match="columns"):
+        mod.envelope(t, y, 0)
+
+
+def test_the_zoom_spans_whole_forcing_periods_after_the_transient():
+    mod = load("paper_scenario")
+    h = 1e-4
+    t = np.arange(50_001) * h
+    period = 60.0 / (2 * 830.0)  # engine order 2 at 830 rpm: 36.1 ms
+    span = mod.zoom_span(t, 1.0, period)
+    assert t[span][0] == pytest.approx(1.0)
+    assert span.stop - span.start == math.floor(3 * period / h) + 1
+    assert t[span][-1] <= 1.0 + 3 * period < t[span][-1] + h
+    end = mod.zoom_span(t, 4.99, period)  # cut at the record's end
+    assert t[end][-1] == t[-1]
+    with pytest.raises(ValueError, match="start"):
+        mod.zoom_span(t, 6.0, period)
+
+
+def test_a_pair_counts_its_own_onsets_by_the_flank_counters_of_the_step():
+    """The pair's force rises from 0 four times: with a drive-flank onset in the step, with
+    a coast-flank one, with both, and with neither (it takes up load on a flank in
+    contact); a force already up at the span's start is no onset."""
+    mod = load("paper_scenario")
+    force = [3, 0, 5, 2, 0, 0, 4, 0, 1, 1, 0, 6, 0]
+    drive = [0, 0, 1, 1, 1, 1, 1, 1, 2, 2, 2, 2, 2]
+    coast = [0, 0, 0, 0, 0, 0, 1, 1, 2, 2, 2, 2, 2]
+    counts = mod.pair_onsets(force, drive, coast)
+    assert counts == {"drive": 1, "coast": 1, "both": 1, "under load": 1}
+    assert mod.pair_onsets_text(counts).startswith("4 contact onsets of this pair")
+    assert mod.pair_onsets([0, 0, 0], [0, 1, 2], [0, 0, 0]) == dict.fromkeys(
+        mod.PAIR_ONSET_KINDS, 0)
+    assert mod.pair_onsets_text(dict.fromkeys(mod.PAIR_ONSET_KINDS, 0)).startswith(
+        "no contact onset of this pair")
+
+
+def test_fig5_names_the_strongest_detected_lines_only():
+    mod = load("paper_scenario")
+    lines = [SpectralLine(100.0 + 10 * k, psd=float((7 * k) % 13 + 1), floor=0.1,
+                          threshold=2.6, name=f"L{k}") for k in range(13)]
+    named = mod.named_lines(lines, 4)
+    assert sorted(ln.psd for ln in named) == sorted(ln.psd for ln in lines)[-4:]
+    assert [ln.frequency for ln in named] == sorted(ln.frequency for ln in named)
+    assert mod.named_lines(lines[:3], 4) == sorted(lines[:3], key=lambda ln: ln.frequency)
+    assert mod.named_lines([], 4) == []
 
 
 def test_rattle_maps_example(tmp_path):

@@ -163,6 +163,64 @@ CONNECTIONS = (_fed_by(MESH, MESH_INPUTS, DRIVELINE, DRIVELINE_OUTPUTS)
                + _fed_by(DRIVELINE, DRIVELINE_INPUTS, MESH, MESH_OUTPUTS))
 
 
+class FlangeMember(NamedTuple):
+    """One variable of a shaft's flange: its member name (``phi``, ``w``, ``a``, ``tau``, as
+    the Modelica Standard Library's rotational signal adaptors for FMUs name angle, speed,
+    acceleration and torque), the unit's variable, and how a connection treats it (FMI 3.0's
+    ``variableKind``): ``signal`` (equal on both sides), or for the torque, which sums to zero
+    at a connection, ``inflow`` (positive: the torque on the unit through the flange, in its
+    forward direction) or ``outflow`` (positive: the opposite)."""
+
+    member: str
+    variable: str
+    kind: str = "signal"
+
+
+class Flange(NamedTuple):
+    """A shaft's flange of a unit: where a driveline tool would connect it (an FMI 3.0
+    terminal, docs/fmi3.md)."""
+
+    unit: str
+    name: str
+    description: str
+    members: tuple[FlangeMember, ...]
+
+
+def _flange(unit: str, name: str, description: str, *members: tuple[str, ...]) -> Flange:
+    """A flange of ``unit`` whose members are the unit's inputs or outputs; ImportError if one
+    is not."""
+    signals = {s.name for s in {MESH: MESH_INPUTS + MESH_OUTPUTS,
+                                DRIVELINE: DRIVELINE_INPUTS + DRIVELINE_OUTPUTS}[unit]}
+    flange = Flange(unit, name, description, tuple(FlangeMember(*m) for m in members))
+    missing = [m.variable for m in flange.members if m.variable not in signals]
+    if missing:
+        raise ImportError(f"flange {unit}.{name}: {missing} are not signals of {unit}")
+    return flange
+
+
+#: The shafts' flanges of each unit, one per shaft the unit meets.  Torques: the mesh's
+#: pinion.tau_mesh is the torque the mesh puts on the pinion, so the torque on the mesh through
+#: that flange is -pinion.tau_mesh (outflow); wheel.tau_load resists the wheel, so it is the
+#: torque on the mesh through the wheel's flange with the sign reversed (outflow) and, by
+#: reaction, the torque on the Driveline's output shaft (inflow).  The Driveline drives the
+#: input shaft by its kinematics alone, so its pinion flange has no torque; the mesh has no
+#: wheel acceleration.  Matched by member name, the flanges of the two units give CONNECTIONS.
+FLANGES = (
+    _flange(MESH, "pinion", "the pinion's flange on the input shaft: the pinion's motion in, "
+            "the mesh torque on the pinion out",
+            ("phi", "pinion.phi"), ("w", "pinion.w"), ("a", "pinion.a"),
+            ("tau", "pinion.tau_mesh", "outflow")),
+    _flange(MESH, "wheel", "the wheel's flange on the output shaft: the wheel's motion out, "
+            "the output shaft's resisting torque in",
+            ("phi", "wheel.phi"), ("w", "wheel.w"), ("tau", "wheel.tau_load", "outflow")),
+    _flange(DRIVELINE, "pinion", "the input shaft's flange at the pinion: its motion out",
+            ("phi", "pinion.phi"), ("w", "pinion.w"), ("a", "pinion.a")),
+    _flange(DRIVELINE, "wheel", "the output shaft's flange at the wheel: the wheel's motion "
+            "in, the output shaft's torque on the wheel out",
+            ("phi", "wheel.phi"), ("w", "wheel.w"), ("tau", "wheel.tau_load", "inflow")),
+)
+
+
 def inputs_of(unit: str, outputs: dict[str, dict[str, float]]) -> dict[str, float]:
     """The inputs of ``unit`` from the outputs of every unit (``{unit: {output: value}}``)
     along ``CONNECTIONS``."""

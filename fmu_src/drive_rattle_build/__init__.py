@@ -16,8 +16,10 @@ compiler), ``model_tables`` (the library's tables from the specs), ``library`` (
 library), ``shim`` (the pythonfmu FMUs' status shim), ``documentation`` (the interface pages
 and tables), ``templates`` (the interface check), ``fmu`` (packaging and validation),
 ``native`` (the native FMUs), ``fmi3`` and ``model_description_fmi3`` (the FMI 3.0 FMUs),
-``system`` (the SSP files), ``cli``.  The names below are
-imported on first use, so that building the library alone needs none of the rest.
+``terminals`` (their terminals and icon), ``platforms`` (the binaries' platforms, a binary
+compiled into a finished FMU), ``icon`` (the images), ``system`` (the SSP files), ``cli``.
+The names below are imported on first use, so that building the library alone needs none of
+the rest.
 """
 
 from importlib import import_module

@@ -1,17 +1,24 @@
 """The build's command line: ``drive-rattle-build`` (``python build_fmu.py`` in a clone).
 
     drive-rattle-build [--out dist] [--update-templates] [--no-fmutool] [--no-native]
-                       [--no-fmi3]
+                       [--no-fmi3] [--platform NAME ...]
+    drive-rattle-build --platform NAME [--platform NAME ...] --fmu FMU [--fmu FMU ...]
     drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
     drive-rattle-build --update-docs   # docs/fmi.md's tables, docs/tools.md's numbers
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
 own system files (``native``; ``--no-native`` skips them), and as FMI 3.0 co-simulation FMUs
-into ``<out>/fmi3/`` with theirs (``fmi3``; ``--no-fmi3`` skips them).  The system files:
-``DriveRattle.ssp`` and ``DriveRattle_outputs.ssp`` (the same with every output a system output,
-``system``); those of the FMI 3.0 units run in ecos and fmu-manipulation-toolbox's container
-(libcosim and fmpy's SSP runner read FMI 1.0 and 2.0 FMUs only).
+(x86_64-linux, x86_64-windows and aarch64-linux binaries) into ``<out>/fmi3/`` with theirs
+(``fmi3``; ``--no-fmi3`` skips them).  The system files: ``DriveRattle.ssp`` and
+``DriveRattle_outputs.ssp`` (the same with every output a system output, ``system``); those of
+the FMI 3.0 units run in ecos and fmu-manipulation-toolbox's container (libcosim and fmpy's SSP
+runner read FMI 1.0 and 2.0 FMUs only).
+
+``--platform`` (an FMI 3.0 platform tuple, ``platforms.PLATFORMS``) adds a binary for that
+platform, cross-compiled by ziglang's clang: to the native and FMI 3.0 FMUs of the build, or,
+with ``--fmu``, to existing FMUs from their own sources (nothing else is built).  The macOS
+binaries are untested here (nothing runs them), and the command says so.
 """
 
 from __future__ import annotations
@@ -24,6 +31,14 @@ from .compiler import BuildError
 from .documentation import interface_docs
 from .library import build_in_place
 from .paths import DIST, FMI_DOCS, TOOLS_DOCS
+from .platforms import (
+    FMI2_SHIPPED,
+    FMI3_SHIPPED,
+    PLATFORMS,
+    UNTESTED,
+    UNTESTED_NOTE,
+    add_binary,
+)
 
 DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co-simulation), "
                "validate them, and write the systems dist/DriveRattle.ssp and "
@@ -43,6 +58,18 @@ def update_docs() -> list[Path]:
     return [FMI_DOCS, TOOLS_DOCS]
 
 
+def with_extra(shipped: tuple[str, ...], extra: list[str]) -> tuple[str, ...]:
+    """The shipped platforms and the requested ones, each once."""
+    return tuple(dict.fromkeys((*shipped, *extra)))
+
+
+def listing(platforms: tuple[str, ...], fmi_major: int) -> str:
+    """The platforms' folders in an FMU of FMI version ``fmi_major``, the untested ones
+    marked."""
+    return ", ".join(PLATFORMS[p].folder(fmi_major) + (" (untested)" if p in UNTESTED else "")
+                     for p in platforms)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="drive-rattle-build", description=DESCRIPTION)
     ap.add_argument("--out", type=Path, default=DIST, help="output folder")
@@ -60,8 +87,26 @@ def main(argv=None) -> int:
                     help="skip the native (C only) FMUs of <out>/native/")
     ap.add_argument("--no-fmi3", action="store_true",
                     help="skip the FMI 3.0 (C only) FMUs of <out>/fmi3/")
+    ap.add_argument("--platform", action="append", default=[], choices=list(PLATFORMS),
+                    metavar="NAME",
+                    help="also compile a binary for this platform (an FMI 3.0 platform tuple: "
+                         f"{', '.join(PLATFORMS)}; repeatable), into the native and FMI 3.0 "
+                         "FMUs of the build, or with --fmu into those FMUs; the macOS ones "
+                         "are untested here")
+    ap.add_argument("--fmu", action="append", default=[], type=Path, metavar="FMU",
+                    help="with --platform: compile that FMU's own sources into it instead of "
+                         "building (repeatable)")
     args = ap.parse_args(argv)
+    if args.fmu and not args.platform:
+        ap.error("--fmu needs --platform NAME: the platform to compile the FMU's sources for")
     try:
+        if args.fmu:
+            for fmu in args.fmu:
+                for name in args.platform:
+                    member = add_binary(fmu, name)
+                    note = f" ({UNTESTED_NOTE})" if name in UNTESTED else ""
+                    print(f"added {member} to {fmu}{note}")
+            return 0
         if args.library:
             print(f"built the model library {build_in_place()}")
             return 0
@@ -81,20 +126,23 @@ def main(argv=None) -> int:
         if not args.no_native:
             from .native import NATIVE_SUBDIR, build_native
 
-            native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool)
+            platforms = with_extra(FMI2_SHIPPED, args.platform)
+            native = build_native(args.out / NATIVE_SUBDIR, not args.no_fmutool, platforms)
             for fmu in native:
-                print(f"built and validated {fmu} (native: C only, linux64 and win64)")
+                print(f"built and validated {fmu} (native: C only, "
+                      f"{listing(platforms, 2)})")
             for system in write_systems(native, args.out / NATIVE_SUBDIR,
                                         not args.no_fmutool):
                 print(f"wrote the system {system}")
         if not args.no_fmi3:
             from .fmi3 import FMI3_SUBDIR, build_fmi3
 
-            fmi3 = build_fmi3(args.out / FMI3_SUBDIR, not args.no_fmutool,
+            platforms = with_extra(FMI3_SHIPPED, args.platform)
+            fmi3 = build_fmi3(args.out / FMI3_SUBDIR, not args.no_fmutool, platforms,
                               update_templates=args.update_templates)
             for fmu in fmi3:
                 print(f"built and validated {fmu} (FMI 3.0 co-simulation, C only, "
-                      "x86_64-linux and x86_64-windows)")
+                      f"{listing(platforms, 3)})")
             for system in write_systems(fmi3, args.out / FMI3_SUBDIR, not args.no_fmutool):
                 print(f"wrote the system {system} (of the FMI 3.0 units)")
     except BuildError as err:

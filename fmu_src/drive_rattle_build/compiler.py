@@ -19,10 +19,10 @@ class BuildError(RuntimeError):
     """The build cannot go on; the message says why and what to do."""
 
 
-#: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline x86-64
-#: (instructions every x86-64 host has) with glibc, so that a library built with ziglang and
-#: one built with gcc call the same libm and compute the same numbers.
-ZIG_TARGET = {"x86_64": "x86_64-linux-gnu"}
+#: ziglang's clang targets the build machine's CPU unless told otherwise: a baseline CPU
+#: (instructions every host of the architecture has) with glibc, so that a library built with
+#: ziglang and one built with gcc call the same libm and compute the same numbers.
+ZIG_TARGET = {"x86_64": "x86_64-linux-gnu", "aarch64": "aarch64-linux-gnu"}
 _ZIG_WRAPPER: list[str] = []
 
 
@@ -72,14 +72,15 @@ def c_compiler() -> str:
 #: IEEE arithmetic without contraction (docs/model_library.md: "Reproducible numbers"),
 #: warnings on: the flags of every C the build compiles for an FMU or the library.
 IEEE_CFLAGS = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra")
-#: The FMI platforms the build compiles for: the ziglang target of each (None: the build
-#: machine's compiler).
+#: The platforms of the model library the pythonfmu FMUs ship (``library``), by FMI 2.0
+#: folder: the ziglang target of each (None: the build machine's compiler).  The FMUs' own
+#: binaries: ``platforms``.
 TARGETS = {"linux64": None, "win64": "x86_64-windows-gnu"}
 
 
 def zig_cc(target: str) -> list[str]:
     """``python -m ziglang cc -target <target>`` (the ziglang package, a dependency): the
-    cross-compiler of the win64 binaries."""
+    cross-compiler of every binary but the build machine's own."""
     try:
         import ziglang  # noqa: F401
     except ImportError:

@@ -1,7 +1,8 @@
 """FMI 3.0 FMUs: GearMeshRattle and Driveline as the model library (``fmu_src/rattle_model``)
 under its FMI 3.0 co-simulation face (``fmu_src/fmi3/fmi3_functions.c``), with no Python at run
-time, built for x86_64-linux and x86_64-windows and shipped with their C sources, into
-``<out>/fmi3/`` (docs/fmi3.md).
+time, built for x86_64-linux, x86_64-windows and aarch64-linux (``platforms.FMI3_SHIPPED``; more
+on request) and shipped with their C sources, an icon and a terminal per shaft
+(``terminals``), into ``<out>/fmi3/`` (docs/fmi3.md).
 
 The same model as the FMI 2.0 native FMUs (``native``): the library's sources as they are, a
 face that holds no physics, ``rattle_fmi_common.c`` (what every FMI layer shares: the resources
@@ -19,7 +20,7 @@ flavour "fmi3", the library's sources and the face's).  The modelDescription is 
 
 ``build_fmi3(out_dir)`` compiles, packs and validates both FMUs.  Build time only: fmpy (the
 FMI 3.0 headers, validate_fmu), a C compiler for x86_64-linux (``compiler.c_compiler``) and the
-``ziglang`` package for x86_64-windows.
+``ziglang`` package for the other platforms (``platforms``).
 """
 
 from __future__ import annotations
@@ -40,21 +41,29 @@ from drive_rattle.catalog import UNITS
 from drive_rattle.interface import MODELS
 
 from . import model_description_fmi3, model_tables, templates
-from .compiler import IEEE_CFLAGS, BuildError, c_compiler, compile_library, zig_cc
+from .compiler import BuildError, c_compiler
 from .documentation import LICENSE_ENTRY, html_page, license_text
 from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
 from .native import CONFIG_HEADER, RESOURCE_MARKER, model_sources, render_config
 from .paths import DIST, FMI2_SOURCE, FMI3_SOURCE, MODEL_SOURCE, TEMPLATES
+from .platforms import (
+    FMI3_SHIPPED,
+    PLATFORMS,
+    binaries_html,
+    binary_member,
+    compile_for,
+    cross_compile_html,
+    write_binary,
+)
+from .terminals import add_terminals_and_icon
 
 #: The FMI 3.0 face and what it shares with the other FMI layers, compiled with the library.
 GLUE_SOURCES = ("fmi3_functions.c", "rattle_fmi_common.c")
 GLUE_HEADERS = ("rattle_fmi_common.h",)
 #: The FMI 3.0 headers, as the standard ships them (fmpy bundles them).
 FMI_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
-#: FMI 3.0 platform tuple -> (binary suffix, ziglang target or None for the build's compiler)
-PLATFORMS = {"x86_64-linux": (".so", None), "x86_64-windows": (".dll", "x86_64-windows-gnu")}
 #: Where the FMI 3.0 FMUs go, below the output folder.
 FMI3_SUBDIR = "fmi3"
 #: The committed normalised modelDescriptions of the FMI 3.0 FMUs.
@@ -138,25 +147,12 @@ def compile_binary(sources: Path, out: Path, platform: str = "x86_64-linux",
                    cc: str | Sequence[str] | None = None,
                    extra_flags: Sequence[str] = ()) -> Path:
     """Compile the FMU's ``sources`` folder (:func:`stage_sources`) into the shared library
-    ``out`` for ``platform``; only the fmi3 functions exported; BuildError with the
-    compiler's output on failure or on any warning (-Werror)."""
-    _, target = PLATFORMS[platform]
-    if target is None:
-        compiler = cc or c_compiler()
-        flags = [*IEEE_CFLAGS, "-fPIC", "-shared", "-fvisibility=hidden"]
-        libs = ["-lm"]
-    else:
-        compiler = zig_cc(target)
-        flags = [*IEEE_CFLAGS, "-shared"]
-        libs = []
+    ``out`` for ``platform`` (``platforms.compile_for``); only the fmi3 functions exported;
+    BuildError with the compiler's output on failure or on any warning (-Werror)."""
     sources = Path(sources)
-    files = [sources / name for name in source_files()]
-    flags += ["-Werror", *source_flags(), *extra_flags, "-I", str(sources.resolve())]
-    try:
-        return compile_library(compiler, flags, files, Path(out),
-                               f"the FMI 3.0 {Path(out).stem} for {platform}", libs=libs)
-    except RuntimeError as err:
-        raise BuildError(str(err)) from None
+    return compile_for(platform, [sources / name for name in source_files()], sources,
+                       Path(out), cc, ["-Werror", *source_flags(), *extra_flags],
+                       f"the FMI 3.0 {Path(out).stem}")
 
 
 # ------------------------------------------------------------------ modelDescription
@@ -209,12 +205,11 @@ def hold_template(model: str, root: Element, update: bool = False) -> None:
 
 # ------------------------------------------------------------------ packing
 FMI3_HOW_TO_RUN = """<p>This is an FMI 3.0 co-simulation FMU implemented entirely in C: it needs
-no Python and no other runtime where it runs. Binaries for x86_64-linux
-(<code>binaries/x86_64-linux/{name}.so</code>) and x86_64-windows
-(<code>binaries/x86_64-windows/{name}.dll</code>) are included, and the C sources
+no Python and no other runtime where it runs. {binaries}, and the C sources
 (<code>sources/</code>, listed in <code>sources/buildDescription.xml</code>) compile for other
 platforms:</p>
 <pre>cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I sources -o {name}.so sources/*.c -lm</pre>
+{cross_compile}
 <p>Types: the table's Real is an FMI 3.0 Float64, Integer an Int32, except the integer codes
 with named choices, which are Enumerations (set and read with fmi3SetInt64/fmi3GetInt64).
 The independent variable is <code>time</code>. Warnings are logged when logging is on
@@ -226,7 +221,9 @@ result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
 
 def documentation_page(model: str, platforms: Sequence[str]) -> str:
     """documentation/index.html: the interface page of the FMUs in FMI 3.0's words."""
-    page = html_page(UNITS[model], FMI3_HOW_TO_RUN.format(name=model),
+    page = html_page(UNITS[model], FMI3_HOW_TO_RUN.format(
+                         name=model, binaries=binaries_html(model, 3, platforms),
+                         cross_compile=cross_compile_html(model)),
                      build_note="implemented in C (no Python at run time), binaries for "
                                 f"{' and '.join(platforms)} and C sources")
     page = page.replace("FMI 2.0 co-simulation", "FMI 3.0 co-simulation").replace("fmi2",
@@ -237,7 +234,7 @@ def documentation_page(model: str, platforms: Sequence[str]) -> str:
 
 
 def package_fmi3(model: str, out_dir: Path, cc: str | Sequence[str] | None = None,
-                 platforms: Sequence[str] = tuple(PLATFORMS),
+                 platforms: Sequence[str] = FMI3_SHIPPED,
                  reference_files: Sequence[Path] = ()) -> Path:
     """Build ``out_dir/<model>.fmu``: sources (with buildDescription.xml), binaries for
     ``platforms``, modelDescription, resources (the marker and ``reference_files`` under
@@ -250,17 +247,14 @@ def package_fmi3(model: str, out_dir: Path, cc: str | Sequence[str] | None = Non
         tmp = Path(tmp)
         sources = tmp / "sources"
         stage_sources(model, token, sources)
-        binaries = {p: compile_binary(sources, tmp / "binaries" / p / f"{model}"
-                                      f"{PLATFORMS[p][0]}", p, cc) for p in platforms}
+        binaries = {binary_member(model, 3, p): compile_binary(
+            sources, tmp / p / f"{model}{PLATFORMS[p].suffix}", p, cc) for p in platforms}
         xml = xml_text(render_model_description(model, token))
         part = fmu.with_name(f".{fmu.name}.{os.getpid()}.part")
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml", xml)
-            for platform, binary in binaries.items():
-                info = zipfile.ZipInfo(f"binaries/{platform}/{model}{PLATFORMS[platform][0]}")
-                info.compress_type = zipfile.ZIP_DEFLATED
-                info.external_attr = 0o100755 << 16
-                z.writestr(info, binary.read_bytes())
+            for member, binary in binaries.items():
+                write_binary(z, member, binary.read_bytes())
             for source in sorted(sources.iterdir()):
                 z.write(source, f"sources/{source.name}")
             z.writestr(f"resources/{RESOURCE_MARKER}", f"{model}\n")
@@ -268,12 +262,13 @@ def package_fmi3(model: str, out_dir: Path, cc: str | Sequence[str] | None = Non
                 z.write(ref, f"resources/regression/{Path(ref).name}")
             z.writestr("documentation/index.html", documentation_page(model, platforms))
             z.writestr(LICENSE_ENTRY, license_text())
+            add_terminals_and_icon(z, model)
         os.replace(part, fmu)
     return fmu
 
 
 def build_fmi3(out_dir: Path = DIST / FMI3_SUBDIR, use_fmutool: bool = True,
-               platforms: Sequence[str] = tuple(PLATFORMS), models: Sequence[str] = MODELS,
+               platforms: Sequence[str] = FMI3_SHIPPED, models: Sequence[str] = MODELS,
                check_template: bool = True, update_templates: bool = False) -> list[Path]:
     """Build the FMI 3.0 FMUs into ``out_dir``, hold each against its committed template
     (``check_template``; ``update_templates`` rewrites them) and validate it (fmpy's

@@ -1,6 +1,8 @@
-"""The FMUs' icon, ``model.png`` at the archive's root (FMI 2.0, section 2.3): a pinion
-meshing with a wheel, drawn by the build with the standard library alone (no plotting package
-is a build dependency), the same bytes on every build.
+"""The FMUs' icon, ``model.png`` at the archive's root (FMI 2.0, section 2.3) and
+``terminalsAndIcons/icon.png`` in the FMI 3.0 FMUs: a pinion meshing with a wheel; and the
+image of their terminals, a shaft's flange (``flange_png``).  Drawn by the build with the
+standard library alone (no plotting package is a build dependency), the same bytes on every
+build.
 
     python -m drive_rattle_build.icon out.png     # write it to look at
 """
@@ -25,6 +27,17 @@ GEARS = (
 PINION_RADIUS = 20.0
 #: Tooth height over the pitch radius (addendum = dedendum = this / 2) and the hole.
 TOOTH, HOLE = 0.24, 0.22
+
+
+#: A flange's image: side [px] and colour, a filled disc in the grey of the Modelica Standard
+#: Library's rotational Flange_a icon (fillColor {95,95,95}).
+FLANGE_SIZE, FLANGE_RGB = 32, (95, 95, 95)
+
+
+def gear_centres() -> dict[str, tuple[float, float]]:
+    """The centres of the wheel and the pinion in the icon, in pixels from its top left."""
+    wheel, pinion = _gears()
+    return {"wheel": (wheel[0], wheel[1]), "pinion": (pinion[0], pinion[1])}
 
 
 def _gears():
@@ -94,6 +107,20 @@ def model_png() -> bytes:
             row += bytes((*rgb, round(255 * total / (n * n))))
         rows.append(bytes(row))
     return _png(SIZE, SIZE, rows)
+
+
+def flange_png() -> bytes:
+    """A terminal's image as PNG bytes (RGBA): the flange's disc, transparent around it."""
+    n, radius = SUPERSAMPLE, FLANGE_SIZE / 2
+    rows = []
+    for j in range(FLANGE_SIZE):
+        row = bytearray()
+        for i in range(FLANGE_SIZE):
+            hits = sum(math.hypot(i + (a + 0.5) / n - radius, j + (b + 0.5) / n - radius)
+                       <= radius for a in range(n) for b in range(n))
+            row += bytes((*FLANGE_RGB, round(255 * hits / (n * n))) if hits else bytes(4))
+        rows.append(bytes(row))
+    return _png(FLANGE_SIZE, FLANGE_SIZE, rows)
 
 
 def add_icon(fmu: Path) -> None:

@@ -1,6 +1,7 @@
 """Native FMUs: GearMeshRattle and Driveline as the model library (``fmu_src/rattle_model``)
 under its FMI 2.0 face (``fmu_src/fmi2/fmi2_functions.c``), with no Python at run time, built
-for linux64 and win64 and shipped with their C sources.
+for linux64 and win64 (``platforms.FMI2_SHIPPED``; more on request) and shipped with their C
+sources.
 
 Each FMU's binary is the one model compiled with the glue: the library's sources, the glue,
 ``rattle_fmi_common.c`` (what the glue shares with the pythonfmu FMUs' status shim) and a small
@@ -17,7 +18,7 @@ and its interface held against the committed ``modelDescription_templates/``.
 ``build_native(out_dir)`` compiles, packs and validates both FMUs into ``out_dir``
 (``dist/native`` from ``drive-rattle-build``).  Build time only: it needs fmpy (the FMI 2.0
 headers, validate_fmu), a C compiler for linux64 (``compiler.c_compiler``) and the ``ziglang``
-package for win64.
+package for the other platforms (``platforms``).
 """
 
 from __future__ import annotations
@@ -41,13 +42,22 @@ from drive_rattle.interface import (
 )
 
 from . import model_description, model_tables, templates
-from .compiler import IEEE_CFLAGS, TARGETS, BuildError, c_compiler, compile_library, zig_cc
+from .compiler import BuildError, c_compiler
 from .documentation import LICENSE_ENTRY, html_page, license_text
 from .fmu import validate
 from .icon import model_png
 from .identity import fmu_guid
 from .library import source_flags
 from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
+from .platforms import (
+    FMI2_SHIPPED,
+    PLATFORMS,
+    binaries_html,
+    binary_member,
+    compile_for,
+    cross_compile_html,
+    write_binary,
+)
 from .shim import fmi2_headers
 
 #: The FMI 2.0 face, compiled with the model library into every native FMU.
@@ -57,11 +67,6 @@ GLUE_HEADERS = ("rattle_fmi_common.h", "rattle_fmi2_common.h")
 CONFIG_HEADER = "rattle_fmu_config.h"
 #: The FMI 2.0 headers, as the standard ships them (fmpy bundles them).
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-#: The IEEE flags (the library's symbols stay hidden: only the fmi2 functions are exported).
-CFLAGS = IEEE_CFLAGS
-#: platform folder -> (binary suffix, ziglang target or None for the build's compiler)
-PLATFORMS = {platform: (".dll" if target else ".so", target)
-             for platform, target in TARGETS.items()}
 #: The file in resources/ that identifies the FMU (the native counterpart of pythonfmu's
 #: slavemodule.txt): its model identifier on the first line.
 RESOURCE_MARKER = "model_identifier.txt"
@@ -128,30 +133,18 @@ def stage_sources(model: str, guid: str, folder: Path) -> list[Path]:
     return sorted(folder.iterdir())
 
 
-def compile_binary(sources: Path, out: Path, platform: str = "linux64",
+def compile_binary(sources: Path, out: Path, platform: str = "x86_64-linux",
                    cc: str | Sequence[str] | None = None,
                    extra_flags: Sequence[str] = ()) -> Path:
     """Compile the FMU's ``sources`` folder (:func:`stage_sources`) into the shared library
-    ``out`` for ``platform``: linux64 with ``cc`` (default the build's compiler), win64 with
-    ziglang's clang; only the fmi2 functions exported.  BuildError with the compiler's output
-    on failure or on any warning (-Werror: the sources compile warning-free)."""
-    _, target = PLATFORMS[platform]
-    if target is None:
-        compiler = cc or c_compiler()
-        flags = [*CFLAGS, "-fPIC", "-shared", "-fvisibility=hidden"]
-        libs = ["-lm"]
-    else:
-        compiler = zig_cc(target)
-        flags = [*CFLAGS, "-shared"]
-        libs = []
+    ``out`` for ``platform`` (an FMI 3.0 platform tuple, ``platforms.compile_for``: the build
+    machine's with ``cc``, others with ziglang's clang); only the fmi2 functions exported.
+    BuildError with the compiler's output on failure or on any warning (-Werror: the sources
+    compile warning-free)."""
     sources = Path(sources)
-    files = [sources / name for name in source_files()]
-    flags += ["-Werror", *source_flags(), *extra_flags, "-I", str(sources.resolve())]
-    what = f"the native {Path(out).stem} for {platform}"
-    try:
-        return compile_library(compiler, flags, files, Path(out), what, libs=libs)
-    except RuntimeError as err:
-        raise BuildError(str(err)) from None
+    return compile_for(platform, [sources / name for name in source_files()], sources,
+                       Path(out), cc, ["-Werror", *source_flags(), *extra_flags],
+                       f"the native {Path(out).stem}")
 
 
 # ------------------------------------------------------------------ modelDescription
@@ -192,10 +185,10 @@ def interface_diff(model: str, root: Element) -> list[str]:
 
 # ------------------------------------------------------------------ packing
 NATIVE_HOW_TO_RUN = """<p>This FMU is implemented entirely in C: it needs no Python and no other
-runtime where it runs. Binaries for linux64 (<code>binaries/linux64/{name}.so</code>) and win64
-(<code>binaries/win64/{name}.dll</code>) are included, and the C sources
-(<code>sources/</code>, listed in the modelDescription) compile for other platforms:</p>
+runtime where it runs. {binaries}, and the C sources (<code>sources/</code>, listed in the
+modelDescription) compile for other platforms:</p>
 <pre>cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I sources -o {name}.so sources/*.c -lm</pre>
+{cross_compile}
 <p>(<code>-ffp-contract=off</code> and no <code>-ffast-math</code>: the results are then those
 of the shipped binary, bit for bit, on the same C library.) In Python:</p>
 <pre>from fmpy import simulate_fmu
@@ -204,7 +197,7 @@ result = simulate_fmu("{name}.fmu", output_interval=1e-4, stop_time=0.1)</pre>
 
 
 def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = None,
-                   platforms: Sequence[str] = tuple(PLATFORMS),
+                   platforms: Sequence[str] = FMI2_SHIPPED,
                    reference_files: Sequence[Path] = ()) -> Path:
     """Build ``out_dir/<model>.fmu``: sources, binaries for ``platforms``, modelDescription,
     resources (the marker and ``reference_files`` under resources/regression/) and
@@ -217,22 +210,22 @@ def package_native(model: str, out_dir: Path, cc: str | Sequence[str] | None = N
         tmp = Path(tmp)
         sources = tmp / "sources"
         stage_sources(model, guid, sources)
-        binaries = {p: compile_binary(sources, tmp / "binaries" / p / f"{model}"
-                                      f"{PLATFORMS[p][0]}", p, cc) for p in platforms}
+        binaries = {binary_member(model, 2, p): compile_binary(
+            sources, tmp / p / f"{model}{PLATFORMS[p].suffix}", p, cc) for p in platforms}
         root = render_model_description(model, guid)
         xml = ElementTree.tostring(root, encoding="unicode", xml_declaration=False)
-        page = html_page(UNITS[model], NATIVE_HOW_TO_RUN.format(name=model),
+        folders = [PLATFORMS[p].folder(2) for p in platforms]
+        page = html_page(UNITS[model], NATIVE_HOW_TO_RUN.format(
+                             name=model, binaries=binaries_html(model, 2, platforms),
+                             cross_compile=cross_compile_html(model)),
                          build_note="implemented in C (no Python at run time), binaries for "
-                                    f"{' and '.join(platforms)} and C sources")
+                                    f"{' and '.join(folders)} and C sources")
         part = fmu.with_name(f".{fmu.name}.{os.getpid()}.part")
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr("modelDescription.xml",
                        '<?xml version="1.0" encoding="UTF-8"?>\n' + xml + "\n")
-            for platform, binary in binaries.items():
-                info = zipfile.ZipInfo(f"binaries/{platform}/{model}{PLATFORMS[platform][0]}")
-                info.compress_type = zipfile.ZIP_DEFLATED
-                info.external_attr = 0o100755 << 16
-                z.writestr(info, binary.read_bytes())
+            for member, binary in binaries.items():
+                write_binary(z, member, binary.read_bytes())
             for source in sorted(sources.iterdir()):
                 z.write(source, f"sources/{source.name}")
             z.writestr(f"resources/{RESOURCE_MARKER}", f"{model}\n")
@@ -262,7 +255,7 @@ def check_interface(fmu: Path) -> None:
 
 
 def build_native(out_dir: Path = DIST / NATIVE_SUBDIR, use_fmutool: bool = True,
-                 platforms: Sequence[str] = tuple(PLATFORMS),
+                 platforms: Sequence[str] = FMI2_SHIPPED,
                  models: Sequence[str] = MODELS, check_template: bool = True) -> list[Path]:
     """Build the native FMUs into ``out_dir``, hold each against its committed template (with
     ``check_template``) and validate it (fmpy's validate_fmu, ``fmutool -check`` with

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -24,7 +24,9 @@ from .spectral_lines import (
     LineCatalogue,
     LineDetection,
     LineSearch,
+    SpectralExtent,
     Spectrum,
+    Subharmonic,
     SubharmonicSearch,
     detect_lines,
     spectral_extent,
@@ -34,9 +36,10 @@ from .spectral_lines import (
 
 __all__ = [
     "DOMINANT_BAND", "PAPER_FIGURES", "ExtentSearch", "LineCatalogue", "LineSearch",
-    "RattleStatistics", "Scatter", "Spectrum", "SubharmonicSearch", "WindowedStatistics",
-    "catalogue_for", "detect_lines", "markdown_table", "onsets_from_counters",
-    "paper_comparison", "rattle_statistics", "welch_spectrum", "windowed_statistics",
+    "RattleStatistics", "Scatter", "Spectrum", "StrongestLine", "SubharmonicSearch",
+    "WindowedStatistics", "catalogue_for", "detect_lines", "markdown_table", "number_text",
+    "onsets_from_counters", "paper_comparison", "rattle_statistics", "strongest_line",
+    "welch_spectrum", "windowed_statistics",
 ]
 
 #: Band [Hz] of the paper's "dominant impact line" (its Fig. 5 shows lines up to ~1.5 kHz).
@@ -48,6 +51,12 @@ REQUIRED_SIGNALS = ("wheel.phi", "mesh.W")
 FLANKS = (("drive", 1), ("coast", -1))
 #: Percentiles of the impact speeds reported per flank.
 PERCENTILES = (10, 50, 90)
+
+#: Rows of the strongest line (``strongest_line``): one line, the same in every window.
+STRONGEST_ROW = ("strongest line 100–1500 Hz: the line with the highest mean PSD level over "
+                 "the windows [Hz]")
+STRONGEST_LEVEL_ROW = "strongest line: PSD level, mean over the windows [dB re 1 N²/Hz]"
+STRONGEST_ABOVE_FLOOR_ROW = "strongest line above the noise floor [dB]"
 
 #: The paper's reported figures (Theodossiades et al. 2008, section 3 and Figures 3-5), as
 #: printed next to this run's: quantity -> text.  The paper's own gear data are unpublished,
@@ -70,8 +79,9 @@ PAPER_FIGURES = {
     "pairs loaded while in contact [1]": "3–4 (\"in simultaneous impact\")",
     "spectral extent: 1/3-octave PSD 10 dB below its 100–500 Hz mean [Hz]":
         "impact lines \"up to about 1.5 kHz\" (its band and criterion not stated)",
-    "strongest line 100–1500 Hz [Hz]": "380 (its gear; this pair's mesh is 277 Hz)",
-    "strongest line above the noise floor [dB]": "not given (a clear line)",
+    STRONGEST_ROW: "380 (its gear; this pair's mesh is 277 Hz)",
+    STRONGEST_LEVEL_ROW: "—",
+    STRONGEST_ABOVE_FLOOR_ROW: "not given (a clear line)",
     "windows with a sub-harmonic of the forcing (power at odd multiples of f0/2) [1]":
         "yes (190 Hz, half its 380 Hz line)",
 }
@@ -178,6 +188,16 @@ def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks, normal_ma
     test (``subharmonics``, default ``SubharmonicSearch()``) with the fundamental
     ``fundamental`` [Hz] -- by default the catalogue's (the forcing's period), without a
     catalogue the strongest line in DOMINANT_BAND."""
+    return _statistics_and_lines(time, signals, onset_speeds, onset_flanks, normal_mass,
+                                 lines=lines, catalogue=catalogue,
+                                 segment_seconds=segment_seconds, extent=extent,
+                                 subharmonics=subharmonics, fundamental=fundamental)[0]
+
+
+def _statistics_and_lines(time, signals: dict, onset_speeds, onset_flanks, normal_mass: float,
+                          *, lines, catalogue, segment_seconds, extent, subharmonics,
+                          fundamental) -> tuple[RattleStatistics, LineDetection | None]:
+    """``rattle_statistics`` and its line search (None without one)."""
     t = np.asarray(time, dtype=float)
     missing = [n for n in REQUIRED_SIGNALS if n not in signals]
     if missing:
@@ -222,6 +242,7 @@ def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks, normal_ma
             setattr(stats, f"impact_speed_rms_{flank}", float(np.sqrt(np.mean(v * v))))
         setattr(stats, f"impact_energy_rate_{flank}",
                 float(0.5 * normal_mass * np.sum(v * v) / duration))
+    detection = None
     if lines is not None:
         spec = welch_spectrum(t[steps], W, segment_seconds)
         detection = detect_lines(spec, lines, catalogue)
@@ -240,7 +261,7 @@ def rattle_statistics(time, signals: dict, onset_speeds, onset_flanks, normal_ma
             if sub.positions:
                 stats.subharmonic_flag = float(sub.flag)
                 stats.subharmonic_ratio_db = sub.ratio_db
-    return stats
+    return stats, detection
 
 
 def _line_figures(stats: RattleStatistics, detection: LineDetection) -> None:
@@ -257,10 +278,23 @@ def _line_figures(stats: RattleStatistics, detection: LineDetection) -> None:
         stats.dominant_line_name = dominant.name or UNEXPLAINED
 
 
+def number_text(value: float, missing: str, scale: float = 1.0, digits: int = 4,
+                spec: str | None = None) -> str:
+    """``value`` times ``scale`` to ``digits`` significant digits (or in the format ``spec``,
+    e.g. ``".2f"``), or ``missing`` -- why there is no value, in words -- when it is not a
+    finite number: a report never prints nan or inf.  Every statistic of the reports is
+    written through this function."""
+    x = value * scale
+    if not math.isfinite(x):
+        return missing
+    return format(x, spec if spec is not None else f".{digits}g")
+
+
 @dataclass(frozen=True)
 class Scatter:
     """A statistic over windows: mean, sample standard deviation (ddof 1; nan for one
-    window), min, max, and the number of windows that had a value (nan values left out)."""
+    window), min, max, and the number of windows that had a value (nan and infinite values
+    left out)."""
 
     mean: float
     std: float
@@ -270,26 +304,64 @@ class Scatter:
 
     @staticmethod
     def of(values) -> Scatter:
-        v = np.asarray([x for x in values if not math.isnan(x)], dtype=float)
+        v = np.asarray([x for x in values if math.isfinite(x)], dtype=float)
         if v.size == 0:
             return Scatter(math.nan, math.nan, math.nan, math.nan, 0)
         return Scatter(float(np.mean(v)), float(np.std(v, ddof=1)) if v.size > 1 else math.nan,
                        float(np.min(v)), float(np.max(v)), int(v.size))
 
-    def text(self, scale: float = 1.0, digits: int = 4) -> str:
-        """``"mean ± std (min–max)"`` of the values times ``scale``."""
+    def text(self, scale: float = 1.0, digits: int = 4,
+             missing: str = "none in any window") -> str:
+        """``"mean ± std (min–max)"`` of the values times ``scale``; ``missing`` when no
+        window had a value."""
         if self.n == 0:
-            return "none in any window"
-        m, lo, hi = self.mean * scale, self.min * scale, self.max * scale
+            return missing
+        m = number_text(self.mean, missing, scale, digits)
         if self.n == 1:
-            return f"{m:.{digits}g} (one window)"
-        return (f"{m:.{digits}g} ± {self.std * abs(scale):.2g} "
-                f"({lo:.{digits}g}–{hi:.{digits}g})")
+            return f"{m} (one window)"
+        lo, hi = (number_text(x, missing, scale, digits) for x in (self.min, self.max))
+        dash = " to " if min(self.min * scale, self.max * scale) < 0 else "–"  # not "-1–-0.5"
+        return f"{m} ± {number_text(self.std, missing, abs(scale), 2)} ({lo}{dash}{hi})"
 
     @property
     def relative_scatter(self) -> float:
         """std / |mean| (nan when undefined)."""
         return self.std / abs(self.mean) if self.mean and not math.isnan(self.std) else math.nan
+
+
+#: Statistics that only a line search computes (``rattle_statistics(lines=...)``).
+SPECTRAL = ("lines_detected", "lines_unexplained", "resonances_detected",
+            "dominant_line_frequency", "dominant_line_level", "spectral_extent",
+            "spectral_extent_censored", "subharmonic_flag", "subharmonic_ratio_db",
+            "subharmonic_fundamental")
+NO_LINE_SEARCH = "no spectrum analysed (no line search asked for)"
+NO_LINE = f"no line found in {DOMINANT_BAND[0]:g}–{DOMINANT_BAND[1]:g} Hz"
+
+
+def missing_reason(name: str, window: RattleStatistics, line_search: bool = True) -> str:
+    """Why the statistic ``name`` has no value in ``window``, in words (``line_search``:
+    whether the spectral statistics were asked for)."""
+    if name in SPECTRAL and not line_search:
+        return NO_LINE_SEARCH
+    for flank, _sign in FLANKS:
+        if name.startswith("impact_speed_") and name.endswith("_" + flank):
+            return f"no {flank}-flank onset"
+    if name.startswith("dominant_line"):
+        return NO_LINE
+    if name.startswith("spectral_extent"):
+        return "no power in the 100–500 Hz reference band"
+    if name == "subharmonic_fundamental":
+        return f"no fundamental: no catalogue and {NO_LINE}"
+    if name.startswith("subharmonic"):
+        if name == "subharmonic_ratio_db" and math.isfinite(window.subharmonic_flag):
+            return ("no power above the noise floor at the odd multiples of f0/2 (or at the "
+                    "multiples of f0)")
+        return "no sub-harmonic test possible (no position with a noise floor in the band)"
+    if name == "max_penetration":
+        return "mesh.delta_peak not recorded"
+    if name in ("contact_fraction", "mean_loaded_pairs", "max_loaded_pairs"):
+        return "mesh.n_contact not recorded"
+    return "no value"
 
 
 @dataclass
@@ -302,18 +374,33 @@ class WindowedStatistics:
     slices: list[slice]  # sample index range of each window (its first sample opens it)
     windows: list[RattleStatistics]
     unused_tail: float  # s at the record's end that fill no whole window
+    #: The line search of each window's force spectrum (empty without a line search).
+    detections: list[LineDetection] = field(default_factory=list)
 
     def scatter(self, name: str) -> Scatter:
         """Mean, scatter and range over the windows of the numeric statistic ``name``."""
         return Scatter.of([float(getattr(w, name)) for w in self.windows])
 
+    def missing_text(self, name: str) -> str:
+        """Why ``name`` has no value in the windows that lack one, in words: "no coast-flank
+        onset", "no line found in 100–1500 Hz", ... (the reasons of the windows, joined)."""
+        reasons = dict.fromkeys(missing_reason(name, w, bool(self.detections))
+                                for w in self.windows
+                                if not math.isfinite(float(getattr(w, name))))
+        return " or ".join(reasons) or "no value"
+
     def text(self, name: str, scale: float = 1.0) -> str:
-        """``Scatter.text`` of ``name``, saying in how many windows it had a value when not
-        in all (a spectral line is not found in every window)."""
+        """``Scatter.text`` of ``name``; where a window has no value, why, in words ("no
+        coast-flank onset in any window"; "...; in 2 of 4 windows (no line found in
+        100–1500 Hz in the others)")."""
         sc = self.scatter(name)
+        if sc.n == 0:
+            reason = self.missing_text(name)
+            return reason if reason == NO_LINE_SEARCH else f"{reason} in any window"
         text = sc.text(scale)
-        if 0 < sc.n < len(self.windows):
-            text += f"; in {sc.n} of {len(self.windows)} windows"
+        if sc.n < len(self.windows):
+            text += (f"; in {sc.n} of {len(self.windows)} windows ({self.missing_text(name)} "
+                     "in the others)")
         return text
 
     def summary(self) -> dict[str, Scatter]:
@@ -325,6 +412,76 @@ class WindowedStatistics:
         """The most frequent value of a text statistic over the windows, and in how many."""
         value, count = Counter(getattr(w, name) for w in self.windows).most_common(1)[0]
         return value, count
+
+
+@dataclass(frozen=True)
+class StrongestLine:
+    """The line with the highest mean level over the windows: one line, followed through
+    every window's spectrum (never a mean of different lines' frequencies)."""
+
+    frequency: float  # Hz: its refined frequency, averaged over the windows that found it
+    name: str  # its catalogue name ("unexplained" when none fits), the most frequent
+    kind: str  # mesh, sideband, engine order, unexplained
+    found_in: int  # windows whose own line search found it
+    windows: int  # windows in all
+    #: The PSD at the line [dB re 1 unit²/Hz] in every window (the highest bin within one
+    #: bin of ``frequency``), whether or not that window's search found the line there.
+    level_db: Scatter
+    #: The same bin over the window's noise floor [dB] (windows with a floor there).
+    above_floor_db: Scatter
+
+    def text(self) -> str:
+        """``"830.1 (3×mesh), found in 4 of 5 windows"``."""
+        return (f"{self.frequency:.1f} ({self.name}), found in {self.found_in} of "
+                f"{self.windows} windows")
+
+
+def strongest_line(ws: WindowedStatistics, band: tuple[float, float] = DOMINANT_BAND
+                   ) -> StrongestLine | None:
+    """The strongest line of the windows in ``band`` [Hz], or None when no window's line
+    search found a line there (or none was made).
+
+    The candidates are the lines the windows' own searches found in the band, taken as one
+    line where they lie within one bin of each other.  Each candidate's level is read from
+    every window's spectrum at its frequency -- in a window that did not find it, too, so a
+    line found in few windows is not ranked by those alone -- and the candidate with the
+    highest mean level (dB, over all windows) is the strongest line."""
+    found = sorted(((ln.frequency, i, ln) for i, d in enumerate(ws.detections)
+                    for ln in d.in_band(*band)), key=lambda x: x[0])
+    if not found:
+        return None
+    resolution = ws.detections[0].resolution
+    groups: list[list] = []
+    for member in found:
+        if groups and member[0] - groups[-1][0][0] <= resolution:
+            groups[-1].append(member)
+        else:
+            groups.append([member])
+    best = None
+    for group in groups:
+        frequency = float(np.mean([f for f, _i, _ln in group]))
+        levels, above = zip(*(_level_at(d, frequency) for d in ws.detections), strict=True)
+        mean = float(np.mean(levels))
+        if best is None or mean > best[0]:
+            best = (mean, frequency, group, levels, above)
+    _mean, frequency, group, levels, above = best
+    named = Counter((ln.name or UNEXPLAINED, ln.kind) for _f, _i, ln in group)
+    (name, kind), _count = named.most_common(1)[0]
+    return StrongestLine(frequency, name, kind, len({i for _f, i, _ln in group}),
+                         len(ws.detections), Scatter.of(levels), Scatter.of(above))
+
+
+def _level_at(detection: LineDetection, frequency: float) -> tuple[float, float]:
+    """(PSD level [dB re 1 unit²/Hz], level above the floor [dB]) of the highest bin within
+    one bin of ``frequency``.  A bin without power counts at the smallest positive float,
+    so that it ranks every candidate alike; no floor there gives nan above it."""
+    spec = detection.spectrum
+    near = np.nonzero(np.abs(spec.frequency - frequency) <= spec.resolution * (1 + 1e-9))[0]
+    k = int(near[np.argmax(spec.psd[near])])
+    psd = max(float(spec.psd[k]), np.finfo(float).tiny)
+    floor = float(detection.floor[k])
+    above = 10.0 * math.log10(psd / floor) if floor > 0 and math.isfinite(floor) else math.nan
+    return 10.0 * math.log10(psd), above
 
 
 def window_layout(points: int, h: float, transient: float = 0.0,
@@ -390,26 +547,29 @@ def windowed_statistics(time, signals: dict, onset_times, onset_speeds, onset_fl
     onset_v = np.asarray(onset_speeds, dtype=float)
     onset_f = np.asarray(onset_flanks, dtype=int)
     series = {k: np.asarray(v) for k, v in signals.items()}
-    starts, slices, results = [], [], []
+    starts, slices, results, detections = [], [], [], []
     for i in range(count):
         a, b = first + i * width, first + (i + 1) * width
         span = slice(a, b + 1)
         inside = (onset_t > t[a]) & (onset_t <= t[b])
-        results.append(rattle_statistics(
+        stats, detection = _statistics_and_lines(
             t[span], {k: v[span] for k, v in series.items()}, onset_v[inside], onset_f[inside],
             normal_mass, lines=lines, catalogue=catalogue, segment_seconds=segment_seconds,
-            extent=extent, subharmonics=subharmonics, fundamental=fundamental))
+            extent=extent, subharmonics=subharmonics, fundamental=fundamental)
+        results.append(stats)
+        if detection is not None:
+            detections.append(detection)
         starts.append(float(t[a]))
         slices.append(span)
     end = first + count * width
     return WindowedStatistics(transient=float(t[first] - t[0]), window=float(width * h),
                               starts=starts, slices=slices, windows=results,
-                              unused_tail=float(t[-1] - t[end]))
+                              unused_tail=float(t[-1] - t[end]), detections=detections)
 
 
 #: Rows of the paper comparison: (quantity as in PAPER_FIGURES, statistic, display scale).
-#: The spectral extent, the strongest line's name and the sub-harmonic flag have rows of
-#: their own (``paper_comparison``).
+#: The energy rates, the spectral extent, the strongest line and the sub-harmonic flag have
+#: rows of their own (``paper_comparison``).
 PAPER_ROWS = (
     ("mean wheel speed [rad/s]", "mean_wheel_speed", 1.0),
     ("max deflection [µm]", "max_penetration", 1e6),
@@ -418,8 +578,6 @@ PAPER_ROWS = (
       for label, q in (("10th percentile", "p10"), ("median", "p50"),
                        ("90th percentile", "p90"), ("RMS", "rms"))),
     ("pairs loaded while in contact [1]", "mean_loaded_pairs", 1.0),
-    ("strongest line 100–1500 Hz [Hz]", "dominant_line_frequency", 1.0),
-    ("strongest line above the noise floor [dB]", "dominant_line_level", 1.0),
 )
 #: Keys of PAPER_FIGURES of the rows built apart.
 ENERGY_ROW = "impact energy rate, {flank} flank: Σ ½ m_n v² per second [mW]"
@@ -455,13 +613,26 @@ def paper_comparison(ws: WindowedStatistics) -> list[tuple[str, str, str]]:
         q = ENERGY_ROW.format(flank=flank)
         rows.insert(2 + (i + 1) * per_flank + i,
                     (q, ws.text(f"impact_energy_rate_{flank}", 1e3), PAPER_FIGURES[q]))
-    at = next(i for i, r in enumerate(rows) if r[0].startswith("strongest line 100"))
-    rows.insert(at, (EXTENT_ROW, extent_text(ws), PAPER_FIGURES[EXTENT_ROW]))
-    name, n = ws.most_common("dominant_line_name")
-    rows.insert(at + 2, ("strongest line's name (most windows)",
-                         f"{name or '—'} ({n} of {len(ws.windows)} windows)", "—"))
+    rows.append((EXTENT_ROW, extent_text(ws), PAPER_FIGURES[EXTENT_ROW]))
+    rows += [(q, text, PAPER_FIGURES[q]) for q, text in strongest_line_rows(ws)]
     rows.append((SUBHARMONIC_ROW, subharmonic_text(ws), PAPER_FIGURES[SUBHARMONIC_ROW]))
     return rows
+
+
+def strongest_line_rows(ws: WindowedStatistics) -> list[tuple[str, str]]:
+    """Rows ``(quantity, this run)`` of the strongest line (``strongest_line``): where it is,
+    its name and in how many windows it is found; its level; its level above the floor."""
+    missing = f"{NO_LINE} in any window" if ws.detections else NO_LINE_SEARCH
+    line = strongest_line(ws)
+    if line is None:
+        return [(STRONGEST_ROW, missing), (STRONGEST_LEVEL_ROW, missing),
+                (STRONGEST_ABOVE_FLOOR_ROW, missing)]
+    above = line.above_floor_db.text(missing="no noise floor at the line in any window")
+    if 0 < line.above_floor_db.n < line.windows:
+        above += (f"; in {line.above_floor_db.n} of {line.windows} windows (no noise floor "
+                  "at the line in the others)")
+    return [(STRONGEST_ROW, line.text()), (STRONGEST_LEVEL_ROW, line.level_db.text()),
+            (STRONGEST_ABOVE_FLOOR_ROW, above)]
 
 
 def further_statistics(ws: WindowedStatistics) -> list[tuple[str, str]]:
@@ -476,7 +647,7 @@ def extent_text(ws: WindowedStatistics) -> str:
     values = [(w.spectral_extent, w.spectral_extent_censored) for w in ws.windows
               if math.isfinite(w.spectral_extent)]
     if not values:
-        return "none in any window"
+        return ws.text("spectral_extent")
     n = len(ws.windows)
     found = [f for f, c in values if not c]
     tops = [f for f, c in values if c]
@@ -488,6 +659,9 @@ def extent_text(ws: WindowedStatistics) -> str:
         parts.append(f"≥ {min(tops):.0f} (the band top, below Nyquist) in {len(tops)} of "
                      f"{n} windows: the PSD stays within 10 dB of its 100–500 Hz level "
                      "up to there")
+    if len(values) < n:
+        parts.append(f"{ws.missing_text('spectral_extent')} in {n - len(values)} of {n} "
+                     "windows")
     return "; ".join(parts)
 
 
@@ -495,7 +669,7 @@ def subharmonic_text(ws: WindowedStatistics) -> str:
     """The sub-harmonic flag over the windows: in how many it was raised, and f0."""
     flags = [w.subharmonic_flag for w in ws.windows if math.isfinite(w.subharmonic_flag)]
     if not flags:
-        return "no test possible in any window"
+        return ws.text("subharmonic_flag")
     n = len(ws.windows)
     f0 = Scatter.of([w.subharmonic_fundamental for w in ws.windows])
     text = f"{int(sum(flags))} of {len(flags)} windows"
@@ -504,10 +678,39 @@ def subharmonic_text(ws: WindowedStatistics) -> str:
     return text + f" (f0 = {f0.mean:.4g} Hz)"
 
 
+def extent_result_text(extent: SpectralExtent, sample_rate: float) -> str:
+    """The spectral extent of one spectrum, in words where it is not a value."""
+    if extent.censored:
+        return (f"≥ {extent.frequency:.0f} Hz: the 1/3-octave PSD stays within 10 dB of its "
+                "100–500 Hz mean up to the band top next to Nyquist "
+                f"({sample_rate / 2:g} Hz)")
+    return number_text(extent.frequency, "none: no power in the 100–500 Hz reference band",
+                       digits=4) + (" Hz" if math.isfinite(extent.frequency) else "")
+
+
+def subharmonic_result_text(sub: Subharmonic) -> str:
+    """The sub-harmonic test of one spectrum: its verdict, statistic and threshold, and the
+    sub-harmonic comb's power over the comb's -- each said in words where it has no value."""
+    if sub.positions == 0:
+        return (f"no test possible (f0 = {number_text(sub.fundamental, 'none', digits=4)} "
+                "Hz: no position (k + ½)·f0 with a noise floor in the band)")
+    if not sub.half_excess > 0:
+        ratio = ("the sub-harmonic comb has no power above the noise floor, so no ratio to "
+                 "the comb")
+    elif not sub.comb_excess > 0:
+        ratio = "the comb at k·f0 has no power above the noise floor, so no ratio to it"
+    else:
+        ratio = f"sub-harmonic comb over the comb {sub.ratio_db:.1f} dB"
+    missing = "not computable"
+    return (f"{'flagged' if sub.flag else 'not flagged'} (f0 = {sub.fundamental:.2f} Hz, "
+            f"{sub.positions} positions, statistic {number_text(sub.statistic, missing, digits=3)}"
+            f" against the threshold {number_text(sub.threshold, missing, digits=3)}; {ratio})")
+
+
 def markdown_table(rows, headers=("quantity", "this run", "paper")) -> str:
     """A Markdown table; floats printed with 4 significant digits."""
     def fmt(v):
-        return f"{v:.4g}" if isinstance(v, float) else str(v)
+        return number_text(v, "no value") if isinstance(v, float) else str(v)
 
     lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
     lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in rows]

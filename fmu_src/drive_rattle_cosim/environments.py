@@ -10,7 +10,9 @@ environment.
     python -m drive_rattle_cosim.environments gemseo     # prints the environment's python
 
 The tests run gemseo-fmu and cofmupy so (tests/cosim/test_masters.py); the cache folder is
-``$RATTLE_MASTER_VENVS``, else ``.venv-masters`` in the working directory.
+``$RATTLE_MASTER_VENVS``, else ``drive-rattle/masters`` in the user's cache folder
+(``$XDG_CACHE_HOME``, default ``~/.cache``): outside any checkout, so that no tool that walks
+the sources (ruff, the structure tests) walks an environment.
 """
 
 from __future__ import annotations
@@ -35,7 +37,10 @@ INSTALL_TIMEOUT = 1200.0
 
 
 def cache_folder() -> Path:
-    return Path(os.environ.get("RATTLE_MASTER_VENVS", ".venv-masters")).resolve()
+    if "RATTLE_MASTER_VENVS" in os.environ:
+        return Path(os.environ["RATTLE_MASTER_VENVS"]).resolve()
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return (cache / "drive-rattle" / "masters").resolve()
 
 
 def _bin(folder: Path, name: str) -> Path:

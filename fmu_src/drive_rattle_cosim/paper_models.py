@@ -29,10 +29,12 @@ from drive_rattle.parameters import DrivelineParameters, MeshParameters
 from .analysis import (
     FLANKS,
     PAPER_FIGURES,
+    STRONGEST_ROW,
     LineSearch,
     WindowedStatistics,
     catalogue_for,
     markdown_table,
+    strongest_line,
     windowed_statistics,
 )
 from .band import SQUEEZE_HIGH, SQUEEZE_LOW
@@ -88,6 +90,9 @@ HYPOTHESIS = Setting(
     "teeth, module 1.5 mm",
     {"z_pinion": 29, "z_wheel": 57, "m_n": 1.5e-3}, {"w_mean": 789.0 * RPM})
 
+#: The statistic of the strongest line's row: one line followed through the windows
+#: (analysis.strongest_line), never a mean of each window's strongest line's frequency.
+STRONGEST = "strongest line"
 #: (quantity, statistic, display scale) of the comparison; the paper's figure from
 #: analysis.PAPER_FIGURES where it gives one.
 QUANTITIES = (
@@ -102,7 +107,7 @@ QUANTITIES = (
     *((f"impact energy rate, {flank} flank: Σ ½ m_n v² per second [mW]",
        f"impact_energy_rate_{flank}", 1e3) for flank, _sign in FLANKS),
     ("pairs loaded while in contact [1]", "mean_loaded_pairs", 1.0),
-    ("strongest line 100–1500 Hz [Hz]", "dominant_line_frequency", 1.0),
+    (STRONGEST_ROW, STRONGEST, 1.0),
 )
 
 
@@ -139,16 +144,30 @@ class ModelBand:
     band: list[Run]
 
     def cell(self, statistic: str, scale: float) -> str:
-        """``mean ± scatter [lo–hi over the band]`` of a statistic (``–``: no value)."""
+        """``mean ± scatter [lo–hi over the band]`` of a statistic (where it has no value in
+        any window, why, in words)."""
+        if statistic == STRONGEST:
+            return self.strongest_cell()
         c = self.central.statistics.scatter(statistic)
         if c.n == 0:
-            return "–"
+            return self.central.statistics.text(statistic)
         means = [r.statistics.scatter(statistic) for r in (self.central, *self.band)]
         means = [m.mean for m in means if m.n > 0]
         text = f"{_g(c.mean * scale)}"
         if c.n > 1:
             text += f" ± {_g(c.std * scale, 2)}"
         return text + f" [{_g(min(means) * scale)}–{_g(max(means) * scale)}]"
+
+
+    def strongest_cell(self) -> str:
+        """The model's strongest line at its defaults (frequency, name, in how many windows)
+        and, in brackets, the strongest lines over the band (its defaults included)."""
+        lines = [strongest_line(r.statistics) for r in (self.central, *self.band)]
+        names = list(dict.fromkeys(f"{ln.frequency:.0f} Hz ({ln.name})" for ln in lines
+                                   if ln is not None))
+        central = lines[0]
+        text = central.text() if central is not None else "no line found in any window"
+        return text + (f" [over the band: {', '.join(names)}]" if names else "")
 
 
 def _g(x: float, digits: int = 4) -> str:

@@ -13,7 +13,7 @@ from drive_rattle import COAST, DRIVE, MeshParameters, MeshUnit
 from drive_rattle.parameters import DEG
 
 from ..fmi.slave_driver import Driven, GearMeshRattle
-from ..oracle import hertz
+from ..oracle import contact
 
 ERROR = 3
 SETTINGS = settings(max_examples=80, deadline=None,
@@ -137,7 +137,7 @@ def test_free_wheel_creates_no_energy(phi_p, w0, backlash, J, crowning, h, law):
     wheel = MeshUnit(p, phi_p, 0.0, 0.0)
     e0 = _energy(wheel, phi_p)
     # Contact duration of the pairs that touch first (zero crown offset): the shortest one.
-    t_c = min(hertz.hertz_impact(derived["normal_mass"],
+    t_c = min(contact.hertz_impact(derived["normal_mass"],
                                  _first_contact_stiffness(wheel, f, phi_p),
                                  w0 * derived["arm_wheel"]).t_contact for f in (DRIVE, COAST))
     per_impact = 2 * 0.07 * (t_c / p.h_max) ** -2.5

@@ -187,8 +187,9 @@ def test_two_starts_forced_into_different_states_are_two_attractors():
         assert 0.85 * rate < bouncing.mean[flank] < rate
 
 
-#: The physics the 0.4 M* attractors were measured with (issue 19), pinned: other physics
-#: options may change the defaults later.
+#: The physics the 0.4 M* attractors were measured with (docs/analysis.md section 7: Hunt-Crossley
+#: dissipation from e = 0.8 at 4 mm/s, 10 um crowning, the exact Hertz law, friction form 0 on the
+#: entrainment speed), pinned: other physics options may change the defaults later.
 PINNED = ("GearMeshRattle.contact.dissipation=1", "GearMeshRattle.contact.restitution=0.8",
           "GearMeshRattle.contact.restitution_speed=0.004",
           "GearMeshRattle.contact.crowning=1e-5", "GearMeshRattle.contact.hertz_law=0",
@@ -213,7 +214,8 @@ def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8(tmp_path, 
     by_start = {s: a for a in at_04["attractors"] for s in a["starts"]}
     smooth, kicked = by_start["smooth"], by_start["kick -1"]
     assert smooth is not kicked
-    # issue 19's figures: 194 against 166 drive onsets per second, 1.419 against 1.364 um
+    # the measured figures (docs/analysis.md section 7): 194 against 166 drive onsets per
+    # second, delta_max 1.419 against 1.364 um
     assert smooth["mean"]["drive_rate"] == pytest.approx(194, abs=1)
     assert kicked["mean"]["drive_rate"] == pytest.approx(166, abs=1)
     assert smooth["mean"]["delta_max"] == pytest.approx(1.419e-6, abs=0.005e-6)

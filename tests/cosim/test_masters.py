@@ -324,7 +324,7 @@ def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):
         for name, value in core.outputs().items():
             assert result["columns"][name][k] == value, (name, t)
     # steady: the shaft torque stays at the drag (taken literally, the held wheel angle would
-    # swing it by tens of N.m, see test_initialization.py)
+    # swing it by tens of N.m, see tests/model/test_unit.py)
     tau = result["columns"]["wheel.tau_load"]
     assert max(tau) - min(tau) < 1e-6 * DrivelineParameters().drag
 

@@ -2,7 +2,7 @@
 (``drive_rattle_cosim.variants``, ``python -m drive_rattle_cosim.masters integer-codes|
 real-outputs``): the same binaries and variables, only those declarations changed, checked
 against the specs and validated.  That the copies compute the FMUs' numbers is tested where
-they run: libcosim and ecos (test_ssp_parameters.py), pathsim-fmi (test_masters.py)."""
+they run: libcosim and ecos (test_ssp.py), pathsim-fmi (test_masters.py)."""
 
 import zipfile
 

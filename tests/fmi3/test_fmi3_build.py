@@ -1,5 +1,6 @@
 """The FMI 3.0 FMUs as the build makes them: the model library and its FMI 3.0 face compiled
-together (x86_64-linux, x86_64-windows) with their C sources and buildDescription.xml, an
+together (x86_64-linux, x86_64-windows, aarch64-linux; no macOS binary, which nothing here
+can run) with their C sources, buildDescription.xml and terminalsAndIcons/, an
 interface rendered from the same specs as the FMI 2.0 FMUs' (the same variables at the same
 value references, the same causality, variability, units, limits and starts; the integer codes
 as Enumerations with named items; the independent variable time), held against the committed
@@ -68,8 +69,12 @@ def test_contents(fmi3_fmus, model):
         for name in FMI_HEADERS:  # the standard's headers as fmpy ships them
             assert z.read(f"sources/{name}") == (fmi3_headers() / name).read_bytes()
         config = z.read(f"sources/{CONFIG_HEADER}").decode()
-    assert {f"binaries/x86_64-linux/{model}.so", f"binaries/x86_64-windows/{model}.dll",
-            "sources/buildDescription.xml"} <= names
+    binaries = {n for n in names if n.startswith("binaries/")}
+    assert binaries == {f"binaries/x86_64-linux/{model}.so",
+                        f"binaries/x86_64-windows/{model}.dll",
+                        f"binaries/aarch64-linux/{model}.so"}  # no untested macOS binary
+    assert {"sources/buildDescription.xml", "terminalsAndIcons/terminalsAndIcons.xml",
+            "terminalsAndIcons/icon.png"} <= names
     assert not any(n.endswith((".py", ".pyc")) or "pythonfmu" in n or "linux64" in n
                    for n in names), names
     assert md.find("CoSimulation").find("SourceFiles") is None  # FMI 3.0: buildDescription
@@ -170,16 +175,27 @@ def _tool(name: str) -> str:
     return path
 
 
+@pytest.mark.parametrize("platform, machine", [("x86_64-linux", "Advanced Micro Devices X86-64"),
+                                               ("aarch64-linux", "AArch64")])
 @pytest.mark.parametrize("model", MODELS)
 def test_linux_binary_exports_every_fmi3_function_and_needs_only_libc(fmi3_fmus, model,
+                                                                      platform, machine,
                                                                       tmp_path):
     with zipfile.ZipFile(fmi3_fmus[model]) as z:
         binary = tmp_path / f"{model}.so"
-        binary.write_bytes(z.read(f"binaries/x86_64-linux/{model}.so"))
+        binary.write_bytes(z.read(f"binaries/{platform}/{model}.so"))
+    header = subprocess.run([_tool("readelf"), "-h", str(binary)], capture_output=True,
+                            text=True, check=True).stdout
+    assert re.search(rf"Machine:\s+{machine}\n", header), header
     dynamic = subprocess.run([_tool("readelf"), "-d", "-W", str(binary)], capture_output=True,
                              text=True, check=True).stdout
     needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
     assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
+    if platform == "aarch64-linux":  # docs/fmi3.md: glibc 2.29 or later (ziglang's default)
+        versions = subprocess.run([_tool("readelf"), "-V", "-W", str(binary)],
+                                  capture_output=True, text=True, check=True).stdout
+        assert max(tuple(map(int, v.split("."))) for v in re.findall(
+            r"Name: GLIBC_([0-9.]+)", versions)) == (2, 29)
     symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
                              capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in symbols.splitlines() if line.strip()}

@@ -63,7 +63,7 @@ def test_mesh_alone_under_simulate_fmu_with_input_table(fmus):
                             ("pinion.a", "f8"), ("wheel.tau_load", "f8")])
     # The wheel's response to the table's last-bit rounding (below) stays within 3.3e-12
     # relative over the run (before the film's engagement was made continuous, the default
-    # squeeze film reached 4.2e-8 here: tests/model/test_conditioning.py)
+    # squeeze film reached 4.2e-8 here: tests/model/test_stepper.py)
     r = simulate_fmu(str(fmus["GearMeshRattle"]), stop_time=T, output_interval=1e-4,
                      input=table)
     assert len(r) == 301

@@ -1,6 +1,6 @@
 """The squeeze-film impact law (contact.dissipation = 3) through the built GearMeshRattle FMU:
 single impacts of the free wheel on a pinion at rest, from below the critical speed to
-100 mm/s, rebound as the law of tests/oracle/squeeze.py says."""
+100 mm/s, rebound as the law of tests/oracle/dissipation.py says."""
 
 import itertools
 
@@ -9,7 +9,7 @@ import pytest
 from drive_rattle import DRIVE
 from drive_rattle_cosim.harness import Unit
 from tests.model.helpers import free_parameters
-from tests.oracle import squeeze
+from tests.oracle import dissipation
 from tests.oracle.mesh import MeshModel
 
 H = 1e-4
@@ -47,13 +47,13 @@ def fmu_restitution(fmu, v: float, name: str) -> float:
 def test_the_fmu_realizes_the_squeeze_film_law_from_sticking_to_100_mm_per_s(fmus):
     p = free_parameters(1e-3, DRIVE, dissipation=3)
     m = MeshModel(p)
-    v_c = squeeze.critical_speed(m, squeeze.flank_area(m, DRIVE, 0.0))
+    v_c = dissipation.critical_speed(m, dissipation.flank_area(m, DRIVE, 0.0))
     speeds = [0.3 * v_c, 0.6 * v_c, 0.95 * v_c, 1.02 * v_c, 1.2 * v_c, 1.6 * v_c, 2.5 * v_c,
               4e-3 * 2, 15e-3, 30e-3, 60e-3, 100e-3]
     assert speeds == sorted(speeds) and speeds[2] < v_c < speeds[3]
     measured = [fmu_restitution(fmus["GearMeshRattle"], v, f"m{i}")
                 for i, v in enumerate(speeds)]
-    law = [squeeze.onset(m, DRIVE, 0.0, v).restitution for v in speeds]
+    law = [dissipation.onset(m, DRIVE, 0.0, v).restitution for v in speeds]
     for v, e, want in zip(speeds, measured, law, strict=True):
         assert e == pytest.approx(want, abs=1e-3), (v, e, want)
     # no rebound below the critical speed; above it the restitution rises with the speed

@@ -1,5 +1,7 @@
 """Shared set-ups of the model tests: the library's probes (``rm_probe_*``) as Python calls, a
-mesh unit started free against a pinion at rest, and pinion kinematics with one order."""
+mesh unit started free against a pinion at rest, pinion kinematics with one order, the
+parameter sets held against the oracle, the default forcing and its separation load, and
+the check that a refused call changes nothing."""
 
 from __future__ import annotations
 
@@ -8,8 +10,12 @@ import math
 from dataclasses import replace
 from typing import NamedTuple
 
-from drive_rattle import DRIVE, MeshParameters, MeshUnit, Unit
+import pytest
+
+from drive_rattle import DRIVE, DrivelineParameters, MeshParameters, MeshUnit, ModelError, Unit
 from drive_rattle.library import MESH
+from drive_rattle.parameters import DEG
+from tests.oracle.mesh import MeshModel
 
 #: Doubles per pair row of rm_probe_loads, in its order (rattle_model.h).
 PAIR_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_speed",
@@ -165,3 +171,98 @@ def pinion_with_order(t: float, w0: float, amp: float, freq: float):
     om = 2 * math.pi * freq
     return (w0 * t + amp / om**2 * (1 - math.cos(om * t)),
             w0 + amp / om * math.sin(om * t), amp * math.cos(om * t))
+
+
+# ------------------------------------------------ communication step, pinion speed, contact options
+#: The communication step of the model tests [s].
+H = 1e-4
+W_PINION = 86.92  # rad/s, 830 rpm
+SPUR = {"beta": 0.0, "b": 20e-3}  # no crown offsets: every pair touches at the same approach
+#: The contact options: the paper's (every pair in the zone loaded) and the line contact.
+PAPER = {"contact_geometry": 1}
+LINE = {"contact_geometry": 2}
+
+
+# ------------------------------------------------------- the parameter sets held against the oracle
+#: The tolerances against the oracle are those of two implementations of the same formulas
+#: in a different order of operations (relative 1e-12 on a quantity, 1e-12 of the sum of
+#: magnitudes on a signed sum); the measured agreement is tighter (most quantities agree to
+#: the last bit).
+REL = 1e-12
+PARAMETER_SETS = [
+    {},
+    {"beta": 0.0},
+    {"hertz_law": 1},
+    {"b": 2e-3, "crowning": 9e-5},  # r_y inside the range of r_x along the path of contact
+    {"z_pinion": 30, "z_wheel": 45, "beta": 0.5, "backlash": 0.0},
+    {"z_pinion": 18, "z_wheel": 80, "m_n": 5e-3, "alpha_n": 25 * DEG, "addendum": 1.2,
+     "dissipation": 2, "damping": 300.0},
+    # the contact options: the paper's geometry, the line contact, rough flanks
+    {"contact_geometry": 1},
+    {"contact_geometry": 1, "hertz_law": 1, "beta": 0.0},
+    {"contact_geometry": 2},
+    {"contact_geometry": 2, "beta": 0.0, "b": 2e-3},
+    {"roughness": 1},
+    {"contact_geometry": 1, "roughness": 1, "sigma": 1e-7},
+    {"contact_geometry": 2, "roughness": 1, "z_pinion": 30, "z_wheel": 45, "beta": 0.5,
+     "asperity_density": 3e10},
+    {"dissipation": 3, "viscous_law": 1, "shear_speed": 1, "sigma": 5e-8, "film": 1},
+    {"dissipation": 4, "beta": 0.0, "friction_form": 2},
+]
+
+
+def oracle_derived(m: MeshModel) -> dict[str, float]:
+    """What rm_describe reports, from the oracle."""
+    g = m.geometry
+    names = ("ratio", "alpha_t", "beta_b", "centre_distance", "r_pinion", "r_wheel",
+             "rb_pinion", "rb_wheel", "ra_pinion", "ra_wheel", "line_length", "s_start",
+             "s_end", "s_pitch", "base_pitch", "eps_alpha", "eps_beta", "eps_gamma",
+             "max_pairs", "r_y", "crown_factor", "half_backlash", "normal_factor")
+    out = {n: float(getattr(g, n)) for n in names}
+    out.update(E_star=m.E_star, arm_wheel=m.arm_wheel, arm_pinion=m.arm_pinion,
+               normal_mass=m.normal_mass, damping=m.damping,
+               penetration_limit=0.05 * m.params.m_n,
+               law_terms=float(len(m.law.kappa)), r_y_eq6_pitch=g.radius_y_eq6(g.s_pitch),
+               palmgren_constant=m.approach.palmgren,
+               asperity_pressure=m.approach.asperity_pressure)
+    return out
+
+
+def close(a: float, b: float, rel: float = REL, abs_: float = 0.0) -> bool:
+    return a == b or abs(a - b) <= max(rel * abs(b), abs_)
+
+
+# ------------------------------------------------------------------ the default forcing
+PARAMS = MeshParameters()
+RATIO = PARAMS.z_pinion / PARAMS.z_wheel
+#: Deepest deceleration of the default pinion (orders 2/4/6 at 300/200/150 rad/s^2), and the
+#: load below which it separates the default wheel quasi-statically (MODEL_NOTES section 3).
+DEEPEST_DECELERATION = 250.0
+M_STAR = PARAMS.J_wheel * RATIO * DEEPEST_DECELERATION
+#: One period of the default forcing: orders 2, 4, 6 and the mesh (order 20) of 830 rpm
+#: repeat every half revolution.
+PERIOD = 0.5 * 2 * math.pi / DrivelineParameters().w_mean
+
+
+# ------------------------------------------------------------------ refused calls
+def history(p=None):
+    unit = MeshUnit(p or MeshParameters(init_in_contact=False, h_comm_max=1e-2), 0.0, 87.0, 0.1)
+    for k in range(5):
+        unit.step(H, 87.0 * k * H, 87.0, 0.0, 0.1)
+    return unit
+
+
+def assert_refused_and_unchanged(unit, call, *args, match):
+    """Call ``call`` of the library on ``unit``: refused (message matching ``match``) with the
+    unit's record, phase and (once stepping) outputs and time unchanged; the message."""
+
+    def state():
+        stepping = unit.phase == "stepping"
+        return (unit.save(), unit.phase, unit.outputs() if stepping else None,
+                unit.time if stepping else None)
+
+    before = state()
+    with pytest.raises(ModelError, match=match) as err:
+        unit.call(call, *args)
+    assert state() == before
+    return str(err.value)

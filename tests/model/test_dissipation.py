@@ -1,8 +1,8 @@
-"""The contact's dissipation laws of docs/model.md section 3.3 and the piezoviscous friction of
-section 4, through the model library: the squeeze-film (Stokes number) impact law against the
-readable equations (tests/oracle/squeeze.py) and realized by single impacts, the mesh damping
-ratio's speed-independent restitution against a direct integration, Barus' viscosity with a
-limiting shear stress against the oracle and in its limits."""
+"""dissipation.c, the contact's dissipation set at each onset (docs/model.md section 3.3),
+through the model library: the squeeze-film (Stokes number) impact law against the readable
+equations (tests/oracle/dissipation.py) and realized by single impacts, its area on the line
+contact; the mesh damping ratio's speed-independent restitution against a direct
+integration and its linearized damping."""
 
 import ctypes
 import itertools
@@ -15,33 +15,32 @@ from scipy import integrate
 
 from drive_rattle import COAST, DRIVE, MeshParameters, ModelError
 from drive_rattle.parameters import DEG
-from tests.oracle import hertz, lubrication, squeeze
+from tests.oracle import contact, dissipation
 from tests.oracle.mesh import MeshModel
 
 from .helpers import Probe, free_parameters, restitution
-from .test_oracle import areas, pair_at_lambda
 
 SQUEEZE = {"dissipation": 3}
 
 
-def squeeze_probe(probe: Probe, flank: int, phi_p: float, v: float) -> squeeze.Onset:
+def squeeze_probe(probe: Probe, flank: int, phi_p: float, v: float) -> dissipation.Onset:
     """rm_probe_squeeze: (area, Stokes number, e, d, sticks)."""
     out = (ctypes.c_double * 5)()
     probe.unit.call("rm_probe_squeeze", int(flank), float(phi_p), float(v), out)
-    return squeeze.Onset(out[0], out[1], out[2], out[3], out[4] == 1.0)
+    return dissipation.Onset(out[0], out[1], out[2], out[3], out[4] == 1.0)
 
 
 def critical_speed(p: MeshParameters, flank: int = DRIVE, phi_p: float = 0.0) -> float:
     m = MeshModel(p)
-    return squeeze.critical_speed(m, squeeze.flank_area(m, flank, phi_p))
+    return dissipation.critical_speed(m, dissipation.flank_area(m, flank, phi_p))
 
 
 # ------------------------------------------------------------------ the law, against the oracle
 def test_squeeze_pair_area_is_the_spheres_and_the_elongated_contacts():
     # A = R^2 for a sphere; 2 sqrt(r_x^3 r_y) for r_y >> r_x (Reynolds' squeeze film of the
     # paraboloidal gap).
-    assert squeeze.pair_area(3e-3, 3e-3) == pytest.approx(9e-6, rel=1e-14)
-    assert squeeze.pair_area(5e-3, 5e3) == pytest.approx(2 * math.sqrt(5e-3**3 * 5e3), rel=1e-6)
+    assert dissipation.pair_area(3e-3, 3e-3) == pytest.approx(9e-6, rel=1e-14)
+    assert dissipation.pair_area(5e-3, 5e3) == pytest.approx(2 * math.sqrt(5e-3**3 * 5e3), rel=1e-6)
 
 
 def test_squeeze_film_force_of_the_paraboloidal_gap_by_quadrature():
@@ -60,7 +59,7 @@ def test_squeeze_film_force_of_the_paraboloidal_gap_by_quadrature():
         lambda t, u: pressure(ly * math.tan(t), lx * math.tan(u)) * lx * ly
         / (math.cos(t) ** 2 * math.cos(u) ** 2), 0, math.pi / 2, 0, math.pi / 2,
         epsabs=0, epsrel=1e-10)[0]
-    closed_form = 6 * math.pi * eta * squeeze.pair_area(r_x, r_y) * rate / h0
+    closed_form = 6 * math.pi * eta * dissipation.pair_area(r_x, r_y) * rate / h0
     assert F / closed_form == pytest.approx(1.0, rel=1e-7)
 
 
@@ -82,14 +81,14 @@ def test_the_squeeze_law_equals_the_oracle(changes, flank, phi_p, log_v):
     p = MeshParameters(**SQUEEZE, **changes)
     v = math.exp(log_v)
     got = squeeze_probe(Probe(p), flank, phi_p, v)
-    want = squeeze.onset(MeshModel(p), flank, phi_p, v)
+    want = dissipation.onset(MeshModel(p), flank, phi_p, v)
     assert got.area == pytest.approx(want.area, rel=1e-12)
     assert got.stokes == pytest.approx(want.stokes, rel=1e-12)
     assert got.restitution == pytest.approx(want.restitution, rel=1e-11, abs=1e-15)
     assert got.sticks == want.sticks
     assert got.d == pytest.approx(want.d, rel=1e-10)
     if not got.sticks:  # the factor realizes the law's e at this speed exactly
-        assert hertz.hunt_crossley_restitution(got.d * v) == pytest.approx(got.restitution,
+        assert contact.hunt_crossley_restitution(got.d * v) == pytest.approx(got.restitution,
                                                                             rel=1e-10)
     event("sticks" if got.sticks else "rebounds")
 
@@ -126,9 +125,26 @@ def test_no_stokes_number_below_critical_rebounds_and_the_contact_is_then_film_d
     static = probe.loads(DRIVE, 0.0, 0.0, phi_w, 0.0, 1e-4)
     touching = [r for r in loads.pairs if r["delta"] > 0.0]
     assert touching
-    film = sum(squeeze.film_damping(m, r["r_x"], m.law.r_y, pen=r["delta"])  # crowned
+    film = sum(dissipation.film_damping(m, r["r_x"], m.law.r_y, pen=r["delta"])  # crowned
                for r in touching)
     assert pytest.approx(film * rate, rel=1e-12) == loads.W - static.W
+
+
+def test_line_contact_squeeze_film_is_the_cylinders():
+    # The squeeze-film law on the line contact: the area it uses is the cylinder's
+    # sqrt(2) L R^(3/2) / (St_c sqrt(sigma)) per pair (the oracle's, within 1e-12), so its
+    # critical speed 6 pi eta phi A St_c / m_n does not depend on St_c.
+    speeds = []
+    for st_c in (5.0, 10.0, 20.0):
+        p = MeshParameters(contact_geometry=2, stokes_critical=st_c)
+        probe = Probe(p)
+        m = MeshModel(p)
+        onset = squeeze_probe(probe, DRIVE, 0.0, 1e-3)
+        assert onset.area == pytest.approx(dissipation.flank_area(m, DRIVE, 0.0), rel=1e-12)
+        assert onset.area > 0.0
+        speeds.append(dissipation.critical_speed(m, onset.area))
+    assert speeds[0] == pytest.approx(speeds[1], rel=1e-12) == pytest.approx(speeds[2],
+                                                                               rel=1e-12)
 
 
 # ------------------------------------------------------------------ realized by single impacts
@@ -159,7 +175,7 @@ def test_any_legal_squeeze_law_is_realized_by_its_impacts(changes, log_v, flank)
         assert "beyond the validity" in str(err) or "too stiff" in str(err)
         event("refused")
         return
-    law = squeeze.onset(MeshModel(p), flank, 0.0, v)
+    law = dissipation.onset(MeshModel(p), flank, 0.0, v)
     if law.sticks:
         assert e == 0.0
     else:
@@ -215,99 +231,3 @@ def test_the_mesh_damping_ratio_is_zeta_of_the_linearized_contact():
         k = sum(1.5 * r["K"] * math.sqrt(r["delta"]) for r in static.pairs if r["delta"] > 0)
         c = (moving.W - static.W) / rate
         assert c == pytest.approx(2 * 0.07 * math.sqrt(k * d["normal_mass"]), rel=1e-9)
-
-
-# ------------------------------------------------------------------ Barus friction
-BARUS = {"viscous_law": 1, "shear_speed": 1}
-
-
-@pytest.mark.parametrize("form", [0, 1, 2])
-@pytest.mark.parametrize("lam", [1.5, 2.5, 3.0, 5.0])
-def test_barus_friction_equals_the_oracle(form, lam):
-    p = MeshParameters(friction_form=form, **BARUS)
-    probe = Probe(p)
-    row = pair_at_lambda(probe, lam)
-    A_e, A = areas(probe, row)
-    tau = lubrication.viscous_stress(1, p.eta, p.alpha_pv, p.tau_limit_0, p.tau_limit_slope,
-                                     row["W"] / A, row["sliding_speed"], row["h"])
-    assert row["dry_fraction"] < 1.0
-    assert row["F"] == pytest.approx(
-        lubrication.friction_force(form, row["dry_fraction"], A_e, A, p.tau_s, tau), rel=1e-12)
-
-
-def test_barus_friction_tends_to_the_isoviscous_one_and_is_bounded_by_the_limiting_shear():
-    # alpha -> 0 with the limiting shear stress out of reach: eta |U| / h of the paper (form 0,
-    # full film, sliding speed); with the default alpha the film is exp(alpha p) more viscous
-    # (about 3-20 at these loads) and at a high shear rate its stress is the limiting shear
-    # stress tau_L0 + gamma_L p.
-    for delta in (0.05e-6, 0.3e-6):
-        iso = Probe(MeshParameters(shear_speed=1))
-        limitless = Probe(MeshParameters(alpha_pv=0.0, tau_limit_0=1e12, **BARUS))
-        barus = Probe(MeshParameters(**BARUS))
-        thick = Probe(MeshParameters(eta=1000.0, **BARUS))
-        for lam in (3.0, 6.0):
-            a, b = pair_at_lambda(iso, lam, delta), pair_at_lambda(limitless, lam, delta)
-            assert b["F"] == pytest.approx(a["F"], rel=1e-6)
-            row = pair_at_lambda(barus, lam, delta)
-            p = row["W"] / areas(barus, row)[1]
-            piezo = math.exp(barus.params.alpha_pv * p)
-            assert 3.0 < piezo < 30.0
-            assert 0.9 * piezo * a["F"] < row["F"] < piezo * a["F"]
-            row = pair_at_lambda(thick, lam, delta)
-            A = areas(thick, row)[1]
-            tau_L = thick.params.tau_limit_0 + thick.params.tau_limit_slope * row["W"] / A
-            assert 0.999 * A * tau_L < row["F"] <= A * tau_L
-
-
-@settings(max_examples=200, deadline=None)
-@given(alpha=st.floats(0.0, 1e-7), tau0=st.floats(1e3, 1e12), slope=st.floats(0.0, 1.0),
-       p=st.floats(0.0, 1e10),
-       U=st.one_of(st.just(0.0), st.floats(1e-9, 10.0), st.floats(-10.0, -1e-9)),
-       h=st.floats(1e-9, 1e-4),
-       eta=st.floats(1e-5, 1e3))
-def test_the_limited_shear_stress_is_bounded_and_below_the_newtonian(alpha, tau0, slope, p, U,
-                                                                      h, eta):
-    tau = lubrication.viscous_stress(1, eta, alpha, tau0, slope, p, U, h)
-    newtonian = eta * math.exp(min(alpha * p, 700.0)) * abs(U) / h
-    assert 0.0 <= tau <= tau0 + slope * p
-    assert tau <= newtonian * (1 + 1e-12)
-
-
-# ------------------------------------------------------------------ the elastohydrodynamic film
-def steady_drive_pairs(probe: Probe, load: float = 0.0833):
-    """The loaded pairs of the drive flank at the static equilibrium for ``load`` [N.m]
-    (rigid speed ratio, 830 rpm) over one base pitch of roll."""
-    from drive_rattle import MeshUnit
-
-    d = probe.derived
-    rows = []
-    for phi_p in [k * d["base_pitch"] / d["rb_pinion"] / 20 for k in range(20)]:
-        unit = MeshUnit(probe.params, phi_p, 86.92, load)
-        out = unit.outputs()
-        unit.close()
-        loads = probe.loads(DRIVE, phi_p, 86.92, out["wheel.phi"], out["wheel.w"], 0.0)
-        rows += [r for r in loads.pairs if r["W"] > 0.0]
-    return rows
-
-
-def test_the_ehl_film_is_hamrock_and_dowsons_and_reaches_the_mixed_regime():
-    # In steady drive at the scenario's load the eq. 11 film is zero (the pairs penetrate)
-    # while the entrainment builds an EHL film of 0.3-0.5 um: with the default 0.4 um
-    # roughness about the boundary of the mixed regime, partly in it.
-    p = MeshParameters(film=1, viscous_law=1, shear_speed=1)
-    probe, m = Probe(p), MeshModel(p)
-    paper = steady_drive_pairs(Probe(MeshParameters()))
-    rows = steady_drive_pairs(probe)
-    assert all(r["h"] == 0.0 and r["dry_fraction"] == 1.0 for r in paper)
-    for r in rows:
-        assert r["h"] == pytest.approx(lubrication.central_film_thickness(
-            r["entrainment_speed"], r["W"], r["r_x"], m.geometry.r_y, m.E_star, p.eta,
-            p.alpha_pv), rel=1e-12)
-    lam = [r["film_parameter"] for r in rows]
-    assert min(r["h"] for r in rows) > 0.2e-6 and max(r["h"] for r in rows) < 0.6e-6
-    assert min(lam) < 1.0 < max(lam)
-    mixed = [r for r in rows if r["dry_fraction"] < 1.0]
-    assert mixed and all(r["F"] < 0.1 * r["W"] for r in mixed)  # the film carries part
-    # no piezoviscosity, no EHL film (G = 0): the paper's eq. 11
-    flat = steady_drive_pairs(Probe(MeshParameters(film=1, alpha_pv=0.0)))
-    assert all(r["h"] == 0.0 for r in flat)

@@ -25,6 +25,11 @@ def test_defaults_are_the_reference_scenario():
     assert [(k, a) for k, a, _ in d.order_terms()] == [(2.0, 300.0), (4.0, 200.0), (6.0, 150.0)]
 
 
+def test_the_defaults_are_crowned_smooth_point_contacts():
+    p = MeshParameters()
+    assert (p.contact_geometry, p.roughness) == (0, 0)
+
+
 @pytest.mark.parametrize("cls", [MeshParameters, DrivelineParameters])
 def test_every_parameter_is_fully_declared(cls):
     names = set()
@@ -109,41 +114,6 @@ def test_the_library_checks_what_the_specs_declare():
                     except ModelError as err:  # only a combination check may refuse a limit
                         assert f"'{spec.name}' = " not in str(err) or "out of range" not in \
                             str(err), str(err)
-
-
-def test_an_undercutting_pinion_is_refused_with_the_minimum():
-    with pytest.raises(ModelError) as err:
-        MeshParameters.from_public({"gear.z_pinion": 10, "gear.beta": 0.0})
-    message = str(err.value)
-    assert "'gear.z_pinion' = 10" in message and "undercut" in message
-    assert "allowed: gear.z_pinion >= 18" in message
-
-
-def test_a_contact_ratio_below_one_is_refused():
-    # Stub teeth on a spur pair: the path of contact is shorter than the base pitch.
-    with pytest.raises(ModelError) as err:
-        MeshParameters.from_public({"gear.h_a": 0.5, "gear.beta": 0.0})
-    message = str(err.value)
-    assert "eps_alpha = 0.88" in message and "gear.h_a = 0.5" in message
-    assert "allowed: eps_alpha >= 1" in message
-
-
-def test_a_face_width_needing_too_many_pair_slots_is_refused():
-    with pytest.raises(ModelError) as err:
-        MeshParameters.from_public({"gear.b": 0.2})
-    message = str(err.value)
-    assert "'gear.b' = 0.2" in message and "needing 15 pair slots" in message
-    assert "at most 8" in message and "allowed: gear.b < 0.1004 m" in message
-
-
-def test_a_free_start_inside_the_teeth_is_refused_at_initialization():
-    from drive_rattle import MeshUnit
-
-    with pytest.raises(ModelError) as err:
-        MeshUnit(MeshParameters(init_in_contact=False, phi_start=0.01), 0.0, 0.0, 0.0)
-    message = str(err.value)
-    assert message.startswith("exitInitializationMode: ")
-    assert "'wheel.phi_start' = 0.01" in message and "allowed: within the backlash" in message
 
 
 def test_wrong_types_and_unknown_names_are_refused_by_the_specs():

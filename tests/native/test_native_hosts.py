@@ -10,6 +10,9 @@ runs each FMU on its regression inputs
 * on win64 under wine, host and FMU cross-compiled: the outputs pass the committed regression
   references (another C library, so not bit for bit).  Skipped with the reason where wine is
   missing, unless RATTLE_REQUIRE_WINE=1 (CI sets it), which makes that a failure.
+
+The aarch64-linux binaries run under qemu-user (``qemu_aarch64``, the FMI 3.0 FMUs' in
+tests/fmi3, a binary built into an FMI 2.0 FMU on request in tests/fmu/test_platforms.py).
 """
 
 from __future__ import annotations
@@ -21,16 +24,16 @@ import subprocess
 import zipfile
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from drive_rattle.interface import MODELS
 from drive_rattle_build.compiler import zig_cc
 from drive_rattle_cosim.harness import Unit
-from drive_rattle_cosim.regression import read_opt, reference_files
+from drive_rattle_cosim.regression import reference_files
 
 from .twin import (
     STRICT,
+    assert_passes_references,
     bits,
     compile_host,
     gcc,
@@ -174,16 +177,30 @@ def test_win64_binary_under_wine(win64_host, wine_env, native_fmus, model, tmp_p
     assert run.returncode == 0, f"fmu_host.exe failed (rc {run.returncode}):\n{run.stderr[-3000:]}"
     assert not logged, logged
     outputs = interface(fmu)[3]
-    table = np.array(read_table(tmp_path / "outputs.csv", outputs), dtype=float)
-    _, ref_csv, opt_file = reference_files(model)
-    opt = read_opt(opt_file)
-    ref_lines = ref_csv.read_text(encoding="utf-8").splitlines()
-    names = ref_lines[0].split(",")
-    ref = np.array([[float(x) for x in line.split(",")] for line in ref_lines[1:]])
-    columns = ["time", *(n for n, _, _ in outputs)]
-    assert table.shape == ref.shape and sorted(names) == sorted(columns)
-    assert np.allclose(table[:, 0], ref[:, 0], rtol=1e-12, atol=0.0)  # fmpy sums its times
-    for k, name in enumerate(names[1:], start=1):  # the regression kit's check
-        r, y = ref[:, k], table[:, columns.index(name)]
-        tol = opt["RelTol"] * np.abs(r) + opt["AbsTol"] * (r.max() - r.min())
-        assert np.all(np.abs(y - r) <= tol), (name, float(np.max(np.abs(y - r) - tol)))
+    assert_passes_references(model, read_table(tmp_path / "outputs.csv", outputs),
+                             ["time", *(n for n, _, _ in outputs)])
+
+
+# ------------------------------------------------------------------ aarch64-linux under qemu
+#: The aarch64 C library of Debian's libc6-arm64-cross: qemu-user's root for a dynamically
+#: linked aarch64 program (its loader and libc, libm, libdl).
+AARCH64_ROOT = Path("/usr/aarch64-linux-gnu")
+
+
+def qemu_aarch64() -> list[str]:
+    """The command that runs a dynamically linked aarch64-linux program here
+    (``qemu-aarch64-static -L /usr/aarch64-linux-gnu``).  Skipped with the reason where qemu-user
+    or the aarch64 C library is missing, unless RATTLE_REQUIRE_QEMU=1 (CI sets it), which makes
+    that a failure."""
+    qemu = shutil.which("qemu-aarch64-static") or shutil.which("qemu-aarch64")
+    missing = [what for what, there in (
+        ("qemu-user (Debian/Ubuntu: `apt-get install qemu-user-static`)", qemu),
+        ("the aarch64 C library (Debian/Ubuntu: `apt-get install libc6-arm64-cross`)",
+         (AARCH64_ROOT / "lib" / "ld-linux-aarch64.so.1").is_file())) if not there]
+    if missing:
+        reason = (f"{' and '.join(missing)} not installed: the aarch64-linux binary is not run "
+                  "here (CI installs them)")
+        if os.environ.get("RATTLE_REQUIRE_QEMU"):
+            pytest.fail(f"RATTLE_REQUIRE_QEMU is set but {reason}")
+        pytest.skip(reason)
+    return [qemu, "-L", str(AARCH64_ROOT)]

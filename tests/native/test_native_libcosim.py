@@ -11,7 +11,7 @@ from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.ssp import write_ssp
 from drive_rattle_cosim.system import simulate
 
-from ..cosim.test_ssp_libcosim import OUTPUTS, PARAMS, run_in_libcosim
+from ..cosim.test_ssp import OUTPUTS, PARAMS, run_in_libcosim
 
 
 @pytest.fixture(scope="module")

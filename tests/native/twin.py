@@ -11,12 +11,13 @@ import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
 from fmpy import read_model_description
 
 from drive_rattle.library import DRIVELINE, MESH
 from drive_rattle.units import Unit
 from drive_rattle_build.shim import fmi2_headers
-from drive_rattle_cosim.regression import reference_files
+from drive_rattle_cosim.regression import read_opt, reference_files
 
 HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
 #: The host compiles warning-free under these.
@@ -92,3 +93,23 @@ def read_table(path: Path, outputs) -> list[list]:
 
 def gcc() -> str | None:
     return shutil.which("gcc")
+
+
+def assert_passes_references(model: str, table, columns: Sequence[str]) -> None:
+    """A host's [time, outputs...] ``table`` (``columns``: its header) against the committed
+    references of ``model`` with the regression kit's check (drive_rattle_cosim.regression):
+    the same times and, in every column at every point, |y - y_ref| <= RelTol |y_ref| +
+    AbsTol (max y_ref - min y_ref)."""
+    table = np.array(table, dtype=float)
+    _, ref_csv, opt_file = reference_files(model)
+    opt = read_opt(opt_file)
+    lines = ref_csv.read_text(encoding="utf-8").splitlines()
+    names = lines[0].split(",")
+    ref = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    columns = list(columns)
+    assert table.shape == ref.shape and sorted(names) == sorted(columns)
+    assert np.allclose(table[:, 0], ref[:, 0], rtol=1e-12, atol=0.0)  # fmpy sums its times
+    for k, name in enumerate(names[1:], start=1):
+        r, y = ref[:, k], table[:, columns.index(name)]
+        tol = opt["RelTol"] * np.abs(r) + opt["AbsTol"] * (r.max() - r.min())
+        assert np.all(np.abs(y - r) <= tol), (name, float(np.max(np.abs(y - r) - tol)))

@@ -9,8 +9,8 @@ The rigid-body approach along the tooth normal is common to all pairs of a flank
 
 Each pair in the zone of action touches at its own contact point with its own crown offset
 g_i (geometry.py; zero on unmodified flanks), so its penetration is delta_i = delta - g_i, and
-it carries the load of its load-approach law (approach.py) with the contact's dissipation
-(squeeze.py: set by the onset at the last impact speed) on its own penetration rate,
+it carries the load of its load-approach law (contact.py) with the contact's dissipation
+(dissipation.py: set by the onset at the last impact speed) on its own penetration rate,
 Hunt-Crossley
 
     W_i = W(delta_i) (1 + d ddelta_i/dt),   W_i >= 0,
@@ -38,8 +38,8 @@ import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from . import hertz, lubrication, roots, squeeze
-from .approach import ApproachLaw
+from . import contact, dissipation, friction, roots
+from .contact import ApproachLaw
 from .geometry import DRIVE, LAYOUT_CROWNED, LAYOUT_LINE, LAYOUT_PAPER, HelicalPairGeometry
 
 DISSIPATION_NONE = 0
@@ -100,7 +100,7 @@ class PairLaw(NamedTuple):
 def damping_factor(params) -> float:
     """Hunt-Crossley factor d [s/m] of the parameters' contact.dissipation model."""
     if params.dissipation == DISSIPATION_RESTITUTION:
-        return hertz.hunt_crossley_factor(params.restitution, params.restitution_speed)
+        return contact.hunt_crossley_factor(params.restitution, params.restitution_speed)
     if params.dissipation == DISSIPATION_FACTOR:
         return params.damping
     return 0.0
@@ -112,13 +112,13 @@ class MeshModel:
     def __init__(self, params):
         self.params = params
         self.geometry = g = HelicalPairGeometry(params)
-        self.E_star = hertz.effective_modulus(
+        self.E_star = contact.effective_modulus(
             params.E_pinion, params.nu_pinion, params.E_wheel, params.nu_wheel)
         if g.layout == LAYOUT_LINE:  # Palmgren's law: no elliptical contact to tabulate
-            self.law = hertz.ContactLaw(hertz.LAW_EQUIVALENT_SPHERE, self.E_star, g.r_y,
+            self.law = contact.ContactLaw(contact.LAW_EQUIVALENT_SPHERE, self.E_star, g.r_y,
                                         (0.0, 0.0))
         else:
-            self.law = hertz.ContactLaw(params.hertz_law, self.E_star, g.r_y,
+            self.law = contact.ContactLaw(params.hertz_law, self.E_star, g.r_y,
                                         g.radius_ratio_range())
         self.approach = ApproachLaw(g.layout == LAYOUT_LINE, getattr(params, "roughness", 0),
                                     self.E_star, params.sigma, params.gamma,
@@ -212,9 +212,9 @@ class MeshModel:
         delta_dot = self.approach_rate(flank, w_p, w_w)
         a = self.approach
         # the contact's dissipation as an onset on this flank at v_impact sets it
-        contact = squeeze.onset(self, flank, phi_p, v_impact)
+        onset = dissipation.onset(self, flank, phi_p, v_impact)
         pair_laws = self.pair_laws(flank, phi_p)
-        ratio = squeeze.ratio_dampings(self, [
+        ratio = dissipation.ratio_dampings(self, [
             a.stiffness(pl.K, pl.W_r, delta - pl.offset)
             for pl in pair_laws if delta - pl.offset > 0.0])
         for pl in pair_laws:
@@ -226,10 +226,10 @@ class MeshModel:
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
             W = a.force(K, pl.W_r, pen)
-            c = (squeeze.film_damping(self, r_x, pl.r_y, pl.length, pen) if contact.sticks
+            c = (dissipation.film_damping(self, r_x, pl.r_y, pl.length, pen) if onset.sticks
                  else ratio.pop(0) if ratio else 0.0)
-            if contact.d > 0.0:
-                W *= 1.0 + contact.d * (delta_dot - self.pair_rate(flank, w_p, dg))
+            if onset.d > 0.0:
+                W *= 1.0 + onset.d * (delta_dot - self.pair_rate(flank, w_p, dg))
                 W = max(W, 0.0)  # the flanks never pull on each other
             elif c > 0.0:
                 W += c * (delta_dot - self.pair_rate(flank, w_p, dg))
@@ -238,25 +238,25 @@ class MeshModel:
             out.tau_pinion -= flank * W * self.arm_pinion
             out.W += W
             rho_p, rho_w = s, g.line_length - s
-            v_s = lubrication.sliding_speed(w_p, rho_p, w_w, rho_w)
-            u = lubrication.entrainment_speed(w_p, rho_p, w_w, rho_w)
+            v_s = friction.sliding_speed(w_p, rho_p, w_w, rho_w)
+            u = friction.entrainment_speed(w_p, rho_p, w_w, rho_w)
             F = h = lam = psi = d_max = 0.0
             if W > 0.0:
-                A_e = lubrication.asperity_area(W, self.E_star, p.gamma, p.sigma)
+                A_e = friction.asperity_area(W, self.E_star, p.gamma, p.sigma)
                 A = a.area(kz, W)
                 d_max = a.film_delta_max(v_impact, K, r_x, ka, pl.length, p.density)
-                h = lubrication.film_thickness(-pen, d_max)
-                if p.film == lubrication.FILM_EHL:
-                    h = max(h, lubrication.central_film_thickness(
+                h = friction.film_thickness(-pen, d_max)
+                if p.film == friction.FILM_EHL:
+                    h = max(h, friction.central_film_thickness(
                         u, W, r_x, pl.r_y, self.E_star, p.eta, p.alpha_pv))
                 lam = h / p.sigma
-                psi = lubrication.dry_fraction(lam)
+                psi = friction.dry_fraction(lam)
                 if p.friction_enabled:
                     U = u if p.shear_speed == 0 else v_s
-                    tau_v = (lubrication.viscous_stress(
+                    tau_v = (friction.viscous_stress(
                         p.viscous_law, p.eta, p.alpha_pv, p.tau_limit_0, p.tau_limit_slope,
                         W / A, U, h) if psi < 1.0 else 0.0)
-                    F = lubrication.friction_force(p.friction_form, psi, A_e, A, p.tau_s,
+                    F = friction.friction_force(p.friction_form, psi, A_e, A, p.tau_s,
                                                    tau_v)
                     sgn = math.copysign(1.0, v_s) if v_s != 0.0 else 0.0
                     out.tau_wheel += sgn * F * rho_w

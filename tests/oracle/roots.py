@@ -1,6 +1,6 @@
 """Bracketing root finding for the readable equations: Brent's method (zeroin: bisection
 safeguarding secant and inverse quadratic steps) written out, as the model library's roots.c
-has it; tests/model/test_oracle_itself.py holds it against ``scipy.optimize.brentq``.
+has it; tests/model/test_roots.py holds it against ``scipy.optimize.brentq``.
 (The library's event location, quadratic crossings included, is the stepper's: it is tested
 through the located events, not copied here.)
 """

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from . import hertz
+from . import contact
 from .geometry import LAYOUT_LINE
 
 DISSIPATION_SQUEEZE = 3
@@ -114,7 +114,7 @@ def onset(model, flank: int, phi_p: float, v: float) -> Onset:
     e = restitution(p, St)
     if not e >= STICK_RESTITUTION:
         return Onset(area, St, e, 0.0, True)
-    return Onset(area, St, e, hertz.hunt_crossley_factor(e, v), False)
+    return Onset(area, St, e, contact.hunt_crossley_factor(e, v), False)
 
 
 #: The penetration over which a pair's film damping engages, as a fraction of sigma.

@@ -1,4 +1,5 @@
-"""Film, regime of lubrication and flank friction (paper eq. 11-17, read as docs/model.md says).
+"""Film, regime of lubrication and flank friction (paper eq. 11-17, read as docs/model.md says):
+the readable equations the model library's friction.c is held against.
 
 Plain functions of SI floats; the oracle's mesh model (mesh.py) calls them per tooth pair.
 """

@@ -1,19 +1,33 @@
 """Statistics after the transient in windows, against records built with known answers."""
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 from drive_rattle_cosim.analysis import (
+    STRONGEST_LEVEL_ROW,
+    STRONGEST_ROW,
     LineCatalogue,
     LineSearch,
     Scatter,
+    extent_result_text,
+    further_statistics,
     markdown_table,
+    number_text,
     onsets_from_counters,
     paper_comparison,
     rattle_statistics,
+    strongest_line,
+    subharmonic_result_text,
     windowed_statistics,
+)
+from drive_rattle_cosim.spectral_lines import (
+    Subharmonic,
+    spectral_extent,
+    subharmonic_test,
+    welch_spectrum,
 )
 from drive_rattle_cosim.sweep import rattle_metrics
 
@@ -166,7 +180,8 @@ def test_spectral_figures_per_window():
     rows = paper_comparison(ws)
     sub = next(r for r in rows if r[0].startswith("windows with a sub-harmonic"))
     assert sub[1] == "2 of 4 windows (f0 = 620 Hz)"
-    assert "| strongest line 100–1500 Hz [Hz] | 620" in markdown_table(rows)
+    assert (f"| {STRONGEST_ROW} | 620.0 (unexplained), found in 4 of 4 windows |"
+            in markdown_table(rows))
     # Without a fundamental, the catalogue's is used: the forcing's period, engine order 2
     # (27.67 Hz).  620 Hz lies 0.6 bins from 622.5 Hz, the odd order 45 -- where a response
     # with twice the forcing's period has lines -- so every window is flagged.
@@ -230,7 +245,8 @@ def test_a_line_in_some_windows_says_in_how_many():
     ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, window,
                              lines=LineSearch())
     assert ws.scatter("dominant_line_frequency").n == 2
-    assert ws.text("dominant_line_frequency").endswith("; in 2 of 4 windows")
+    assert ws.text("dominant_line_frequency").endswith(
+        "; in 2 of 4 windows (no line found in 100–1500 Hz in the others)")
     assert [w.dominant_line_name for w in ws.windows] == ["unexplained"] * 2 + ["none found"] * 2
     assert ws.text("mean_wheel_speed") == "1 ± 0 (1–1)"
 
@@ -282,10 +298,12 @@ def test_paper_rows_give_percentiles_with_scatter_and_claim_no_agreement():
     assert "4 mm/s" in paper and "not a like-for-like" in paper
     assert not any("typical" in q for q in rows)
     # Without a line search the spectral rows say so instead of inventing a value.
+    no_search = "no spectrum analysed (no line search asked for)"
     assert rows["spectral extent: 1/3-octave PSD 10 dB below its 100–500 Hz mean [Hz]"][0] == (
-        "none in any window")
+        no_search)
     assert rows["windows with a sub-harmonic of the forcing (power at odd multiples of f0/2) "
-                "[1]"][0] == "no test possible in any window"
+                "[1]"][0] == no_search
+    assert rows[STRONGEST_ROW][0] == no_search
 
 
 def test_extent_rows_say_when_the_extent_is_only_a_lower_bound():
@@ -300,3 +318,123 @@ def test_extent_rows_say_when_the_extent_is_only_a_lower_bound():
     text = next(r[1] for r in paper_comparison(ws) if r[0].startswith("spectral extent"))
     assert text.startswith("≥ 4996 (the band top, below Nyquist) in 2 of 2 windows")
     assert "±" not in text
+
+
+def _two_lines_trading_places():
+    """Four 2 s windows at 10 kHz with tones at 300 and 900 Hz (bin centres at 4 Hz bins) in
+    weak white noise: 300 Hz is the stronger in windows 0 and 2 (amplitude 1 against 0.5),
+    900 Hz in windows 1 and 3 (0.8 against 0.3).  The per-window strongest lines average to
+    600 Hz, where there is no line; 900 Hz has the higher mean level."""
+    fs, window = 10_000.0, 2.0
+    t = np.arange(round(4 * window * fs) + 1) / fs
+    odd = (t // window).astype(int) % 2 == 1
+    a300, a900 = np.where(odd, 0.3, 1.0), np.where(odd, 0.8, 0.5)
+    W = (10.0 + a300 * np.sin(2 * np.pi * 300.0 * t) + a900 * np.sin(2 * np.pi * 900.0 * t)
+         + 0.05 * np.random.default_rng(4).standard_normal(t.size))
+    return t, {"wheel.phi": 44.5 * t, "mesh.W": W}, window
+
+
+def test_the_strongest_line_is_one_line_followed_through_the_windows():
+    t, s, window = _two_lines_trading_places()
+    ws = windowed_statistics(t, s, [], [], [], M_N, 0.0, window, lines=LineSearch(),
+                             segment_seconds=0.25)
+    # The input is hard: each window's own strongest line alternates, and their mean
+    # frequency lies where no line is.
+    assert [w.dominant_line_frequency for w in ws.windows] == pytest.approx(
+        [300.0, 900.0] * 2, abs=1.0)
+    assert ws.scatter("dominant_line_frequency").mean == pytest.approx(600.0, abs=1.0)
+    line = strongest_line(ws)
+    assert line.frequency == pytest.approx(900.0, abs=1.0)
+    assert (line.name, line.found_in, line.windows) == ("unexplained", 4, 4)
+    # A tone of amplitude A on a bin centre has the Welch PSD A²/2 over the equivalent noise
+    # bandwidth of the Hann window, 1.5 bins of 4 Hz: its level in dB, averaged over the windows.
+    expected = np.mean([10 * math.log10(a * a / 2 / (1.5 * 4.0)) for a in (0.5, 0.8) * 2])
+    assert line.level_db.mean == pytest.approx(expected, abs=0.05)
+    assert line.level_db.n == 4 and line.above_floor_db.n == 4
+    rows = dict((q, run) for q, run, _paper in paper_comparison(ws))
+    assert rows[STRONGEST_ROW] == "900.0 (unexplained), found in 4 of 4 windows"
+    assert rows[STRONGEST_LEVEL_ROW] == line.level_db.text()
+
+
+def test_a_line_found_in_one_window_is_ranked_by_its_level_in_all():
+    """A 620 Hz tone only in the first of four windows, strong there, against a weaker
+    400 Hz tone in all four: the strongest line is the one that is there throughout, and a
+    line found in fewer windows says so."""
+    fs, window = 10_000.0, 1.0
+    t = np.arange(round(4 * window * fs) + 1) / fs
+    W = (10.0 + 0.5 * np.sin(2 * np.pi * 400.0 * t)
+         + np.where(t < window, 1.0, 0.0) * np.sin(2 * np.pi * 620.0 * t)
+         + 0.05 * np.random.default_rng(9).standard_normal(t.size))
+    ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, window,
+                             lines=LineSearch())
+    assert ws.windows[0].dominant_line_frequency == pytest.approx(620.0, abs=1.0)
+    line = strongest_line(ws)
+    assert line.frequency == pytest.approx(400.0, abs=1.0) and line.found_in == 4
+    only_first = strongest_line(ws, band=(600.0, 640.0))
+    assert only_first.frequency == pytest.approx(620.0, abs=1.0)
+    assert only_first.text() == "620.0 (unexplained), found in 1 of 4 windows"
+
+
+def test_white_noise_has_no_strongest_line():
+    fs = 10_000.0
+    t = np.arange(round(4.0 * fs) + 1) / fs
+    cat = LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0))
+    for seed in range(10):
+        W = 10.0 + np.random.default_rng(seed).standard_normal(t.size)
+        ws = windowed_statistics(t, {"wheel.phi": t, "mesh.W": W}, [], [], [], M_N, 0.0, 1.0,
+                                 lines=LineSearch(), catalogue=cat)
+        assert strongest_line(ws) is None, seed
+        rows = dict((q, run) for q, run, _paper in paper_comparison(ws))
+        assert rows[STRONGEST_ROW] == "no line found in 100–1500 Hz in any window"
+
+
+def test_reports_say_in_words_what_is_missing():
+    """A run with drive onsets only and a force without lines: every row of the paper
+    comparison and of the further statistics, and the whole stretch's sub-harmonic test, is
+    a number or says why there is none -- never nan or inf."""
+    fs = 10_000.0
+    t = np.arange(round(4.0 * fs) + 1) / fs
+    W = 10.0 + np.random.default_rng(2).standard_normal(t.size)
+    onset_t = np.arange(0.05, 4.0, 0.1)
+    speeds = 1e-3 * (1.0 + (np.arange(onset_t.size) % 3))
+    ws = windowed_statistics(t, {"wheel.phi": 44.5 * t, "mesh.W": W}, onset_t, speeds,
+                             [1] * onset_t.size, M_N, 0.0, 1.0, lines=LineSearch(),
+                             catalogue=LineCatalogue(830 / 60, 20, (2.0, 4.0, 6.0)))
+    spec = welch_spectrum(t[1:], W[1:], 0.25)
+    sub = subharmonic_test(spec, 830 / 30)
+    text = (markdown_table(paper_comparison(ws)) + markdown_table(further_statistics(ws))
+            + subharmonic_result_text(sub)
+            + extent_result_text(spectral_extent(spec), spec.sample_rate))
+    assert not re.search(r"\b(nan|inf)\b", text, re.IGNORECASE), text
+    rows = dict((q, run) for q, run, _paper in paper_comparison(ws))
+    assert rows["impact speed at onsets, coast flank: median [mm/s]"] == (
+        "no coast-flank onset in any window")
+    assert rows[STRONGEST_LEVEL_ROW] == "no line found in 100–1500 Hz in any window"
+    assert ws.text("dominant_line_level") == "no line found in 100–1500 Hz in any window"
+
+
+@pytest.mark.parametrize("sub, words", [
+    (Subharmonic(27.67, 51, 1.06, 1.13, -0.2, 3.0, False),
+     "the sub-harmonic comb has no power above the noise floor"),
+    (Subharmonic(27.67, 51, 1.3, 1.13, 0.2, -1.0, True),
+     "the comb at k·f0 has no power above the noise floor"),
+    (Subharmonic(27.67, 0, math.nan, math.nan, math.nan, math.nan, False),
+     "no test possible"),
+])
+def test_the_subharmonic_result_says_in_words_what_it_lacks(sub, words):
+    text = subharmonic_result_text(sub)
+    assert words in text and "nan" not in text
+
+
+def test_the_subharmonic_result_gives_the_ratio_where_both_combs_have_power():
+    text = subharmonic_result_text(Subharmonic(27.67, 51, 1.3, 1.13, 0.25, 1.0, True))
+    assert text == ("flagged (f0 = 27.67 Hz, 51 positions, statistic 1.3 against the "
+                    "threshold 1.13; sub-harmonic comb over the comb -6.0 dB)")
+
+
+def test_scatter_and_tables_never_print_nan():
+    assert Scatter.of([math.inf, 2.0, math.nan]).text() == "2 (one window)"
+    assert Scatter.of([]).text(missing="no coast-flank onset") == "no coast-flank onset"
+    assert number_text(math.nan, "no line found") == "no line found"
+    assert markdown_table([("x", math.nan)], headers=("q", "v")).splitlines()[-1] == (
+        "| x | no value |")

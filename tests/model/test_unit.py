@@ -1,54 +1,103 @@
-"""How the units start and read their inputs: the harness against the in-process twin, and in
-masters other than the harness consistent input start values, the first step after an
-initialization without exchange, held inputs.  The rules are the model library's
-(init.settle_first_step, inputs.continue_when_held; docs/tools.md); the slave classes are
-driven directly to show that the pythonfmu face passes them on."""
+"""The unit (unit.c, unit_mesh.c, unit_driveline.c): a refused call -- a bad input, step size
+or communication point, a bad set, a refused initialization -- changes nothing; and how the
+units start and read their inputs (init.settle_first_step, inputs.continue_when_held;
+docs/tools.md): each unit started on its input starts outputs its partner's, the mesh
+settles against the first step's inputs, the driveline starts its shaft anew, held inputs
+run on.  The start and hold rules are driven through the pythonfmu slave classes
+(tests/fmi/slave_driver.py), the way a master that makes no exchange at initialization
+drives them."""
+
+import ctypes
+import math
 
 import pytest
 
+from drive_rattle import DrivelineParameters, DrivelineUnit, MeshParameters, ModelError, Unit
 from drive_rattle.library import DRIVELINE, MESH
-from drive_rattle.parameters import DrivelineParameters, MeshParameters
 from drive_rattle.units import input_starts
-from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.ssp import consistent_input_starts
-from drive_rattle_cosim.system import SIGNALS, simulate
+from tests.fmi.slave_driver import Driveline, Driven, GearMeshRattle
+from tests.fmu.closed_forms import engine_orders
 
-from ..fmi.slave_driver import Driveline, Driven, GearMeshRattle
-from ..fmu.closed_forms import engine_orders
+from .helpers import H, assert_refused_and_unchanged, history
 
+# ------------------------------------------------------------------ a refused call changes nothing
+REFUSED_STEPS = [
+    (H, {"pinion.phi": math.nan}, "pinion.phi"),
+    (H, {"pinion.w": math.inf}, "pinion.w"),
+    (H, {"pinion.a": -math.inf}, "pinion.a"),
+    (H, {"wheel.tau_load": math.nan}, "wheel.tau_load"),
+    (H, {"wheel.tau_load": 1e308}, "out of range"),
+    (H, {"pinion.phi": 2e6}, "out of range"),
+    (0.0, {}, "step size"),
+    (-H, {}, "step size"),
+    (math.nan, {}, "step size"),
+    (math.inf, {}, "step size"),
+    (2e-2, {}, "h_comm_max"),
+    # the pinion jumps 12 mrad (~250 um) into the flank: beyond the validity of the Hertz
+    # contact (a 1 us step: the substeps this penetration needs stay few)
+    (1e-6, {"pinion.phi": 87.0 * 5 * H + 0.012}, "penetrate"),
+]
+
+
+@pytest.mark.parametrize("h, inputs, match", REFUSED_STEPS)
+def test_a_refused_step_leaves_the_unit_unchanged(h, inputs, match):
+    unit, twin = history(), history()
+    unit.set({"pinion.phi": 87.0 * 5 * H, "pinion.w": 87.0, "pinion.a": 0.0,
+              "wheel.tau_load": 0.1} | inputs)
+    message = assert_refused_and_unchanged(unit, "rm_do_step", unit.time, h, match=match)
+    assert message.startswith("doStep: ")
+    # ...and the unit continues as one that never saw the refused call
+    args = (H, 87.0 * 5 * H, 87.0, 0.0, 0.1)
+    unit.step(*args)
+    twin.step(*args)
+    assert unit.outputs() == twin.outputs() and unit.save() == twin.save()
+
+
+def test_a_step_that_does_not_continue_the_last_one_is_refused():
+    unit = history()
+    assert_refused_and_unchanged(unit, "rm_do_step", unit.time + 1e-6, H, match="doStep")
+    assert_refused_and_unchanged(unit, "rm_do_step", 0.0, H, match="doStep")
+
+
+def test_a_refused_driveline_step_leaves_the_unit_unchanged():
+    unit = DrivelineUnit(DrivelineParameters(), 0.0, 44.57)
+    unit.step(H, 0.0, 44.57)
+    unit.set({"wheel.phi": math.nan})
+    before = unit.save()
+    with pytest.raises(ModelError, match=r"'wheel\.phi' = nan"):
+        unit.call("rm_do_step", unit.time, H)
+    assert unit.save() == before
+
+
+def test_refused_sets_and_a_refused_initialization_change_nothing():
+    unit = Unit(MESH, MeshParameters(), initialize=False)
+    real = ctypes.c_double * 2
+    j, z = unit.variables["wheel.J"].vr, unit.variables["gear.z_pinion"].vr
+    # one bad entry refuses the whole call: an unknown reference, an Integer set as Real, an
+    # output
+    for vrs, match in (((j, 99999), "99999"), ((j, z), "no Real variable"),
+                       ((j, unit.variables["mesh.W"].vr), "output")):
+        message = assert_refused_and_unchanged(
+            unit, "rm_set_real", (ctypes.c_uint * 2)(*vrs), 2, real(2e-3, 1.0), match=match)
+        assert message.startswith("setReal: ")
+    # parameters are checked when initialization ends: refused there, nothing changes
+    unit.set({"wheel.J": math.nan})
+    unit.call("rm_setup", 0.0)
+    unit.call("rm_enter_initialization")
+    assert_refused_and_unchanged(unit, "rm_exit_initialization", match="'wheel.J' = nan")
+    assert unit.phase == "initialization"
+    unit.set({"wheel.J": 1.3e-3})
+    unit.call("rm_exit_initialization")
+    # parameters are fixed once stepping
+    assert_refused_and_unchanged(unit, "rm_set_real", (ctypes.c_uint * 1)(j), 1,
+                                 (ctypes.c_double * 1)(2e-3), match="wheel.J")
+
+
+# ------------------------------------------------------------------ start and held inputs
 OK, WARNING, ERROR = 0, 1, 3
 MESH_STARTS = input_starts(MESH)
 DRIVELINE_STARTS = input_starts(DRIVELINE)
-
-
-@pytest.mark.parametrize("parameters, start_time", [
-    ({}, 0.0),
-    ({"GearMeshRattle.gear.backlash": 2e-4, "GearMeshRattle.contact.dissipation": 2,
-      "Driveline.engine.amplitude[1]": 1200.0, "Driveline.vehicle.drag": 0.3}, 0.25),
-])
-def test_the_harness_equals_the_in_process_twin_bit_for_bit(fmus, parameters, start_time):
-    """The FMUs in the harness (initialization exchange, Jacobi steps on integer nanoseconds)
-    give exactly the twin's numbers, every signal at every point: the FMI face adds nothing."""
-    per_unit = {MESH: {}, DRIVELINE: {}}
-    names = {MESH: "GearMeshRattle", DRIVELINE: "Driveline"}
-    for qualified, value in parameters.items():
-        unit, _, name = qualified.partition(".")
-        per_unit[MESH if unit == names[MESH] else DRIVELINE][name] = value
-    stop = start_time + 0.02
-    ref = simulate(MeshParameters.from_public(per_unit[MESH]),
-                   DrivelineParameters.from_public(per_unit[DRIVELINE]),
-                   stop_time=stop, step=1e-4, start_time=start_time)
-    with CoSimulation(fmus["GearMeshRattle"], fmus["Driveline"], parameters,
-                      start_time=start_time) as sim:
-        res = sim.run(stop)
-    assert res.time == ref.time and len(ref.time) == 201
-    compared = 0
-    for column in res.columns:
-        name = column.split(".", 1)[1]
-        if name in SIGNALS:
-            assert res[column] == ref.signals[name], column
-            compared += 1
-    assert compared >= 30
 
 
 def started(cls, parameters=None, inputs=None):
