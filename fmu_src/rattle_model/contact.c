@@ -187,42 +187,19 @@ static double ellipse_field(const RmEllipse* e, int i)
 }
 
 /* Coefficients of the Chebyshev interpolant of field i on [lo, hi] at the n Chebyshev points
- * of the first kind (c_0 halved, ready for chebyshev_value). */
+ * of the first kind (roots.c's rm_chebyshev_node and rm_chebyshev_coefficients). */
 static int chebyshev_fit(EllipseCache* cache, int i, double lo, double hi, int terms,
                          double* coeffs, RmText* err)
 {
     int n = terms;
-    double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
     double values[RM_MAX_CHEBYSHEV_TERMS];
     for (int k = 0; k < n; k++) {
         RmEllipse e;
-        if (!cached_ellipse(cache, mid + half * cos(RM_PI * ((double)k + 0.5) / (double)n), &e,
-                            err))
-            return 0;
+        if (!cached_ellipse(cache, rm_chebyshev_node(lo, hi, k, n), &e, err)) return 0;
         values[k] = ellipse_field(&e, i);
     }
-    for (int j = 0; j < n; j++) {
-        double acc = 0.0;
-        for (int k = 0; k < n; k++)
-            acc += values[k] * cos(RM_PI * (double)j * ((double)k + 0.5) / (double)n);
-        coeffs[j] = 2.0 * acc / (double)n;
-    }
-    coeffs[0] *= 0.5;
+    rm_chebyshev_coefficients(values, n, coeffs);
     return 1;
-}
-
-/* Clenshaw's recurrence for sum_j c_j T_j(t), t in [-1, 1]. */
-static inline double chebyshev_value(const double* c, int n, double t)
-{
-    double b1 = 0.0, b2 = 0.0;
-    int j = n - 1;
-    while (j > 0) {
-        double next = 2.0 * t * b1 - b2 + c[j];
-        b2 = b1;
-        b1 = next;
-        j -= 1;
-    }
-    return t * b1 - b2 + c[0];
 }
 
 int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double x_hi,
@@ -273,7 +250,7 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
             for (int i = 1; i <= 3; i++) {
                 double exact = ellipse_field(&e, i);
                 worst = rm_max(worst,
-                               fabs(chebyshev_value(fits[i - 1], terms, t) - exact) / exact);
+                               fabs(rm_chebyshev_value(fits[i - 1], terms, t) - exact) / exact);
             }
         }
         if (!failed && worst <= CHEBYSHEV_TOLERANCE) {
@@ -323,10 +300,10 @@ void rm_contact_law_at_radii(const RmContactLaw* c, RmFail* f, double r_x, doubl
             rho = r_x / r_y;
         }
         double t = (rm_log_checked(f, rho) - c->t_mid) * c->t_scale;
-        *K = E * rm_sqrt_checked(f, *R) * chebyshev_value(c->kappa, c->terms, t);
+        *K = E * rm_sqrt_checked(f, *R) * rm_chebyshev_value(c->kappa, c->terms, t);
         double cr = rm_pow_checked(f, *R / E, 1.0 / 3.0);
-        *ka = cr * chebyshev_value(c->alpha, c->terms, t);
-        *kz = cr * cr * chebyshev_value(c->zeta, c->terms, t);
+        *ka = cr * rm_chebyshev_value(c->alpha, c->terms, t);
+        *kz = cr * cr * rm_chebyshev_value(c->zeta, c->terms, t);
         return;
     }
     /* equivalent sphere (eq. 2) with Johnson's approximate ellipse, a along the larger radius */

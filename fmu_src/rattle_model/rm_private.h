@@ -3,7 +3,7 @@
  *
  *   text.c          message text (numbers as the shortest text that reads back exactly)
  *   refusals.c      the wording of every refusal the physics reports as a code
- *   roots.c         Brent's method, exact quadratic crossings
+ *   roots.c         Brent's method, exact quadratic crossings, Chebyshev series
  *   geometry.c      the helical involute pair and its tooth pairs (paper eq. 3-6)
  *   contact.c       the load-approach laws of a tooth pair: Hertz point contact (exact
  *                   ellipse, eq. 2), Palmgren's line contact, the Greenwood-Tripp asperity
@@ -186,6 +186,26 @@ RM_INTERNAL double rm_brent(RmFail* f, RmRootFn fn, void* ctx, double a, double 
 RM_INTERNAL int rm_first_crossing(double c0, double c1, double c2, double t_max, int rising,
                                   double* out);
 
+/* Chebyshev series (the laws tabulated once per parameter set): the k-th of the n Chebyshev
+ * points of the first kind on [lo, hi]; the coefficients of the interpolant through values
+ * at those n points (c_0 halved, ready for rm_chebyshev_value); and the series
+ * sum_j c_j T_j(t) at t in [-1, 1] by Clenshaw's recurrence. */
+#define RM_MAX_CHEBYSHEV_TERMS 32
+RM_INTERNAL double rm_chebyshev_node(double lo, double hi, int k, int n);
+RM_INTERNAL void rm_chebyshev_coefficients(const double* values, int n, double* coeffs);
+static inline double rm_chebyshev_value(const double* c, int n, double t)
+{
+    double b1 = 0.0, b2 = 0.0;
+    int j = n - 1;
+    while (j > 0) {
+        double next = 2.0 * t * b1 - b2 + c[j];
+        b2 = b1;
+        b1 = next;
+        j -= 1;
+    }
+    return t * b1 - b2 + c[0];
+}
+
 /* ------------------------------------------------------------------ geometry.c */
 #define RM_DRIVE 1
 #define RM_COAST (-1)
@@ -262,7 +282,6 @@ RM_INTERNAL int rm_next_breakpoint(const RmGeometry* g, RmFail* f, double u_a, d
 /* ------------------------------------------------------------------ contact.c */
 #define RM_LAW_EXACT 0
 #define RM_LAW_EQUIVALENT_SPHERE 1
-#define RM_MAX_CHEBYSHEV_TERMS 32
 
 typedef struct {
     double q, kappa, alpha, zeta;
