@@ -137,3 +137,19 @@ void rm_chebyshev_coefficients(const double* values, int n, double* coeffs)
     }
     coeffs[0] *= 0.5;
 }
+
+/* With c_0 the plain first coefficient (a_0 / 2 of the usual primed sum) the derivative's
+ * coefficients follow a'_{j-1} = a'_{j+1} + 2 j a_j from a'_n = a'_(n-1) = 0, its first
+ * halved again. */
+void rm_chebyshev_derivative(const double* c, int n, double* d)
+{
+    double next = 0.0, next2 = 0.0; /* a'_{j}, a'_{j+1} */
+    for (int j = n - 1; j >= 1; j--) {
+        double value = next2 + 2.0 * (double)j * c[j]; /* a'_{j-1} */
+        d[j] = next;
+        next2 = next;
+        next = value;
+    }
+    d[0] = 0.5 * next;
+    if (n > 1) d[n - 1] = 0.0;
+}

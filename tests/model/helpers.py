@@ -16,7 +16,7 @@ PAIR_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_sp
                "entrainment_speed", "h", "film_parameter", "dry_fraction", "delta_max_eq7")
 TOTAL_FIELDS = ("delta", "tau_wheel", "tau_pinion", "W", "F")
 #: Doubles per pair row of rm_probe_pair_laws, in its order (rattle_model.h).
-PAIR_LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r")
+PAIR_LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r", "c_t")
 MAX_PAIRS = 16
 
 
@@ -86,11 +86,13 @@ class Probe:
             r["slot"] = int(r["slot"])
         return rows
 
-    def approach(self, K: float, W_r: float, kz: float, pen: float
-                 ) -> tuple[float, float, float, float]:
-        """rm_probe_approach: (W, dW/d(pen), energy, area) of the parameters' law."""
-        out = (ctypes.c_double * 4)()
-        self.unit.call("rm_probe_approach", float(K), float(W_r), float(kz), float(pen), out)
+    def approach(self, K: float, W_r: float, kz: float, pen: float, c_t: float = 0.0
+                 ) -> tuple[float, float, float, float, float]:
+        """rm_probe_approach: (W, dW/d(pen), energy, area, the flanks' own approach) of the
+        parameters' law with the teeth's compliance c_t in series (0: rigid teeth)."""
+        out = (ctypes.c_double * 5)()
+        self.unit.call("rm_probe_approach", float(K), float(W_r), float(c_t), float(kz),
+                       float(pen), out)
         return tuple(out)
 
     def loads(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,

@@ -29,9 +29,10 @@ W_PINION = 86.92  # rad/s, 830 rpm
 @pytest.mark.parametrize("flank", [DRIVE, COAST])
 @pytest.mark.parametrize("v", [1e-3, 4e-3, 0.05])
 def test_single_undamped_impact_matches_the_hertz_closed_form(flank, v):
-    # Spur pair, friction and dissipation off, pinion at rest: the pairs in mesh share one
-    # penetration, W = sum K_i delta^1.5 with K_i from the oracle's contact law.
-    p = free_parameters(v, flank, dissipation=0, **SPUR)
+    # Spur pair, friction and dissipation off, pinion at rest, rigid teeth (the Hertz law
+    # alone; with the teeth in series: tests/model/test_compliance.py): the pairs in mesh share
+    # one penetration, W = sum K_i delta^1.5 with K_i from the oracle's contact law.
+    p = free_parameters(v, flank, dissipation=0, tooth_compliance=0, **SPUR)
     unit = MeshUnit(p, 0.0, 0.0, 0.0)
     oracle = MeshModel(p)
     K = oracle.stiffness_sum(flank, 0.0)
@@ -86,13 +87,15 @@ def test_reference_impact_magnitudes():
 
 
 def test_substep_refinement_converges():
-    # The W ~ delta^(3/2) onset limits RK4 to about order 2.5 (5.7-fold per halving); where the
-    # onset falls on the substep grid makes single errors erratic, so the worst rebound error
-    # over four onset phases must fall at least threefold per halving of solver.h_max.
+    # The W ~ delta^(3/2) onset of the Hertz law (rigid teeth) limits RK4 to about order 2.5
+    # (5.7-fold per halving); where the onset falls on the substep grid makes single errors
+    # erratic, so the worst rebound error over four onset phases must fall at least threefold
+    # per halving of solver.h_max.
     v = 4e-3
 
     def worst(h):
-        return max(abs(restitution(v, dissipation=0, h_max=h, gap=gap, **SPUR) - 1.0)
+        return max(abs(restitution(v, dissipation=0, h_max=h, gap=gap, tooth_compliance=0,
+                                   **SPUR) - 1.0)
                    for gap in (13e-9, 20e-9, 29e-9, 37e-9))
 
     errs = [worst(h) for h in (1e-5, 5e-6, 2.5e-6)]

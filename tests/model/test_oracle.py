@@ -10,6 +10,7 @@ The tolerances are those of two implementations of the same formulas in a differ
 operations (relative 1e-12 on a quantity, 1e-12 of the sum of magnitudes on a signed sum);
 the measured agreement is tighter (most quantities agree to the last bit)."""
 
+import itertools
 import math
 import sys
 
@@ -74,7 +75,9 @@ def oracle_derived(m: MeshModel) -> dict[str, float]:
                penetration_limit=0.05 * m.params.m_n,
                law_terms=float(len(m.law.kappa)), r_y_eq6_pitch=g.radius_y_eq6(g.s_pitch),
                palmgren_constant=m.approach.palmgren,
-               asperity_pressure=m.approach.asperity_pressure)
+               asperity_pressure=m.approach.asperity_pressure,
+               tooth_stiffness_pitch=1.0 / m.tooth.pitch if m.tooth else math.inf,
+               tooth_terms=float(len(m.tooth.coefficients)) if m.tooth else 0.0)
     return out
 
 
@@ -101,7 +104,8 @@ geometry = st.fixed_dictionaries({
 #: The reason of a refused geometry: a phrase of the oracle's message and of the library's.
 REASONS = ("undercuts", "tip interference", "transverse contact ratio", "pair slots",
            "cannot be tabulated", "too large for an elliptical contact",
-           "needs the wheel's radius at every contact point")
+           "needs the wheel's radius at every contact point", "pointed below its contact",
+           "compliance is not positive")
 
 
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -298,15 +302,17 @@ def test_approach_laws_equal_the_oracle(changes):
     probe, a = Probe(p), MeshModel(p).approach
     rows = [r for r in probe.pair_laws(DRIVE, 0.1) if r["K"] > 0.0]
     assert rows
-    for row in rows:
+    for row, c_t in itertools.product(rows, (0.0, None)):
         K, W_r, kz = row["K"], row["W_r"], row["kz"]
+        c_t = row["c_t"] if c_t is None else c_t  # rigid teeth, and the pair's own
         for pen in np.geomspace(1e-12, 1e-4, 41):
-            W = a.force(K, W_r, pen)
-            want = (W, a.stiffness(K, W_r, pen), a.energy(K, W_r, pen), a.area(kz, W))
-            got = probe.approach(K, W_r, kz, pen)
-            for name, g, w in zip(("W", "stiffness", "energy", "area"), got, want,
+            W = a.force(K, W_r, pen, c_t)
+            want = (W, a.stiffness(K, W_r, pen, c_t), a.energy(K, W_r, pen, c_t),
+                    a.area(kz, W), a.surface(K, W_r, pen, c_t))
+            got = probe.approach(K, W_r, kz, pen, c_t)
+            for name, g, w in zip(("W", "stiffness", "energy", "area", "surface"), got, want,
                                   strict=True):
-                assert close(g, w), (changes, pen, name, g, w)
+                assert close(g, w), (changes, c_t, pen, name, g, w)
 
 
 @pytest.mark.parametrize("changes", APPROACH_LAWS.values(), ids=APPROACH_LAWS)
@@ -499,7 +505,8 @@ def test_mesh_loads_of_the_parameter_sets(pair, flank):
 # ------------------------------------------------------------------ friction forms
 def pair_at_lambda(probe, lam, delta=0.05e-6, flank=DRIVE):
     """The loads of the most loaded pair at film parameter ``lam`` (set through the impact
-    speed of eq. 7: h = delta_max(v) - delta_i, delta_max linear in v)."""
+    speed of eq. 7: h = delta_max(v) - x_i, delta_max linear in v, x_i the flanks' own
+    approach: the pair's penetration less its teeth's deflection)."""
     d = probe.derived
     phi_p, w_p = 0.0, 86.92
     phi_w = (d["arm_pinion"] * phi_p - flank * (d["half_backlash"] + delta)) / d["arm_wheel"]
@@ -509,8 +516,9 @@ def pair_at_lambda(probe, lam, delta=0.05e-6, flank=DRIVE):
         loads = probe.loads(flank, phi_p, w_p, phi_w, w_w, v)
         return max(loads.pairs, key=lambda r: r["W"])
 
-    unit = top(1.0)
-    v = (lam * probe.params.sigma + unit["delta"]) / unit["delta_max_eq7"]
+    unit = top(1.0)  # (h > 0 at 1 m/s: x_i = delta_max - h)
+    surface = unit["delta_max_eq7"] - unit["h"]
+    v = (lam * probe.params.sigma + surface) / unit["delta_max_eq7"]
     return top(v)
 
 
@@ -531,7 +539,10 @@ def test_default_boundary_friction_coefficient_is_0_1():
 @pytest.mark.parametrize("form", [0, 1, 2])
 @pytest.mark.parametrize("shear_speed", [0, 1])
 def test_friction_forms_limits_and_continuity(form, shear_speed):
-    p = MeshParameters(friction_form=form, shear_speed=shear_speed)
+    # (rigid teeth: lambda is set to its limits exactly through the pair's penetration; with
+    # the teeth the film is the flanks' own approach's, held against the oracle at random
+    # states above)
+    p = MeshParameters(friction_form=form, shear_speed=shear_speed, tooth_compliance=0)
     probe = Probe(p)
     for lam in (0.0, 0.3, 1.0):  # boundary: psi = 1, asperity (or apparent) shear
         row = pair_at_lambda(probe, lam)

@@ -37,7 +37,8 @@ class ImpactEnergy:
     """The wheel's energy on the tooth normal against a pinion at rest (oracle): the kinetic
     energy 1/2 m (d delta/dt)^2 plus the elastic energy sum_i integral_0^(delta - g_i) W_i of
     the pairs of ``flank`` (2/5 K_i (delta - g_i)^(5/2) for smooth Hertz; any of the
-    load-approach laws of contact.geometry and contact.roughness)."""
+    load-approach laws of contact.geometry and contact.roughness, with the teeth in series
+    or rigid)."""
 
     def __init__(self, p: MeshParameters, flank: int):
         self.model = m = MeshModel(p)
@@ -93,6 +94,10 @@ impacts = st.fixed_dictionaries({
     "contact_geometry": st.integers(0, 2),
     "roughness": st.integers(0, 1),
     "asperity_density": st.floats(1e8, 1e11),
+    # the teeth's compliance in series, on bodies from thin rims to solid
+    "tooth_compliance": st.integers(0, 1),
+    "body_ratio_pinion": st.floats(1.4, 7.0),
+    "body_ratio_wheel": st.floats(1.4, 7.0),
 })
 
 
