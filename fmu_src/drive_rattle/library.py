@@ -154,7 +154,7 @@ _SIGNATURES = {
     "rm_probe_pair_laws": ([_P, ctypes.c_int, ctypes.c_double, _D, ctypes.c_size_t,
                             ctypes.POINTER(ctypes.c_size_t)], ctypes.c_int),
     "rm_probe_approach": ([_P, ctypes.c_double, ctypes.c_double, ctypes.c_double,
-                           ctypes.c_double, _D], ctypes.c_int),
+                           ctypes.c_double, ctypes.c_double, _D], ctypes.c_int),
     "rm_probe_squeeze": ([_P, ctypes.c_int, ctypes.c_double, ctypes.c_double, _D],
                          ctypes.c_int),
 }

@@ -264,6 +264,15 @@ DISSIPATION_MODELS = {
 }
 DISSIPATION_MODELS_NAMES = {0: "none", 1: "hunt_crossley_restitution", 2: "hunt_crossley_damping",
                             3: "squeeze_film", 4: "damping_ratio"}
+#: tooth.compliance codes (docs/model.md section 3.7)
+TOOTH_COMPLIANCES = {
+    0: "none: rigid teeth, only the contact deforms (the paper's equations)",
+    1: "bending, shear and compression of both teeth (Weber's energy method on the virtual "
+       "spur teeth of the normal section) and of their gear bodies (Sainsot, Velex and "
+       "Duverger 2004), per unit length of contact line, in series with each pair's contact "
+       "law over the pair's engaged contact line",
+}
+TOOTH_COMPLIANCES_NAMES = {0: "none", 1: "weber_sainsot"}
 #: friction.shear_speed codes
 SHEAR_SPEEDS = {0: "entrainment speed u (paper eq. 12, 16)", 1: "sliding speed |v_s|"}
 SHEAR_SPEEDS_NAMES = {0: "entrainment", 1: "sliding"}
@@ -417,6 +426,24 @@ class MeshParameters(ParameterSet):
         "mesh damping ratio zeta (contact.dissipation = 4): viscous damping "
         "c = 2 zeta sqrt(k m_n) with k = dW/d(delta) the contact's linearized stiffness and m_n "
         "the wheel's normal mass (gear dynamics uses 0.03-0.1)", minimum=0.0, maximum=1.0)
+    # --- the teeth's own compliance, in series with the contact ---------------------------
+    tooth_compliance: int = declare(
+        "tooth.compliance", 1, "1", "compliance of the teeth in series with each pair's "
+        "contact law (docs/model.md section 3.7): "
+        + "; ".join(f"{k} = {v}" for k, v in TOOTH_COMPLIANCES.items()),
+        minimum=0, maximum=1, choices=TOOTH_COMPLIANCES,
+        choice_names=TOOTH_COMPLIANCES_NAMES)
+    body_ratio_pinion: float = declare(
+        "tooth.body_ratio_pinion", 1.8, "1",
+        "root-circle radius over bore radius of the pinion's body, where the body is held "
+        "(h = r_f / r_int of the gear-body term of Sainsot, Velex and Duverger 2004, fitted for "
+        "1.4-7; tooth.compliance = 1); default 1.8: the pinion's 22.6 mm root radius on a "
+        "25 mm shaft", minimum=1.4, maximum=7.0)
+    body_ratio_wheel: float = declare(
+        "tooth.body_ratio_wheel", 2.7, "1",
+        "root-circle radius over bore radius of the wheel's body (as "
+        "tooth.body_ratio_pinion); default 2.7: the wheel's 46.8 mm root radius on a 35 mm "
+        "shaft", minimum=1.4, maximum=7.0)
     # --- lubricant, surfaces, friction (eq. 11-17) ----------------------------------------
     friction_enabled: bool = declare(
         "friction.enabled", True, "", "include flank friction (eq. 12-17)")

@@ -67,10 +67,11 @@ class Setting:
 #: The two models compared with the paper.
 MODELS = (
     Setting("default model", "lead-crowned flanks: each pair at its own crown offset "
-            "(contact.geometry = 0)"),
+            "(contact.geometry = 0), the teeth's compliance in series (tooth.compliance = 1)"),
     Setting("paper's contact model", "every pair in the zone of action an equivalent ellipsoid "
-            "at the shared rigid approach, eq. 6's r_y (contact.geometry = 1)",
-            {"contact_geometry": 1}),
+            "at the shared rigid approach, eq. 6's r_y (contact.geometry = 1), rigid teeth as "
+            "printed (tooth.compliance = 0)",
+            {"contact_geometry": 1, "tooth_compliance": 0}),
 )
 #: The band of each model: the plausible range of the lubricated impact's dissipation (the
 #: squeeze-film law's low and high ends, docs/model.md section 3.3) and of the film and

@@ -20,6 +20,8 @@
  * (r_x, r_y) or a cylinder (r_x, length L) -- gives W = W_r (delta_a/sigma)^(1/q) from first
  * asperity contact; it is taken in series with the smooth law (the same load on both):
  * delta = (W/K)^(1/p) + sigma (W/W_r)^q, solved for W by Newton's method.
+ * The teeth's compliance c_t (compliance.c) is a linear spring in series with either:
+ * delta = (W/K)^(1/p) [+ sigma (W/W_r)^q] + c_t W.
  * Dissipation: Hunt-Crossley, W = K delta^(3/2) (1 + d d(delta)/dt), with d set exactly from a
  * coefficient of restitution (docs/model.md section 3.3).
  */
@@ -187,42 +189,19 @@ static double ellipse_field(const RmEllipse* e, int i)
 }
 
 /* Coefficients of the Chebyshev interpolant of field i on [lo, hi] at the n Chebyshev points
- * of the first kind (c_0 halved, ready for chebyshev_value). */
+ * of the first kind (roots.c's rm_chebyshev_node and rm_chebyshev_coefficients). */
 static int chebyshev_fit(EllipseCache* cache, int i, double lo, double hi, int terms,
                          double* coeffs, RmText* err)
 {
     int n = terms;
-    double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
     double values[RM_MAX_CHEBYSHEV_TERMS];
     for (int k = 0; k < n; k++) {
         RmEllipse e;
-        if (!cached_ellipse(cache, mid + half * cos(RM_PI * ((double)k + 0.5) / (double)n), &e,
-                            err))
-            return 0;
+        if (!cached_ellipse(cache, rm_chebyshev_node(lo, hi, k, n), &e, err)) return 0;
         values[k] = ellipse_field(&e, i);
     }
-    for (int j = 0; j < n; j++) {
-        double acc = 0.0;
-        for (int k = 0; k < n; k++)
-            acc += values[k] * cos(RM_PI * (double)j * ((double)k + 0.5) / (double)n);
-        coeffs[j] = 2.0 * acc / (double)n;
-    }
-    coeffs[0] *= 0.5;
+    rm_chebyshev_coefficients(values, n, coeffs);
     return 1;
-}
-
-/* Clenshaw's recurrence for sum_j c_j T_j(t), t in [-1, 1]. */
-static inline double chebyshev_value(const double* c, int n, double t)
-{
-    double b1 = 0.0, b2 = 0.0;
-    int j = n - 1;
-    while (j > 0) {
-        double next = 2.0 * t * b1 - b2 + c[j];
-        b2 = b1;
-        b1 = next;
-        j -= 1;
-    }
-    return t * b1 - b2 + c[0];
 }
 
 int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double x_hi,
@@ -273,7 +252,7 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
             for (int i = 1; i <= 3; i++) {
                 double exact = ellipse_field(&e, i);
                 worst = rm_max(worst,
-                               fabs(chebyshev_value(fits[i - 1], terms, t) - exact) / exact);
+                               fabs(rm_chebyshev_value(fits[i - 1], terms, t) - exact) / exact);
             }
         }
         if (!failed && worst <= CHEBYSHEV_TOLERANCE) {
@@ -323,10 +302,10 @@ void rm_contact_law_at_radii(const RmContactLaw* c, RmFail* f, double r_x, doubl
             rho = r_x / r_y;
         }
         double t = (rm_log_checked(f, rho) - c->t_mid) * c->t_scale;
-        *K = E * rm_sqrt_checked(f, *R) * chebyshev_value(c->kappa, c->terms, t);
+        *K = E * rm_sqrt_checked(f, *R) * rm_chebyshev_value(c->kappa, c->terms, t);
         double cr = rm_pow_checked(f, *R / E, 1.0 / 3.0);
-        *ka = cr * chebyshev_value(c->alpha, c->terms, t);
-        *kz = cr * cr * chebyshev_value(c->zeta, c->terms, t);
+        *ka = cr * rm_chebyshev_value(c->alpha, c->terms, t);
+        *kz = cr * cr * rm_chebyshev_value(c->zeta, c->terms, t);
         return;
     }
     /* equivalent sphere (eq. 2) with Johnson's approximate ellipse, a along the larger radius */
@@ -378,6 +357,9 @@ double rm_film_delta_max(RmFail* f, double v, double K, double r_x, double ka, d
 /* Newton's method on the series law (it converges from above, monotonically): the iteration
  * cap (never reached: a few iterations reach rounding). */
 #define SERIES_MAX_ITERATIONS 100
+/* Newton's method on the teeth's series law converges quadratically, its error after a step of
+ * relative size r about r^2: past a step of 1e-8 the next is below rounding. */
+#define SERIES_STEP_TOLERANCE 1e-8
 
 void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star, double sigma,
                            double gamma, double asperity_density)
@@ -398,6 +380,23 @@ void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star,
     /* B(1/2, n + 1) = Gamma(1/2) Gamma(n + 1) / Gamma(n + 3/2) (tgamma: lgamma would write
      * the global signgam) */
     a->line_beta = tgamma(0.5) * tgamma(n + 1.0) / tgamma(n + 1.5);
+    /* f(e), the root of f^2 + e f^3 = 1 (Newton's method from f = 1, above it, to rounding),
+     * and by implicit differentiation f' = -f^2 / D, f'' = -(2 f f' D - f^2 D') / D^2 with
+     * D = 2 + 3 e f, D' = 3 f + 3 e f' */
+    for (int k = 0; k <= RM_TOOTH_ROOT_POINTS; k++) {
+        double e = (double)k * RM_TOOTH_ROOT_STEP, f_k = 1.0;
+        for (int it = 0; it < SERIES_MAX_ITERATIONS; it++) {
+            double g = f_k * f_k + e * f_k * f_k * f_k - 1.0;
+            double next = f_k - g / (2.0 * f_k + 3.0 * e * f_k * f_k);
+            if (!(g > 0.0) || !(next < f_k)) break;
+            f_k = next;
+        }
+        double D = 2.0 + 3.0 * e * f_k, d1 = -f_k * f_k / D;
+        a->tooth_root[k][0] = f_k;
+        a->tooth_root[k][1] = d1;
+        a->tooth_root[k][2] = -(2.0 * f_k * d1 * D - f_k * f_k * (3.0 * f_k + 3.0 * e * d1))
+                              / (D * D);
+    }
 }
 
 /* K = E* (L^0.8 / C_P)^(10/9) of Palmgren's law W = K delta^(10/9). */
@@ -428,30 +427,96 @@ double rm_asperity_scale(const RmApproachLaw* a, RmFail* f, double r_x, double r
     return 2.0 * RM_PI * rm_sqrt_checked(f, r_x * r_y) * P * a->sigma / (GT_FIT_EXPONENT + 1.0);
 }
 
-/* The series law: W from delta = (W/K)^(1/p) + sigma (W/W_r)^q by Newton's method on
- * y = ln W, where the approach is a sum of exponentials (convex, increasing): from the smaller
- * of the two one-sided loads (each above the solution) the iterates fall monotonically to
- * it.  *bulk and *layer get the two approaches at the solution. */
-static double series_load(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen,
-                          double* bulk, double* layer)
+/* The series law: W from delta = (W/K)^(1/p) + sigma (W/W_r)^q [+ c_t W] by Newton's method
+ * on y = ln W, where the approach is a sum of exponentials (convex, increasing): from the
+ * smallest of the one-sided loads (each above the solution) the iterates fall monotonically
+ * to it.  *bulk and *layer get the two approaches at the solution (the teeth's is c_t W;
+ * c_t = 0: rigid teeth, the two-term law exactly). */
+static double series_load(const RmApproachLaw* a, RmFail* f, double K, double W_r, double c_t,
+                          double pen, double* bulk, double* layer)
 {
     double p = a->exponent, q = a->rough_exponent, sigma = a->sigma;
     double ln_K = rm_log_checked(f, K), ln_r = rm_log_checked(f, W_r);
     double ln_pen = rm_log_checked(f, pen);
     double y = rm_min(ln_K + p * ln_pen, ln_r + (ln_pen - rm_log_checked(f, sigma)) / q);
+    if (c_t > 0.0) y = rm_min(y, ln_pen - rm_log_checked(f, c_t));
     double b = rm_exp_checked(f, (y - ln_K) / p), l = sigma * rm_exp_checked(f, q * (y - ln_r));
+    double t = c_t > 0.0 ? c_t * rm_exp_checked(f, y) : 0.0;
     for (int it = 0; it < SERIES_MAX_ITERATIONS; it++) {
-        double excess = b + l - pen;
+        double excess = b + l + t - pen; /* (t = +0 adds nothing: the rigid law's numbers) */
         if (!(excess > 0.0)) break;
-        double y_new = y - excess / (b / p + q * l);
+        double y_new = y - excess / (b / p + q * l + t);
         if (!(y_new < y)) break;
         y = y_new;
         b = rm_exp_checked(f, (y - ln_K) / p);
         l = sigma * rm_exp_checked(f, q * (y - ln_r));
+        if (c_t > 0.0) t = c_t * rm_exp_checked(f, y);
     }
     *bulk = b;
     *layer = l;
     return rm_exp_checked(f, y);
+}
+
+/* z^n for a small n >= 1 by multiplication. */
+static inline double power_n(double z, int n)
+{
+    double r = z;
+    for (int k = 1; k < n; k++) r *= z;
+    return r;
+}
+
+/* The smooth law W = K x^p in series with the teeth, pen = x + c_t W: W and the contact's
+ * approach x.  With x = z^m (m = 2 for Hertz, p = 3/2; m = 9 for Palmgren's p = 10/9) the
+ * approach pen = z^m + c_t K z^(m+1) is a polynomial, convex and increasing in z > 0.  For
+ * Hertz z = sqrt(pen) f(e), e = c_t K sqrt(pen), f the root of f^2 + e f^3 = 1 -- one function
+ * for every pair and load, tabulated once (rm_approach_law_build) and interpolated by quintic
+ * Hermite polynomials in e < 2 (to rounding: tests/model/test_compliance.py),
+ * with no division or library call but the square root (the law is evaluated per loaded pair
+ * at every right-hand side).  Beyond (e >= 2: tens of um of penetration), and for Palmgren's
+ * law, Newton's method falls monotonically to the root from the smaller of the one-sided
+ * roots pen^(1/m), (pen / (c_t K))^(1/(m+1)), each above it. */
+static double tooth_series_load(const RmApproachLaw* a, RmFail* f, double K, double c_t,
+                                double pen, double* approach)
+{
+    int m = a->line ? 9 : 2;
+    double C = c_t * K;
+    double z;
+    if (a->line) {
+        z = rm_pow_checked(f, pen, 1.0 / 9.0);
+        if (C * z > 1.0) z = rm_min(z, rm_pow_checked(f, pen / C, 0.1));
+    }
+    else {
+        double root = rm_sqrt_checked(f, pen), e = C * root;
+        double x = e * (1.0 / RM_TOOTH_ROOT_STEP);
+        if (x < (double)RM_TOOTH_ROOT_POINTS) {
+            int k = (int)x;
+            z = root * rm_quintic_hermite(x - (double)k, RM_TOOTH_ROOT_STEP, a->tooth_root[k],
+                                          a->tooth_root[k + 1]);
+            *approach = z * z;
+            return K * (z * z) * z;
+        }
+        z = rm_min(root, cbrt(pen / C));
+    }
+    int lifted = 0;
+    for (int it = 0; it < SERIES_MAX_ITERATIONS; it++) {
+        double z_m1 = power_n(z, m - 1), z_m = z_m1 * z;
+        double excess = z_m + C * z_m * z - pen;
+        double z_new = z - excess / ((double)m * z_m1 + (double)(m + 1) * C * z_m);
+        if (!(excess > 0.0)) {
+            if (!(excess < 0.0) || lifted) break;
+            lifted = 1; /* below the root: one step up */
+        }
+        else if (!(z_new < z))
+            break;
+        else if (z - z_new <= SERIES_STEP_TOLERANCE * z) { /* the next step is at rounding */
+            z = z_new;
+            break;
+        }
+        z = z_new;
+    }
+    double x = power_n(z, m);
+    *approach = x;
+    return K * x * z;
 }
 
 /* W = K pen^p of the smooth law (Hertz written as K pen sqrt(pen)). */
@@ -464,26 +529,42 @@ static double smooth_load(const RmApproachLaw* a, RmFail* f, double K, double pe
 /* A load below the smallest normal double (2.2e-308 N) is none: a subnormal keeps a few bits
  * at most (the series law's exp() of a log-space sum), and whether a pair counts as loaded --
  * its friction, film and area (mesh.c) -- must not turn on them. */
-double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen)
+double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r, double c_t,
+                         double pen, double* surface)
 {
-    if (!(K > 0.0)) return 0.0; /* a line of zero length */
-    double W;
-    if (!a->rough)
-        W = smooth_load(a, f, K, pen);
+    if (surface != NULL) *surface = pen;
+    if (!(K > 0.0 && c_t < INFINITY)) return 0.0; /* a line of zero length */
+    double W, x;
+    if (!a->rough) {
+        if (c_t > 0.0) {
+            W = tooth_series_load(a, f, K, c_t, pen, &x);
+            if (surface != NULL) *surface = x;
+        }
+        else
+            W = smooth_load(a, f, K, pen);
+    }
     else {
         double bulk, layer;
-        W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+        W = series_load(a, f, K, W_r, c_t, pen, &bulk, &layer);
+        if (c_t > 0.0 && surface != NULL) *surface = bulk + layer;
     }
     return W < DBL_MIN ? 0.0 : W;
 }
 
-/* dW/d(pen): p W / pen for the smooth law (Hertz: 1.5 K sqrt(pen)); for the series law the
- * inverse of the compliances' sum, W / (bulk/p + q layer). */
-void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen,
-                       double d, double* k, double* c)
+/* dW/d(pen): p W / pen for the smooth law (Hertz: 1.5 K sqrt(pen)); for the series laws the
+ * inverse of the compliances' sum, W / (bulk/p + q layer [+ c_t W]), with the teeth
+ * 1 / (x / (p W) + c_t). */
+void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r, double c_t,
+                       double pen, double d, double* k, double* c)
 {
-    if (!(K > 0.0)) {
+    if (!(K > 0.0 && c_t < INFINITY)) {
         *k = *c = 0.0;
+        return;
+    }
+    if (c_t > 0.0 && !a->rough) {
+        double x, W = tooth_series_load(a, f, K, c_t, pen, &x);
+        *k = W > 0.0 ? W / (x / a->exponent + c_t * W) : 0.0;
+        *c = d * W;
         return;
     }
     if (!a->rough && !a->line) {
@@ -495,8 +576,9 @@ void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r, 
     double W, compliance;
     if (a->rough) {
         double bulk, layer;
-        W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+        W = series_load(a, f, K, W_r, c_t, pen, &bulk, &layer);
         compliance = bulk / a->exponent + a->rough_exponent * layer;
+        if (c_t > 0.0) compliance += c_t * W;
     }
     else {
         W = smooth_load(a, f, K, pen);
@@ -508,16 +590,23 @@ void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r, 
 
 /* integral_0^pen W: W pen / (p + 1) for the smooth law; for the series law, with
  * integral_0^W delta dW' = W bulk p/(p+1) + W layer/(q+1),
- * W (bulk + layer) minus that = W bulk / (p + 1) + W layer q / (q + 1). */
-double rm_approach_energy(const RmApproachLaw* a, RmFail* f, double K, double W_r, double pen)
+ * W (bulk + layer) minus that = W bulk / (p + 1) + W layer q / (q + 1); the teeth add their
+ * spring's c_t W^2 / 2. */
+double rm_approach_energy(const RmApproachLaw* a, RmFail* f, double K, double W_r, double c_t,
+                          double pen)
 {
-    if (!(K > 0.0)) return 0.0;
+    if (!(K > 0.0 && c_t < INFINITY)) return 0.0;
     double p = a->exponent;
-    if (!a->rough) return smooth_load(a, f, K, pen) * pen / (p + 1.0);
+    if (!a->rough) {
+        if (!(c_t > 0.0)) return smooth_load(a, f, K, pen) * pen / (p + 1.0);
+        double x, W = tooth_series_load(a, f, K, c_t, pen, &x);
+        return W * x / (p + 1.0) + 0.5 * c_t * W * W;
+    }
     double bulk, layer;
-    double W = series_load(a, f, K, W_r, pen, &bulk, &layer);
+    double W = series_load(a, f, K, W_r, c_t, pen, &bulk, &layer);
     double q = a->rough_exponent;
-    return W * bulk / (p + 1.0) + W * layer * q / (q + 1.0);
+    double energy = W * bulk / (p + 1.0) + W * layer * q / (q + 1.0);
+    return c_t > 0.0 ? energy + 0.5 * c_t * W * W : energy;
 }
 
 double rm_approach_area(const RmApproachLaw* a, RmFail* f, double kz, double W)

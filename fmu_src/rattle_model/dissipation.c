@@ -133,7 +133,8 @@ double rm_ratio_scale(const RmMesh* M, RmFail* f, RmPairSet* ps, double delta)
         if (pen > 0.0) {
             rm_pair_coefficients(M, f, ps, i);
             double k_i, c_i;
-            rm_approach_rates(&M->approach, f, ps->K[i], ps->W_r[i], pen, 0.0, &k_i, &c_i);
+            rm_approach_rates(&M->approach, f, ps->K[i], ps->W_r[i], ps->c_t[i], pen, 0.0, &k_i,
+                              &c_i);
             k += k_i;
         }
     }

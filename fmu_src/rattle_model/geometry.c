@@ -315,11 +315,22 @@ static void unmodified_pairs(const RmGeometry* g, RmFail* f, double u, double me
     }
 }
 
+/* The length of the engaged contact line of a pair whose face centre is at roll coordinate s
+ * (in the zone of action): [max(s - w/2, s_start), min(s + w/2, s_end)] over sin(beta_b), or
+ * the face width of a spur pair. */
+static double engaged_length(const RmGeometry* g, double s)
+{
+    double half = 0.5 * g->line_span;
+    if (!(half > 0.0)) return g->face_width;
+    double a = rm_max(s - half, g->s_start), b = rm_min(s + half, g->s_end);
+    return b > a ? (b - a) / g->sin_beta_b : 0.0;
+}
+
 /* The pairs at roll coordinate u of pair 0's face centre: pair n sits at s_n = u - n p_bt.
  * Per pair: its slot (pair number mod RM_MAX_PAIR_SLOTS, so a slot follows one pair through
  * its passage), the roll coordinate s of its contact point, the crown offset g there (the
  * pair touches when the flank's penetration exceeds it), dg = dg/ds_n, and the length of its
- * engaged contact line (unmodified flanks; 0 for crowned ones). */
+ * engaged contact line (over which its teeth bend, compliance.c). */
 void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, double member, RmPairSet* ps)
 {
     double pb = g->base_pitch;
@@ -342,21 +353,22 @@ void rm_pair_set_build(const RmGeometry* g, RmFail* f, double u, double member, 
         double s = u - n * pb; /* roll coordinate of the pair's face centre */
         if (half > 0.0) {
             if (s + half > s0 && s - half < s1) {
+                double length = engaged_length(g, s);
                 if (s < s0) {
                     double d = s0 - s;
-                    pair_set_add(f, ps, n, s0, k * d * d, -2.0 * k * d, 0.0);
+                    pair_set_add(f, ps, n, s0, k * d * d, -2.0 * k * d, length);
                 }
                 else if (s > s1) {
                     double d = s - s1;
-                    pair_set_add(f, ps, n, s1, k * d * d, 2.0 * k * d, 0.0);
+                    pair_set_add(f, ps, n, s1, k * d * d, 2.0 * k * d, length);
                 }
                 else {
-                    pair_set_add(f, ps, n, s, 0.0, 0.0, 0.0);
+                    pair_set_add(f, ps, n, s, 0.0, 0.0, length);
                 }
             }
         }
         else if (s0 < s && s < s1) {
-            pair_set_add(f, ps, n, s, 0.0, 0.0, 0.0);
+            pair_set_add(f, ps, n, s, 0.0, 0.0, g->face_width);
         }
     }
 }

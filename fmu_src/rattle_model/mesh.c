@@ -14,7 +14,9 @@
  * or a viscous damping c_i (squeeze film after a sticking impact, mesh damping ratio),
  *     W_i = W(delta_i) + c_i d(delta_i)/dt,    W_i >= 0,
  * W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
- * radii.  Torques (each gear positive forward), F_i the
+ * radii, in series with the teeth's compliance c_i (compliance.c): delta = x + c_i W(x).  The
+ * dissipation acts on the pair's whole approach delta_i (the mesh damping of gear dynamics),
+ * the film's thickness (eq. 11) on the flanks' own approach x.  Torques (each gear positive forward), F_i the
  * pair's friction force and sgn_i the sign of its sliding speed:
  *     wheel:   tau_w = sum_i  flank W_i cos(beta_b) rb_w + sgn_i F_i rho_w,i
  *     pinion:  tau_p = sum_i -flank W_i cos(beta_b) rb_p - sgn_i F_i rho_p,i
@@ -30,6 +32,7 @@ int rm_mesh_build(const RmMeshParams* p, RmMesh* m, RmText* err)
 {
     m->p = *p;
     if (!rm_geometry(&p->gear, &m->g, err)) return 0;
+    if (!rm_tooth_compliance_build(p, &m->g, &m->tooth, err)) return 0;
     /* the EHL film is Hamrock and Dowson's point-contact film (friction.c): a line contact's
      * film follows another law, not in this model */
     if (m->g.layout == RM_LAYOUT_LINE && p->film == RM_FILM_EHL) {
@@ -99,7 +102,8 @@ RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u)
 
 /* The radii and the load-approach law's coefficients of pair i: r_x at its contact point, r_y
  * (the crown's, eq. 6's, or none for a line), K of its smooth law, the ellipse's ka and the
- * area coefficient kz, and the asperity layer's load scale W_r (rough flanks). */
+ * area coefficient kz, the asperity layer's load scale W_r (rough flanks) and the teeth's
+ * compliance c_t over its engaged contact line (0: rigid teeth). */
 void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i)
 {
     if (ps->coefficients_ok[i]) return;
@@ -126,6 +130,7 @@ void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i)
     ps->W_r[i] = a->rough && ps->K[i] > 0.0
                      ? rm_asperity_scale(a, f, r_x, ps->r_y[i], ps->length[i])
                      : 0.0;
+    ps->c_t[i] = rm_tooth_pair_compliance(&M->tooth, ps->s[i], ps->length[i]);
     ps->coefficients_ok[i] = 1;
 }
 
@@ -198,7 +203,8 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
         }
         rm_pair_coefficients(M, f, ps, i);
         double K = ps->K[i];
-        W = rm_approach_force(&M->approach, f, K, ps->W_r[i], pen);
+        double surface; /* the flanks' own approach: pen less the teeth's deflection */
+        W = rm_approach_force(&M->approach, f, K, ps->W_r[i], ps->c_t[i], pen, &surface);
         if (damping > 0.0) {
             W *= 1.0 + damping * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (W < 0.0) W = 0.0; /* the flanks never pull on each other */
@@ -206,7 +212,8 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
         else if (viscous) {
             double k_i = 0.0, c_i;
             if (ratio_scale > 0.0)
-                rm_approach_rates(&M->approach, f, K, ps->W_r[i], pen, 0.0, &k_i, &c_i);
+                rm_approach_rates(&M->approach, f, K, ps->W_r[i], ps->c_t[i], pen, 0.0, &k_i,
+                                  &c_i);
             double c = rm_pair_viscous_damping(M, diss.film, ps->r_x[i], ps->r_y[i],
                                                ps->length[i], k_i, ratio_scale, pen);
             W += c * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
@@ -222,7 +229,7 @@ void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank, do
             double A_e = 3.2 * W / E_star * M->sqrt_gamma_sigma; /* eq. 13 */
             double A = rm_approach_area(&M->approach, f, ps->kz[i], W);
             d_max = pair_d_max(M, f, ps, i, v_impact);
-            h = -pen + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, never negative */
+            h = -surface + d_max; /* eq. 11: rigid gap plus the eq. 7 delta_max, >= 0 */
             if (!(h > 0.0)) h = 0.0;
             if (p->film == RM_FILM_EHL)
                 h = rm_max(h, rm_ehl_central_film(u, W, ps->r_x[i], ps->r_y[i], E_star, p->eta,
@@ -294,7 +301,8 @@ double rm_static_force(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank
         double d = delta - ps->offset[i];
         if (d > 0.0) {
             rm_pair_coefficients(M, f, ps, i);
-            total += rm_approach_force(&M->approach, f, ps->K[i], ps->W_r[i], d);
+            total += rm_approach_force(&M->approach, f, ps->K[i], ps->W_r[i], ps->c_t[i], d,
+                                       NULL);
         }
     }
     return total;
@@ -316,7 +324,8 @@ void rm_contact_rates(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
         if (pen > 0.0) {
             rm_pair_coefficients(M, f, ps, i);
             double k_i, c_i;
-            rm_approach_rates(&M->approach, f, ps->K[i], ps->W_r[i], pen, d, &k_i, &c_i);
+            rm_approach_rates(&M->approach, f, ps->K[i], ps->W_r[i], ps->c_t[i], pen, d, &k_i,
+                              &c_i);
             double factor = 1.0 + d * (delta_dot - pair_rate(M, flank, w_p, ps->dg[i]));
             if (factor > 0.0) k_sum += k_i * factor;
             c_sum += c_i;

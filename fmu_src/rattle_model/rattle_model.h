@@ -232,16 +232,18 @@ RM_API int rm_probe_loads(RmUnit* u, int flank, double phi_p, double w_p, double
                           double w_w, double v_impact, double* totals, double* pairs,
                           size_t capacity, size_t* count);
 /* The load-approach law's coefficients of the pairs in the zone of action on `flank` at pinion
- * angle phi_p: per pair (slot, s, length of the engaged contact line, r_x, r_y, K, ka, kz, W_r)
- * into out (9 doubles each, at most `capacity` pairs); *count their number. */
+ * angle phi_p: per pair (slot, s, length of the engaged contact line, r_x, r_y, K, ka, kz, W_r,
+ * c_t the teeth's compliance) into out (10 doubles each, at most `capacity` pairs); *count
+ * their number. */
 RM_API int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out,
                               size_t capacity, size_t* count);
 /* The pair's load-approach law of the unit's parameters (contact.geometry: point or line;
- * contact.roughness) for the coefficients K, W_r, kz at the approach pen > 0: the load W [N],
- * the stiffness dW/d(pen) [N/m], the elastic energy integral_0^pen W [J], the area at W
- * [m^2]. */
-RM_API int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen,
-                             double* out4);
+ * contact.roughness) for the coefficients K, W_r, the teeth's compliance c_t [m/N] (0: rigid)
+ * and kz at the approach pen > 0: the load W [N], the stiffness dW/d(pen) [N/m], the elastic
+ * energy integral_0^pen W [J], the area at W [m^2] and the flanks' own approach pen - c_t W
+ * [m], into out5. */
+RM_API int rm_probe_approach(RmUnit* u, double K, double W_r, double c_t, double kz,
+                             double pen, double* out5);
 /* The squeeze-film impact law (contact.dissipation = 3) for an impact on `flank` at pinion
  * angle phi_p with normal speed v: the squeeze-film area A [m^2], the Stokes number, the law's
  * restitution e, and the contact's Hunt-Crossley factor d [s/m] and 1 if the impact does not

@@ -3,11 +3,13 @@
  *
  *   text.c          message text (numbers as the shortest text that reads back exactly)
  *   refusals.c      the wording of every refusal the physics reports as a code
- *   roots.c         Brent's method, exact quadratic crossings
+ *   roots.c         Brent's method, exact quadratic crossings, Chebyshev series
  *   geometry.c      the helical involute pair and its tooth pairs (paper eq. 3-6)
  *   contact.c       the load-approach laws of a tooth pair: Hertz point contact (exact
  *                   ellipse, eq. 2), Palmgren's line contact, the Greenwood-Tripp asperity
- *                   layer in series; eq. 7-8, Hunt-Crossley
+ *                   layer and the teeth's compliance in series; eq. 7-8, Hunt-Crossley
+ *   compliance.c    the teeth's compliance: bending, shear and compression of both teeth and
+ *                   their gear bodies, per pair over its engaged contact line
  *   friction.c      film, regime and flank friction (eq. 11-17)
  *   dissipation.c   the contact's dissipation set at each onset: the squeeze-film (Stokes
  *                   number) impact law, the squeeze films after a sticking impact, the mesh
@@ -186,6 +188,41 @@ RM_INTERNAL double rm_brent(RmFail* f, RmRootFn fn, void* ctx, double a, double 
 RM_INTERNAL int rm_first_crossing(double c0, double c1, double c2, double t_max, int rising,
                                   double* out);
 
+/* Chebyshev series (the laws tabulated once per parameter set): the k-th of the n Chebyshev
+ * points of the first kind on [lo, hi]; the coefficients of the interpolant through values
+ * at those n points (c_0 halved, ready for rm_chebyshev_value); and the series
+ * sum_j c_j T_j(t) at t in [-1, 1] by Clenshaw's recurrence. */
+#define RM_MAX_CHEBYSHEV_TERMS 32
+RM_INTERNAL double rm_chebyshev_node(double lo, double hi, int k, int n);
+RM_INTERNAL void rm_chebyshev_coefficients(const double* values, int n, double* coeffs);
+/* The n coefficients of the derivative d/dt of the series c (its last one 0). */
+RM_INTERNAL void rm_chebyshev_derivative(const double* c, int n, double* d);
+static inline double rm_chebyshev_value(const double* c, int n, double t)
+{
+    double b1 = 0.0, b2 = 0.0;
+    int j = n - 1;
+    while (j > 0) {
+        double next = 2.0 * t * b1 - b2 + c[j];
+        b2 = b1;
+        b1 = next;
+        j -= 1;
+    }
+    return t * b1 - b2 + c[0];
+}
+
+/* Quintic Hermite interpolation on a grid of step h: the value at the fraction t in [0, 1] of
+ * the step between the nodes a0 and a1, each {value, first, second derivative}. */
+static inline double rm_quintic_hermite(double t, double h, const double* a0, const double* a1)
+{
+    double t2 = t * t, t3 = t2 * t, t4 = t3 * t, t5 = t4 * t, hh = h * h;
+    return (1.0 - 10.0 * t3 + 15.0 * t4 - 6.0 * t5) * a0[0]
+           + (t - 6.0 * t3 + 8.0 * t4 - 3.0 * t5) * h * a0[1]
+           + (0.5 * t2 - 1.5 * t3 + 1.5 * t4 - 0.5 * t5) * hh * a0[2]
+           + (10.0 * t3 - 15.0 * t4 + 6.0 * t5) * a1[0]
+           + (-4.0 * t3 + 7.0 * t4 - 3.0 * t5) * h * a1[1]
+           + (0.5 * t3 - t4 + 0.5 * t5) * hh * a1[2];
+}
+
 /* ------------------------------------------------------------------ geometry.c */
 #define RM_DRIVE 1
 #define RM_COAST (-1)
@@ -245,7 +282,7 @@ typedef struct {
     double s[RM_MAX_PAIRS], offset[RM_MAX_PAIRS], dg[RM_MAX_PAIRS], length[RM_MAX_PAIRS];
     int coefficients_ok[RM_MAX_PAIRS];
     double r_x[RM_MAX_PAIRS], r_y[RM_MAX_PAIRS], K[RM_MAX_PAIRS], ka[RM_MAX_PAIRS],
-        kz[RM_MAX_PAIRS], W_r[RM_MAX_PAIRS];
+        kz[RM_MAX_PAIRS], W_r[RM_MAX_PAIRS], c_t[RM_MAX_PAIRS];
     double d_max_v;
     int d_max_ok[RM_MAX_PAIRS];
     double d_max[RM_MAX_PAIRS];
@@ -262,7 +299,6 @@ RM_INTERNAL int rm_next_breakpoint(const RmGeometry* g, RmFail* f, double u_a, d
 /* ------------------------------------------------------------------ contact.c */
 #define RM_LAW_EXACT 0
 #define RM_LAW_EQUIVALENT_SPHERE 1
-#define RM_MAX_CHEBYSHEV_TERMS 32
 
 typedef struct {
     double q, kappa, alpha, zeta;
@@ -290,6 +326,9 @@ RM_INTERNAL double rm_film_delta_max(RmFail* f, double v, double K, double r_x, 
                                      double density);
 RM_INTERNAL int rm_hunt_crossley_restitution(double alpha, double* e, RmText* err);
 
+/* The grid of the root of the teeth's series law with Hertz: e in [0, 2] in steps of 1/256. */
+#define RM_TOOTH_ROOT_POINTS 512
+#define RM_TOOTH_ROOT_STEP (1.0 / 256.0)
 /* The load-approach law of one tooth pair: the smooth bulk law W = K pen^p -- Hertz point
  * contact (p = 3/2, K from the contact law) or Palmgren's line contact (p = 10/9, K from the
  * engaged contact line's length) -- optionally in series with the Greenwood-Tripp asperity
@@ -302,6 +341,9 @@ typedef struct {
     double asperity_pressure; /* K' E* c of the Greenwood-Tripp fit [Pa] */
     double rough_exponent;    /* q of the asperity layer */
     double line_beta;         /* B(1/2, n + 1) of the rough line contact */
+    /* the root f of f^2 + e f^3 = 1 and its first two derivatives in e at
+     * e = k RM_TOOTH_ROOT_STEP (Hertz with the teeth in series, contact.c) */
+    double tooth_root[RM_TOOTH_ROOT_POINTS + 1][3];
 } RmApproachLaw;
 
 RM_INTERNAL void rm_approach_law_build(RmApproachLaw* a, int line, int rough, double E_star,
@@ -315,16 +357,18 @@ RM_INTERNAL double rm_line_area_coefficient(const RmApproachLaw* a, RmFail* f, d
  * length). */
 RM_INTERNAL double rm_asperity_scale(const RmApproachLaw* a, RmFail* f, double r_x, double r_y,
                                      double length);
-/* The elastic load W [N] of a pair at approach pen > 0. */
+/* The elastic load W [N] of a pair at approach pen > 0, its law in series with the teeth's
+ * compliance c_t [m/N] (0: rigid teeth; infinite: no contact line, no load), and (surface not
+ * NULL) the part of pen the flanks' surfaces take, pen - c_t W. */
 RM_INTERNAL double rm_approach_force(const RmApproachLaw* a, RmFail* f, double K, double W_r,
-                                     double pen);
+                                     double c_t, double pen, double* surface);
 /* Its stiffness dW/d(pen) [N/m] and, for the Hunt-Crossley factor d, its damping
  * d W [N.s/m]. */
 RM_INTERNAL void rm_approach_rates(const RmApproachLaw* a, RmFail* f, double K, double W_r,
-                                   double pen, double d, double* k, double* c);
+                                   double c_t, double pen, double d, double* k, double* c);
 /* The elastic energy integral_0^pen W [J]. */
 RM_INTERNAL double rm_approach_energy(const RmApproachLaw* a, RmFail* f, double K, double W_r,
-                                      double pen);
+                                      double c_t, double pen);
 /* The apparent contact area [m^2] at load W: kz W^(2/3) (point) or kz W^(1/2) (line). */
 RM_INTERNAL double rm_approach_area(const RmApproachLaw* a, RmFail* f, double kz, double W);
 /* eq. 7's delta_max of the pair's smooth law for the impact speed v (the film estimate). */
@@ -332,6 +376,36 @@ RM_INTERNAL double rm_approach_film_delta_max(const RmApproachLaw* a, RmFail* f,
                                               double K, double r_x, double ka, double length,
                                               double density);
 RM_INTERNAL int rm_hunt_crossley_factor(double e, double v, double* d, RmText* err);
+
+/* ------------------------------------------------------------------ compliance.c */
+/* tooth.compliance */
+#define RM_TOOTH_NONE 0
+#define RM_TOOTH_WEBER_SAINSOT 1
+
+/* The teeth's stiffness per unit length of contact line, 1/q(s) [N/m^2] of both teeth at the
+ * contact's roll coordinate s: a Chebyshev series over the path of contact (of at most
+ * RM_MAX_TOOTH_TERMS terms: 20 for the reference pair, 40 where a tooth is nearly pointed at
+ * the tip), evaluated as quintic Hermite pieces on a grid of at most RM_MAX_TOOTH_GRID steps
+ * (its values and two derivatives at the nodes). */
+#define RM_MAX_TOOTH_TERMS 64
+#define RM_MAX_TOOTH_GRID 1024
+typedef struct {
+    int on, terms, steps;
+    double t_mid, t_scale, lo, h, inv_h;
+    double k[RM_MAX_TOOTH_TERMS];
+    double grid[RM_MAX_TOOTH_GRID + 1][3];
+    double pitch; /* q at the pitch point [m^2/N] */
+} RmToothCompliance;
+
+typedef struct RmMeshParams RmMeshParams;
+/* The teeth's compliance of the parameters (nothing to build with tooth.compliance = 0): 1, or
+ * 0 with the refusal. */
+RM_INTERNAL int rm_tooth_compliance_build(const RmMeshParams* p, const RmGeometry* g,
+                                          RmToothCompliance* c, RmText* err);
+/* c_t = q(s) / length [m/N] of a pair touching at s over an engaged contact line of `length`:
+ * 0 with rigid teeth, infinite for no line. */
+RM_INTERNAL double rm_tooth_pair_compliance(const RmToothCompliance* c, double s,
+                                            double length);
 
 /* ------------------------------------------------------------------ friction.c */
 #define RM_FORM_LOAD_SHARING 0
@@ -378,16 +452,18 @@ RM_INTERNAL double rm_stick_direction(double v_s, double v);
 #define RM_DISSIPATION_RATIO 4
 
 /* The parameters of the mesh model (GearMeshRattle's, SI). */
-typedef struct {
+struct RmMeshParams {
     RmGearParams gear;
     double E_pinion, nu_pinion, E_wheel, nu_wheel, density, J_wheel;
     int hertz_law, dissipation, roughness;
     double restitution, restitution_speed, damping, asperity_density;
     double stokes_critical, restitution_dry, squeeze_fraction, damping_ratio;
+    int tooth_compliance;
+    double body_ratio_pinion, body_ratio_wheel;
     int friction_enabled, friction_form, shear_speed, viscous_law, film;
     double tau_s, eta, alpha_pv, tau_limit_0, tau_limit_slope, sigma, gamma, rattle_time, h_max,
         h_comm_max;
-} RmMeshParams;
+};
 
 /* The dissipation of the contact in progress, set at its onset (dissipation.c): the
  * Hunt-Crossley factor d [s/m] on each pair's penetration rate, or (film) the pairs' squeeze
@@ -403,6 +479,7 @@ typedef struct {
     RmGeometry g;
     RmContactLaw law;
     RmApproachLaw approach;
+    RmToothCompliance tooth;
     double E_star, arm_wheel, arm_pinion, normal_mass, damping;
     double pen_limit;        /* largest penetration a step may reach [m] */
     double sqrt_gamma_sigma; /* sqrt(gamma / sigma) of eq. 13 */
@@ -451,8 +528,8 @@ typedef struct {
 /* Per-pair detail of the loads (probes): slot, s, offset, r_x, K, delta, W, F, v_s, u, h,
  * lambda, psi, delta_max. */
 #define RM_PAIR_DETAIL 14
-/* Per-pair law detail (rm_probe_pair_laws): slot, s, length, r_x, r_y, K, ka, kz, W_r. */
-#define RM_PAIR_LAW_DETAIL 9
+/* Per-pair law detail (rm_probe_pair_laws): slot, s, length, r_x, r_y, K, ka, kz, W_r, c_t. */
+#define RM_PAIR_LAW_DETAIL 10
 
 RM_INTERNAL void rm_mesh_loads(const RmMesh* M, RmFail* f, RmPairCache* cache, int flank,
                                double phi_p, double w_p, double phi_w, double w_w,

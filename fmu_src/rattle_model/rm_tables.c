@@ -6,10 +6,11 @@ static const int MESH_CHOICES_15[] = {0, 1};
 static const int MESH_CHOICES_16[] = {0, 1, 2};
 static const int MESH_CHOICES_17[] = {0, 1};
 static const int MESH_CHOICES_19[] = {0, 1, 2, 3, 4};
-static const int MESH_CHOICES_28[] = {0, 1, 2};
-static const int MESH_CHOICES_29[] = {0, 1};
-static const int MESH_CHOICES_30[] = {0, 1};
-static const int MESH_CHOICES_36[] = {0, 1};
+static const int MESH_CHOICES_27[] = {0, 1};
+static const int MESH_CHOICES_31[] = {0, 1, 2};
+static const int MESH_CHOICES_32[] = {0, 1};
+static const int MESH_CHOICES_33[] = {0, 1};
+static const int MESH_CHOICES_39[] = {0, 1};
 const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"gear.z_pinion", RM_INTEGER, RM_PARAMETER, "1", 20.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
     {"gear.z_wheel", RM_INTEGER, RM_PARAMETER, "1", 39.0, NULL, 1, 1, 0, 0, 5.0, 400.0, 0, NULL, "[5, 400]"},
@@ -38,16 +39,19 @@ const RmVariable RM_MESH_VARIABLES[RM_MESH_N_VARIABLES] = {
     {"contact.restitution_dry", RM_REAL, RM_PARAMETER, "1", 0.97, NULL, 1, 1, 0, 0, 0.01, 1.0, 0, NULL, "[0.01, 1]"},
     {"contact.squeeze_fraction", RM_REAL, RM_PARAMETER, "1", 0.03, NULL, 1, 1, 0, 0, 1e-06, 1.0, 0, NULL, "[1e-06, 1]"},
     {"contact.damping_ratio", RM_REAL, RM_PARAMETER, "1", 0.05, NULL, 1, 1, 0, 0, 0.0, 1.0, 0, NULL, "[0, 1]"},
+    {"tooth.compliance", RM_INTEGER, RM_PARAMETER, "1", 1.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_27, "one of 0 (none: rigid teeth, only the contact deforms (the paper's equations)), 1 (bending, shear and compression of both teeth (Weber's energy method on the virtual spur teeth of the normal section) and of their gear bodies (Sainsot, Velex and Duverger 2004), per unit length of contact line, in series with each pair's contact law over the pair's engaged contact line)"},
+    {"tooth.body_ratio_pinion", RM_REAL, RM_PARAMETER, "1", 1.8, NULL, 1, 1, 0, 0, 1.4, 7.0, 0, NULL, "[1.4, 7]"},
+    {"tooth.body_ratio_wheel", RM_REAL, RM_PARAMETER, "1", 2.7, NULL, 1, 1, 0, 0, 1.4, 7.0, 0, NULL, "[1.4, 7]"},
     {"friction.enabled", RM_BOOLEAN, RM_PARAMETER, "", 1.0, NULL, 0, 0, 0, 0, 0.0, 0.0, 0, NULL, "true or false"},
-    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_28, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
-    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_29, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
-    {"friction.viscous_law", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_30, "one of 0 (Newtonian, isoviscous: eta U / h (the paper)), 1 (piezoviscous (Barus) eta = eta exp(alpha p) with a limiting shear stress: tau_L (1 - exp(-eta exp(alpha p) U / (h tau_L))), tau_L = tau_L0 + gamma_L p, p the pair's mean Hertz pressure)"},
+    {"friction.form", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 2.0, 3, MESH_CHOICES_31, "one of 0 (load sharing: psi*A_e*tau_s + (1-psi)*A*eta*U/h), 1 (apparent area: A*(psi*tau_s + (1-psi)*eta*U/h)), 2 (as printed: A_e*(psi*tau_s + (1-psi)*eta*U/h))"},
+    {"friction.shear_speed", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_32, "one of 0 (entrainment speed u (paper eq. 12, 16)), 1 (sliding speed |v_s|)"},
+    {"friction.viscous_law", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_33, "one of 0 (Newtonian, isoviscous: eta U / h (the paper)), 1 (piezoviscous (Barus) eta = eta exp(alpha p) with a limiting shear stress: tau_L (1 - exp(-eta exp(alpha p) U / (h tau_L))), tau_L = tau_L0 + gamma_L p, p the pair's mean Hertz pressure)"},
     {"friction.tau_s", RM_REAL, RM_PARAMETER, "Pa", 228000000.0, NULL, 1, 1, 0, 0, 0.0, 10000000000.0, 0, NULL, "[0, 1e+10] Pa"},
     {"lubricant.eta", RM_REAL, RM_PARAMETER, "Pa.s", 0.05, NULL, 1, 1, 0, 0, 1e-05, 1000.0, 0, NULL, "[1e-05, 1000] Pa.s"},
     {"lubricant.alpha", RM_REAL, RM_PARAMETER, "1/Pa", 2e-08, NULL, 1, 1, 0, 0, 0.0, 1e-07, 0, NULL, "[0, 1e-07] 1/Pa"},
     {"lubricant.tau_limit_0", RM_REAL, RM_PARAMETER, "Pa", 2000000.0, NULL, 1, 1, 0, 0, 1000.0, 1000000000000.0, 0, NULL, "[1000, 1e+12] Pa"},
     {"lubricant.tau_limit_slope", RM_REAL, RM_PARAMETER, "1", 0.07, NULL, 1, 1, 0, 0, 0.0, 1.0, 0, NULL, "[0, 1]"},
-    {"lubricant.film", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_36, "one of 0 (eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)), 1 (the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair (Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha))"},
+    {"lubricant.film", RM_INTEGER, RM_PARAMETER, "1", 0.0, NULL, 1, 1, 0, 0, 0.0, 1.0, 2, MESH_CHOICES_39, "one of 0 (eq. 11: the rigid gap plus the eq. 7 delta_max of the last impact (the paper)), 1 (the larger of eq. 11 and the elastohydrodynamic central film of the loaded pair (Hamrock and Dowson 1977, fully flooded, isothermal, with lubricant.alpha))"},
     {"surface.sigma", RM_REAL, RM_PARAMETER, "m", 4e-07, NULL, 1, 1, 0, 0, 1e-09, 0.001, 0, NULL, "[1e-09, 0.001] m"},
     {"surface.gamma", RM_REAL, RM_PARAMETER, "m", 0.0001, NULL, 1, 1, 0, 0, 1e-07, 1.0, 0, NULL, "[1e-07, 1] m"},
     {"rattle.time_constant", RM_REAL, RM_PARAMETER, "s", 1.0, NULL, 1, 1, 0, 0, 0.001, 10000.0, 0, NULL, "[0.001, 10000] s"},

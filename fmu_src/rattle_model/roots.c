@@ -1,7 +1,8 @@
 /*
- * roots.c - bracketing root finding and exact quadratic crossings for event location:
- * Brent's method (zeroin: bisection safeguarding secant and inverse quadratic steps) and the
- * cancellation-free quadratic formula.
+ * roots.c - numerical tools: bracketing root finding and exact quadratic crossings for event
+ * location -- Brent's method (zeroin: bisection safeguarding secant and inverse quadratic
+ * steps) and the cancellation-free quadratic formula -- and the Chebyshev interpolants the
+ * laws tabulated once per parameter set are fitted with.
  */
 #include "rm_private.h"
 
@@ -115,4 +116,40 @@ double rm_brent(RmFail* f, RmRootFn fn, void* ctx, double a, double b, double fa
         fb = fn(ctx, b);
     }
     return b;
+}
+
+/* ------------------------------------------------------------------ Chebyshev series */
+double rm_chebyshev_node(double lo, double hi, int k, int n)
+{
+    double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    return mid + half * cos(RM_PI * ((double)k + 0.5) / (double)n);
+}
+
+/* The discrete cosine transform of the values at the n nodes: c_j = 2/n sum_k f_k
+ * cos(pi j (k + 1/2) / n), c_0 halved. */
+void rm_chebyshev_coefficients(const double* values, int n, double* coeffs)
+{
+    for (int j = 0; j < n; j++) {
+        double acc = 0.0;
+        for (int k = 0; k < n; k++)
+            acc += values[k] * cos(RM_PI * (double)j * ((double)k + 0.5) / (double)n);
+        coeffs[j] = 2.0 * acc / (double)n;
+    }
+    coeffs[0] *= 0.5;
+}
+
+/* With c_0 the plain first coefficient (a_0 / 2 of the usual primed sum) the derivative's
+ * coefficients follow a'_{j-1} = a'_{j+1} + 2 j a_j from a'_n = a'_(n-1) = 0, its first
+ * halved again. */
+void rm_chebyshev_derivative(const double* c, int n, double* d)
+{
+    double next = 0.0, next2 = 0.0; /* a'_{j}, a'_{j+1} */
+    for (int j = n - 1; j >= 1; j--) {
+        double value = next2 + 2.0 * (double)j * c[j]; /* a'_{j-1} */
+        d[j] = next;
+        next2 = next;
+        next = value;
+    }
+    d[0] = 0.5 * next;
+    if (n > 1) d[n - 1] = 0.0;
 }

@@ -78,8 +78,9 @@ static int balance(Residual* r, double* delta, RmText* err)
             rm_puts(err, "no static flank equilibrium for wheel.tau_load = ");
             rm_put_number(err, r->tau_load);
             rm_printf(err, " N.m: the mesh torque does not reach it within %g mm penetration "
-                           "(friction dominates the normal force?); set init.in_contact = "
-                           "false", EQUILIBRIUM_MAX_PENETRATION * 1e3);
+                           "(friction dominates the normal force?); allowed: "
+                           "init.in_contact = false (a free start)",
+                      EQUILIBRIUM_MAX_PENETRATION * 1e3);
             return 0;
         }
         r_hi = equilibrium_residual(r, hi);

@@ -28,7 +28,8 @@
 #define MAX_RUN_LENGTH (4.0 * MAX_START_TIME)
 /* Version of the record of rm_save (bumped when its fields change). */
 #define RECORD_MAGIC "RATLUNIT"
-#define RECORD_VERSION 2u /* 2: the contact, dissipation and friction options of issue 19 */
+/* 2: the contact, dissipation and friction options; 3: the teeth's compliance parameters */
+#define RECORD_VERSION 3u
 /* The record's header: magic, version, kind, phase, motion flag, start time, time, count. */
 #define RECORD_HEADER_BYTES ((size_t)(8 + 4 * 4 + 2 * 8 + 4))
 

@@ -74,6 +74,9 @@ int rm_mesh_params(const RmValue* values, RmMeshParams* p)
     p->restitution_dry = R(RM_MESH_CONTACT_RESTITUTION_DRY);
     p->squeeze_fraction = R(RM_MESH_CONTACT_SQUEEZE_FRACTION);
     p->damping_ratio = R(RM_MESH_CONTACT_DAMPING_RATIO);
+    p->tooth_compliance = (int)I(RM_MESH_TOOTH_COMPLIANCE);
+    p->body_ratio_pinion = R(RM_MESH_TOOTH_BODY_RATIO_PINION);
+    p->body_ratio_wheel = R(RM_MESH_TOOTH_BODY_RATIO_WHEEL);
     p->friction_enabled = B(RM_MESH_FRICTION_ENABLED);
     p->friction_form = (int)I(RM_MESH_FRICTION_FORM);
     p->shear_speed = (int)I(RM_MESH_FRICTION_SHEAR_SPEED);
@@ -479,7 +482,8 @@ static int describe(RmUnit* u, const char** names, double* values, size_t capaci
                        "eps_gamma", "max_pairs", "r_y", "crown_factor", "half_backlash",
                        "normal_factor", "E_star", "arm_wheel", "arm_pinion", "normal_mass",
                        "damping", "penetration_limit", "law_terms", "r_y_eq6_pitch",
-                       "palmgren_constant", "asperity_pressure"};
+                       "palmgren_constant", "asperity_pressure", "tooth_stiffness_pitch",
+                       "tooth_terms"};
     double v[] = {g->ratio, g->alpha_t, g->beta_b, g->centre_distance, g->r_pinion, g->r_wheel,
                   g->rb_pinion, g->rb_wheel, g->ra_pinion, g->ra_wheel, g->line_length,
                   g->s_start, g->s_end, g->s_pitch, g->base_pitch, g->eps_alpha, g->eps_beta,
@@ -487,7 +491,8 @@ static int describe(RmUnit* u, const char** names, double* values, size_t capaci
                   g->half_backlash, g->normal_factor, M->E_star, M->arm_wheel, M->arm_pinion,
                   M->normal_mass, M->damping, M->pen_limit, (double)M->law.terms,
                   rm_radius_y_eq6(g, g->s_pitch), M->approach.palmgren,
-                  M->approach.asperity_pressure};
+                  M->approach.asperity_pressure,
+                  M->tooth.on ? 1.0 / M->tooth.pitch : INFINITY, (double)M->tooth.terms};
     size_t total = sizeof v / sizeof v[0];
     for (size_t k = 0; k < total && k < capacity; k++) {
         names[k] = n[k];
@@ -682,28 +687,33 @@ int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out, size_t c
     for (int i = 0; i < ps.n && (size_t)i < capacity; i++) {
         rm_pair_coefficients(M, &f, &ps, i);
         double row[RM_PAIR_LAW_DETAIL] = {(double)ps.slot[i], ps.s[i], ps.length[i], ps.r_x[i],
-                                          ps.r_y[i], ps.K[i], ps.ka[i], ps.kz[i], ps.W_r[i]};
+                                          ps.r_y[i], ps.K[i],   ps.ka[i],     ps.kz[i],
+                                          ps.W_r[i],  ps.c_t[i]};
         for (int k = 0; k < RM_PAIR_LAW_DETAIL; k++) out[RM_PAIR_LAW_DETAIL * i + k] = row[k];
     }
     return RM_OK;
 }
 
-int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen, double* out4)
+int rm_probe_approach(RmUnit* u, double K, double W_r, double c_t, double kz, double pen,
+                      double* out5)
 {
     const RmMesh* M;
     if (u == NULL || !probe_begin(u, &M)) return RM_ERROR;
     RmFail f;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
-    if (!(pen > 0.0 && K > 0.0 && W_r >= 0.0 && kz >= 0.0 && (W_r > 0.0 || !M->approach.rough))) {
+    if (!(pen > 0.0 && K > 0.0 && W_r >= 0.0 && c_t >= 0.0 && kz >= 0.0
+          && (W_r > 0.0 || !M->approach.rough))) {
         RmText t;
         rm_text_init(&t);
-        rm_puts(&t, "probe: the load-approach law needs pen > 0, K > 0, kz >= 0 and W_r > 0 with "
-                    "contact.roughness = 1 (W_r >= 0 without); got pen = ");
+        rm_puts(&t, "probe: the load-approach law needs pen > 0, K > 0, c_t >= 0, kz >= 0 and "
+                    "W_r > 0 with contact.roughness = 1 (W_r >= 0 without); got pen = ");
         rm_put_number(&t, pen);
         rm_puts(&t, ", K = ");
         rm_put_number(&t, K);
         rm_puts(&t, ", W_r = ");
         rm_put_number(&t, W_r);
+        rm_puts(&t, ", c_t = ");
+        rm_put_number(&t, c_t);
         rm_puts(&t, ", kz = ");
         rm_put_number(&t, kz);
         rm_report(u, RM_ERROR, rm_text_str(&t));
@@ -712,11 +722,11 @@ int rm_probe_approach(RmUnit* u, double K, double W_r, double kz, double pen, do
     }
     const RmApproachLaw* a = &M->approach;
     double k, c;
-    out4[0] = rm_approach_force(a, &f, K, W_r, pen);
-    rm_approach_rates(a, &f, K, W_r, pen, 1.0, &k, &c);
-    out4[1] = k;
-    out4[2] = rm_approach_energy(a, &f, K, W_r, pen);
-    out4[3] = rm_approach_area(a, &f, kz, out4[0]);
+    out5[0] = rm_approach_force(a, &f, K, W_r, c_t, pen, &out5[4]);
+    rm_approach_rates(a, &f, K, W_r, c_t, pen, 1.0, &k, &c);
+    out5[1] = k;
+    out5[2] = rm_approach_energy(a, &f, K, W_r, c_t, pen);
+    out5[3] = rm_approach_area(a, &f, kz, out5[0]);
     return RM_OK;
 }
 

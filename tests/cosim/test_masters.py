@@ -9,6 +9,7 @@ Each master runs in its own process (run_master.py).  Workarounds of the masters
 are in drive_rattle_cosim.masters.
 """
 
+import math
 import zipfile
 
 import pytest
@@ -271,7 +272,7 @@ def fmpy_default_step(stop: float) -> float:
     return step
 
 
-def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
+def test_mesh_alone_under_fmpy_defaults_is_loaded_drive_at_a_constant_pinion_speed(fmus, tmp_path):
     """`fmpy simulate GearMeshRattle.fmu --stop-time 10`: fmpy takes a 12.8 ms step and sets no
     input; the pinion runs at its held start speed and the run is that of the core stepped
     with a constant-speed pinion, bit for bit."""
@@ -294,14 +295,19 @@ def test_mesh_alone_under_fmpy_defaults_is_steady_loaded_drive(fmus, tmp_path):
             phi += w * sizes[k - 1]
         for name, value in core.outputs().items():
             assert columns[name][k] == value, (name, times[k])
-    # Steady loaded drive: the wheel follows the constant-speed pinion, rippled only by the
-    # load passing between the crowned pairs at the mesh frequency (dynamic transmission
-    # error of ~0.05 um; measured 1.6e-4 of the speed peak to peak), without an impact.
+    # Loaded drive at a constant pinion speed: the wheel follows the pinion on average,
+    # rippled by the load passing between the crowned pairs at the mesh frequency.  With the
+    # teeth's compliance in series the light start load (2 N on the tooth normal) no longer
+    # holds the flanks together through that ripple: they part and meet again about once per
+    # mesh cycle on the drive flank, never on the coast flank (measured: 2788 impacts in
+    # 10 s, 2767 mesh cycles; speed ripple 3.9e-4 peak to peak, where rigid teeth stayed in
+    # contact with 1.7e-4).
     w_wheel = columns["wheel.w"]
-    assert max(w_wheel) - min(w_wheel) < 4e-4 * w_wheel[0]
+    assert max(w_wheel) - min(w_wheel) < 1e-3 * w_wheel[0]
     assert sum(w_wheel) / len(w_wheel) == pytest.approx(w_wheel[0], rel=2e-5)
-    assert columns["mesh.impacts_drive"][-1] == columns["mesh.impacts_coast"][-1] == 0
-    assert min(columns["mesh.n_contact"][1:]) >= 1
+    mesh_cycles = stop * MeshParameters().z_pinion * starts["pinion.w"] / (2 * math.pi)
+    assert columns["mesh.impacts_coast"][-1] == 0
+    assert columns["mesh.impacts_drive"][-1] == pytest.approx(mesh_cycles, rel=0.02)
 
 
 def test_driveline_alone_under_fmpy_defaults_drives_the_vehicle_steadily(fmus):

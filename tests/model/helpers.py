@@ -22,7 +22,7 @@ PAIR_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_sp
                "entrainment_speed", "h", "film_parameter", "dry_fraction", "delta_max_eq7")
 TOTAL_FIELDS = ("delta", "tau_wheel", "tau_pinion", "W", "F")
 #: Doubles per pair row of rm_probe_pair_laws, in its order (rattle_model.h).
-PAIR_LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r")
+PAIR_LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r", "c_t")
 MAX_PAIRS = 16
 
 
@@ -92,11 +92,13 @@ class Probe:
             r["slot"] = int(r["slot"])
         return rows
 
-    def approach(self, K: float, W_r: float, kz: float, pen: float
-                 ) -> tuple[float, float, float, float]:
-        """rm_probe_approach: (W, dW/d(pen), energy, area) of the parameters' law."""
-        out = (ctypes.c_double * 4)()
-        self.unit.call("rm_probe_approach", float(K), float(W_r), float(kz), float(pen), out)
+    def approach(self, K: float, W_r: float, kz: float, pen: float, c_t: float = 0.0
+                 ) -> tuple[float, float, float, float, float]:
+        """rm_probe_approach: (W, dW/d(pen), energy, area, the flanks' own approach) of the
+        parameters' law with the teeth's compliance c_t in series (0: rigid teeth)."""
+        out = (ctypes.c_double * 5)()
+        self.unit.call("rm_probe_approach", float(K), float(W_r), float(c_t), float(kz),
+                       float(pen), out)
         return tuple(out)
 
     def loads(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
@@ -179,7 +181,7 @@ H = 1e-4
 W_PINION = 86.92  # rad/s, 830 rpm
 SPUR = {"beta": 0.0, "b": 20e-3}  # no crown offsets: every pair touches at the same approach
 #: The contact options: the paper's (every pair in the zone loaded) and the line contact.
-PAPER = {"contact_geometry": 1}
+PAPER = {"contact_geometry": 1, "tooth_compliance": 0}  # the paper's model as printed
 LINE = {"contact_geometry": 2}
 
 
@@ -224,7 +226,9 @@ def oracle_derived(m: MeshModel) -> dict[str, float]:
                penetration_limit=0.05 * m.params.m_n,
                law_terms=float(len(m.law.kappa)), r_y_eq6_pitch=g.radius_y_eq6(g.s_pitch),
                palmgren_constant=m.approach.palmgren,
-               asperity_pressure=m.approach.asperity_pressure)
+               asperity_pressure=m.approach.asperity_pressure,
+               tooth_stiffness_pitch=1.0 / m.tooth.pitch if m.tooth else math.inf,
+               tooth_terms=float(len(m.tooth.coefficients)) if m.tooth else 0.0)
     return out
 
 

@@ -323,15 +323,17 @@ def test_approach_laws_equal_the_oracle(changes):
     probe, a = Probe(p), MeshModel(p).approach
     rows = [r for r in probe.pair_laws(DRIVE, 0.1) if r["K"] > 0.0]
     assert rows
-    for row in rows:
+    for row, c_t in itertools.product(rows, (0.0, None)):
         K, W_r, kz = row["K"], row["W_r"], row["kz"]
+        c_t = row["c_t"] if c_t is None else c_t  # rigid teeth, and the pair's own
         for pen in np.geomspace(1e-12, 1e-4, 41):
-            W = a.force(K, W_r, pen)
-            want = (W, a.stiffness(K, W_r, pen), a.energy(K, W_r, pen), a.area(kz, W))
-            got = probe.approach(K, W_r, kz, pen)
-            for name, g, w in zip(("W", "stiffness", "energy", "area"), got, want,
+            W = a.force(K, W_r, pen, c_t)
+            want = (W, a.stiffness(K, W_r, pen, c_t), a.energy(K, W_r, pen, c_t),
+                    a.area(kz, W), a.surface(K, W_r, pen, c_t))
+            got = probe.approach(K, W_r, kz, pen, c_t)
+            for name, g, w in zip(("W", "stiffness", "energy", "area", "surface"), got, want,
                                   strict=True):
-                assert close(g, w), (changes, pen, name, g, w)
+                assert close(g, w), (changes, c_t, pen, name, g, w)
 
 
 @pytest.mark.parametrize("changes", APPROACH_LAWS.values(), ids=APPROACH_LAWS)
@@ -512,9 +514,10 @@ def test_bad_probe_arguments_are_refused_with_their_value(call, args, fragment):
 @pytest.mark.parametrize("flank", [DRIVE, COAST])
 @pytest.mark.parametrize("v", [1e-3, 4e-3, 0.05])
 def test_single_undamped_impact_matches_the_hertz_closed_form(flank, v):
-    # Spur pair, friction and dissipation off, pinion at rest: the pairs in mesh share one
-    # penetration, W = sum K_i delta^1.5 with K_i from the oracle's contact law.
-    p = free_parameters(v, flank, dissipation=0, **SPUR)
+    # Spur pair, friction and dissipation off, pinion at rest, rigid teeth (the Hertz law
+    # alone; with the teeth in series: tests/model/test_compliance.py): the pairs in mesh share
+    # one penetration, W = sum K_i delta^1.5 with K_i from the oracle's contact law.
+    p = free_parameters(v, flank, dissipation=0, tooth_compliance=0, **SPUR)
     unit = MeshUnit(p, 0.0, 0.0, 0.0)
     oracle = MeshModel(p)
     K = oracle.stiffness_sum(flank, 0.0)
@@ -578,10 +581,10 @@ def power_law_impact(m: float, C: float, p: float, v: float):
 @pytest.mark.parametrize("flank", [DRIVE, COAST])
 @pytest.mark.parametrize("v", [1e-3, 4e-3, 0.05])
 def test_single_impact_on_the_line_law_matches_its_closed_form(v, flank):
-    # Palmgren's law on the pairs' contact lines, pinion at rest: W = (sum C_i) delta^(10/9).
-    # At the default solver.h_max the measured errors are below 6e-5 (the contact-rate rule
-    # halves the substeps of these short contacts).
-    p = free_parameters(v, flank, dissipation=0, **LINE)
+    # Palmgren's law on the pairs' contact lines (alone: rigid teeth), pinion at rest:
+    # W = (sum C_i) delta^(10/9).  At the default solver.h_max the measured errors are below
+    # 6e-5 (the contact-rate rule halves the substeps of these short contacts).
+    p = free_parameters(v, flank, dissipation=0, tooth_compliance=0, **LINE)
     unit = MeshUnit(p, 0.0, 0.0, 0.0)
     oracle = MeshModel(p)
     C = oracle.stiffness_sum(flank, 0.0)

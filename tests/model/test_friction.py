@@ -41,7 +41,8 @@ def test_bad_arguments_are_refused():
 # ----------------------------------------------------------- the friction forms, against the oracle
 def pair_at_lambda(probe, lam, delta=0.05e-6, flank=DRIVE):
     """The loads of the most loaded pair at film parameter ``lam`` (set through the impact
-    speed of eq. 7: h = delta_max(v) - delta_i, delta_max linear in v)."""
+    speed of eq. 7: h = delta_max(v) - x_i, delta_max linear in v, x_i the flanks' own
+    approach: the pair's penetration less its teeth's deflection)."""
     d = probe.derived
     phi_p, w_p = 0.0, 86.92
     phi_w = (d["arm_pinion"] * phi_p - flank * (d["half_backlash"] + delta)) / d["arm_wheel"]
@@ -51,8 +52,9 @@ def pair_at_lambda(probe, lam, delta=0.05e-6, flank=DRIVE):
         loads = probe.loads(flank, phi_p, w_p, phi_w, w_w, v)
         return max(loads.pairs, key=lambda r: r["W"])
 
-    unit = top(1.0)
-    v = (lam * probe.params.sigma + unit["delta"]) / unit["delta_max_eq7"]
+    unit = top(1.0)  # (h > 0 at 1 m/s: x_i = delta_max - h)
+    surface = unit["delta_max_eq7"] - unit["h"]
+    v = (lam * probe.params.sigma + surface) / unit["delta_max_eq7"]
     return top(v)
 
 
@@ -73,7 +75,10 @@ def test_default_boundary_friction_coefficient_is_0_1():
 @pytest.mark.parametrize("form", [0, 1, 2])
 @pytest.mark.parametrize("shear_speed", [0, 1])
 def test_friction_forms_limits_and_continuity(form, shear_speed):
-    p = MeshParameters(friction_form=form, shear_speed=shear_speed)
+    # (rigid teeth: lambda is set to its limits exactly through the pair's penetration; with
+    # the teeth the film is the flanks' own approach's, held against the oracle at random
+    # states above)
+    p = MeshParameters(friction_form=form, shear_speed=shear_speed, tooth_compliance=0)
     probe = Probe(p)
     for lam in (0.0, 0.3, 1.0):  # boundary: psi = 1, asperity (or apparent) shear
         row = pair_at_lambda(probe, lam)

@@ -118,7 +118,8 @@ geometry = st.fixed_dictionaries({
 #: The reason of a refused geometry: a phrase of the oracle's message and of the library's.
 REASONS = ("undercuts", "tip interference", "transverse contact ratio", "pair slots",
            "cannot be tabulated", "too large for an elliptical contact",
-           "needs the wheel's radius at every contact point")
+           "needs the wheel's radius at every contact point", "pointed below its contact",
+           "compliance is not positive")
 
 
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -156,10 +156,14 @@ def test_mesh_settles_against_the_first_steps_inputs():
     assert code == WARNING and "settled" in message and "init.settle_first_step" in message
     names = ["wheel.phi", "wheel.w", "wheel.tau_mesh", "mesh.W", "mesh.delta_peak"]
     assert outputs(mesh, names) == outputs(reference, names)
-    # Only the first step settles: later ones take the inputs as they come.
+    # Only the first step settles: later ones take the inputs as they come -- a pinion set
+    # back to rest at angle 0, 86 um into the wheel's coast flank and approached at 1.8 m/s:
+    # refused (with the teeth's compliance in series the flanks would be driven beyond the
+    # 0.05 m_n the step allows; a settled wheel would rest on the drive flank instead).
     mesh.set_named(zeros)
-    assert mesh.step(1e-4, 1e-4) == (OK, "")
-    assert mesh.get("mesh.impacts_coast") == 1  # the wheel ran into a pinion set back to 0
+    code, message = mesh.step(1e-4, 1e-4)
+    assert code == ERROR and "penetrate" in message, message
+    assert mesh.get("mesh.impacts_coast") == 0  # the refused step changed nothing
 
 
 def test_without_settling_the_first_step_takes_the_inputs_as_they_come():
@@ -193,11 +197,14 @@ def test_driveline_starts_its_shaft_anew_behind_the_first_steps_wheel():
 
 def test_held_pinion_runs_on_at_constant_speed():
     """fmpy simulate of the mesh alone sets no input: the pinion turns at the held speed, as
-    if driven at that constant speed, and the wheel follows loaded (no impact)."""
+    if driven at that constant speed, and the wheel follows loaded on the drive flank (with
+    the teeth's compliance the light start load lets the flanks part and meet again about
+    once per mesh cycle, tests/cosim/test_masters.py)."""
     h, n = 1e-2, 20
     held = started(GearMeshRattle)  # no input ever set
     driven = started(GearMeshRattle, inputs=MESH_STARTS)
     phi, w = MESH_STARTS["pinion.phi"], MESH_STARTS["pinion.w"]
+    phi_w = held.get("wheel.phi")
     names = ["wheel.phi", "wheel.w", "wheel.tau_mesh", "mesh.W", "mesh.impacts_drive",
              "mesh.impacts_coast"]
     for k in range(n):
@@ -207,9 +214,11 @@ def test_held_pinion_runs_on_at_constant_speed():
         phi += w * h  # the constant-speed pinion, as the stepper advances it
         assert outputs(held, names) == outputs(driven, names), k
     ratio = DRIVELINE_STARTS["wheel.w"] / w
-    assert held.get("wheel.w") == pytest.approx(ratio * w, rel=1e-4)
+    assert (held.get("wheel.phi") - phi_w) / (n * h) == pytest.approx(ratio * w, rel=1e-4)
     assert held.get("wheel.tau_mesh") == pytest.approx(MESH_STARTS["wheel.tau_load"], rel=0.01)
-    assert held.get("mesh.impacts_drive") == held.get("mesh.impacts_coast") == 0
+    mesh_cycles = n * h * MeshParameters().z_pinion * w / (2 * math.pi)
+    assert held.get("mesh.impacts_coast") == 0
+    assert held.get("mesh.impacts_drive") <= 1.05 * mesh_cycles
     assert held.get("mesh.transmission_error") > 0.0  # on the drive flank: the pinion leads
 
 

@@ -29,6 +29,8 @@ rounding (checked when the law is built), and evaluates them with Clenshaw's rec
 
 The load-approach law of one tooth pair (:class:`ApproachLaw`):
 
+from . import roots
+
 * **Smooth point contact** (contact.geometry 0 and 1): Hertz, ``W = K delta^(3/2)``, K from
   the contact law at the pair's radii (:class:`ContactLaw`).
 * **Smooth line contact** (contact.geometry 2): Palmgren's empirical law for a roller on a
@@ -50,6 +52,11 @@ The load-approach law of one tooth pair (:class:`ApproachLaw`):
   ``t = delta_a / sigma``, ``P = K' E* 4.4086e-5``, ``n = 6.804``: ``W = W_r t^(1/q)``.  The
   layer is in series with the smooth law (the bulk): one load W, the approaches add,
   ``delta = (W/K)^(1/p) + sigma (W/W_r)^q``, solved for W by Newton's method in ``ln W``.
+* **The teeth** (tooth.compliance 1, compliance.py): a linear spring of compliance c_t in
+  series with either, ``delta = (W/K)^(1/p) [+ sigma (W/W_r)^q] + c_t W``, solved for W by
+  Brent's method in ``ln W`` (the approach is increasing in W); the flanks' own approach is
+  ``delta - c_t W``, the stiffness ``1 / (d(flanks)/dW + c_t)``, the energy gains
+  ``c_t W^2 / 2``.
 """
 
 from __future__ import annotations
@@ -455,35 +462,90 @@ class ApproachLaw:
             bulk, layer = math.exp((y - ln_K) / p), sigma * math.exp(q * (y - ln_r))
         return math.exp(y), bulk, layer
 
-    def force(self, K: float, W_r: float, delta: float) -> float:
-        """The elastic load W [N] at approach ``delta`` > 0 (0 for a line of zero length, and
-        below the smallest normal double: a subnormal load is known to a few bits at most, and
-        whether a pair is loaded must not turn on them)."""
-        if not K > 0.0:
+    def flanks(self, K: float, W_r: float, W: float) -> tuple[float, float]:
+        """``(bulk, layer)`` approaches of the flanks under the load W: (W/K)^(1/p) and, rough,
+        sigma (W/W_r)^q."""
+        bulk = (W / K) ** (1.0 / self.exponent)
+        layer = self.sigma * (W / W_r) ** self.rough_exponent if self.rough else 0.0
+        return bulk, layer
+
+    def with_teeth(self, K: float, W_r: float, c_t: float, delta: float
+                   ) -> tuple[float, float, float]:
+        """``(W, bulk, layer)`` with the teeth in series: W solves
+        delta = bulk(W) + layer(W) + c_t W, by Brent's method on y = ln W between a load
+        whose approach falls short of delta and the smallest one-sided load (above it)."""
+        candidates = [math.log(K) + self.exponent * math.log(delta),
+                      math.log(delta / c_t)]
+        if self.rough:
+            candidates.append(math.log(W_r) + (math.log(delta / self.sigma))
+                              / self.rough_exponent)
+
+        def excess(y: float) -> float:
+            W = math.exp(y)
+            bulk, layer = self.flanks(K, W_r, W)
+            return bulk + layer + c_t * W - delta
+
+        hi = min(candidates)
+        if excess(hi) <= 0.0:  # the one-sided load is the root to rounding
+            y = hi
+        else:
+            lo = hi - 1.0
+            while excess(lo) > 0.0:
+                lo -= 2.0 * (hi - lo)
+            y = roots.brent(excess, lo, hi, xtol=1e-15, rtol=roots.BRENT_RTOL)
+        W = math.exp(y)
+        return (W, *self.flanks(K, W_r, W))
+
+    def solve(self, K: float, W_r: float, c_t: float, delta: float
+              ) -> tuple[float, float, float]:
+        """``(W, bulk, layer)`` of the pair's law at approach ``delta`` (layer 0 when smooth;
+        the teeth's share is delta - bulk - layer)."""
+        if c_t > 0.0:
+            return self.with_teeth(K, W_r, c_t, delta)
+        if self.rough:
+            return self.series(K, W_r, delta)
+        return self.smooth(K, delta), delta, 0.0
+
+    def force(self, K: float, W_r: float, delta: float, c_t: float = 0.0) -> float:
+        """The elastic load W [N] at approach ``delta`` > 0 with the teeth's compliance
+        ``c_t`` in series (0 for a line of zero length or infinite c_t, and below the smallest
+        normal double: a subnormal load is known to a few bits at most, and whether a pair is
+        loaded must not turn on them)."""
+        if not (K > 0.0 and c_t < math.inf):
             return 0.0
-        load = self.smooth(K, delta) if not self.rough else self.series(K, W_r, delta)[0]
+        load = self.solve(K, W_r, c_t, delta)[0]
         return load if load >= sys.float_info.min else 0.0
 
-    def stiffness(self, K: float, W_r: float, delta: float) -> float:
-        """dW/d(delta) [N/m]: p W / delta (smooth), W / (bulk/p + q layer) (series)."""
-        if not K > 0.0:
-            return 0.0
-        if not self.rough:
-            return self.exponent * self.smooth(K, delta) / delta
-        W, bulk, layer = self.series(K, W_r, delta)
-        return W / (bulk / self.exponent + self.rough_exponent * layer)
+    def surface(self, K: float, W_r: float, delta: float, c_t: float = 0.0) -> float:
+        """The flanks' own approach [m]: ``delta`` less the teeth's deflection c_t W."""
+        if not (K > 0.0 and c_t < math.inf) or not c_t > 0.0:
+            return delta
+        _, bulk, layer = self.solve(K, W_r, c_t, delta)
+        return bulk + layer
 
-    def energy(self, K: float, W_r: float, delta: float) -> float:
+    def stiffness(self, K: float, W_r: float, delta: float, c_t: float = 0.0) -> float:
+        """dW/d(delta) [N/m]: p W / delta (smooth), W / (bulk/p + q layer) (series), the
+        teeth's c_t added to the compliance dW/d(delta)^-1."""
+        if not (K > 0.0 and c_t < math.inf):
+            return 0.0
+        if not self.rough and not c_t > 0.0:
+            return self.exponent * self.smooth(K, delta) / delta
+        W, bulk, layer = self.solve(K, W_r, c_t, delta)
+        if not W > 0.0:
+            return 0.0
+        return W / (bulk / self.exponent + self.rough_exponent * layer + c_t * W)
+
+    def energy(self, K: float, W_r: float, delta: float, c_t: float = 0.0) -> float:
         """integral_0^delta W [J]: W delta / (p + 1) (smooth); for the series law
-        W bulk / (p + 1) + W layer q / (q + 1)."""
-        if not K > 0.0:
+        W bulk / (p + 1) + W layer q / (q + 1); the teeth's spring adds c_t W^2 / 2."""
+        if not (K > 0.0 and c_t < math.inf):
             return 0.0
         p = self.exponent
-        if not self.rough:
+        if not self.rough and not c_t > 0.0:
             return self.smooth(K, delta) * delta / (p + 1.0)
-        W, bulk, layer = self.series(K, W_r, delta)
+        W, bulk, layer = self.solve(K, W_r, c_t, delta)
         q = self.rough_exponent
-        return W * bulk / (p + 1.0) + W * layer * q / (q + 1.0)
+        return W * bulk / (p + 1.0) + W * layer * q / (q + 1.0) + 0.5 * c_t * W * W
 
     def area(self, kz: float, W: float) -> float:
         """The apparent contact area [m^2] at load W: kz W^(2/3) (ellipse), kz W^(1/2) (line)."""

@@ -21,7 +21,10 @@ or viscous (the squeeze films after an impact that did not rebound, the mesh dam
 
 W(delta) = K_i delta^(3/2) for smooth point contacts, K_i from the contact law at the pair's
 radii (the crown's r_y, or eq. 6's for the paper's contact.geometry 1), Palmgren's line law
-for contact.geometry 2, either in series with the asperity layer for contact.roughness 1.
+for contact.geometry 2, either in series with the asperity layer for contact.roughness 1 and
+with the teeth's compliance c_i over the pair's engaged contact line for tooth.compliance 1
+(compliance.py).  The dissipation acts on the pair's whole approach delta_i, the film of
+eq. 11 on the flanks' own approach (delta_i less the teeth's deflection).
 Torques (each gear positive in its own forward direction), with F_i the pair's friction force
 and sgn_i the sign of its sliding speed:
 
@@ -39,6 +42,7 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from . import contact, dissipation, friction, roots
+from .compliance import ToothCompliance
 from .contact import ApproachLaw
 from .geometry import DRIVE, LAYOUT_CROWNED, LAYOUT_LINE, LAYOUT_PAPER, HelicalPairGeometry
 
@@ -86,13 +90,14 @@ class PairLaw(NamedTuple):
 
     slot: int
     s: float  # roll coordinate of its contact point [m]
-    length: float  # of its engaged contact line (unmodified flanks) [m]
+    length: float  # of its engaged contact line [m]
     r_x: float  # [m]
     r_y: float  # [m] (0 for a line)
     K: float  # of the smooth law W = K delta^p
     ka: float  # semi-major axis a = ka W^(1/3) (ellipse)
     kz: float  # area A = kz W^(2/3) (ellipse) or kz W^(1/2) (line)
     W_r: float  # asperity layer's load scale [N] (0: smooth)
+    c_t: float  # the teeth's compliance over the engaged line [m/N] (0: rigid teeth)
     offset: float  # crown offset [m]
     dg: float  # its rate per roll of the face centre
 
@@ -124,6 +129,8 @@ class MeshModel:
                                     self.E_star, params.sigma, params.gamma,
                                     getattr(params, "asperity_density", 1e9))
         self.damping = damping_factor(params)
+        self.tooth = (ToothCompliance(params, g) if getattr(params, "tooth_compliance", 0) == 1
+                      else None)
         # Arms of the normal force about each axis: cos(beta_b) * base radius.
         self.arm_wheel = g.normal_factor * g.rb_wheel
         self.arm_pinion = g.normal_factor * g.rb_pinion
@@ -155,8 +162,10 @@ class MeshModel:
     def pair_laws(self, flank: int, phi_p: float) -> list[PairLaw]:
         """The pairs in the zone of action of ``flank`` with their laws' coefficients."""
         g, a = self.geometry, self.approach
-        if g.layout == LAYOUT_CROWNED:
-            rows = [(slot, s, 0.0, off, dg) for slot, s, off, dg in g.pairs(flank, phi_p)]
+        if g.layout == LAYOUT_CROWNED:  # the engaged lines' lengths, by slot
+            lengths = {slot: length for slot, _, length in g.lines(flank, phi_p)}
+            rows = [(slot, s, lengths[slot], off, dg)
+                    for slot, s, off, dg in g.pairs(flank, phi_p)]
         else:
             rows = [(slot, s, length, 0.0, 0.0) for slot, s, length in g.lines(flank, phi_p)]
         out = []
@@ -170,7 +179,8 @@ class MeshModel:
                 r_y = g.radius_y_eq6(s) if g.layout == LAYOUT_PAPER else self.law.r_y
                 K, _R, ka, kz = self.law.coefficients_at(r_x, r_y)
             W_r = a.asperity_scale(r_x, r_y, length) if a.rough and K > 0.0 else 0.0
-            out.append(PairLaw(slot, s, length, r_x, r_y, K, ka, kz, W_r, offset, dg))
+            c_t = self.tooth.pair(s, length) if self.tooth is not None else 0.0
+            out.append(PairLaw(slot, s, length, r_x, r_y, K, ka, kz, W_r, c_t, offset, dg))
         return out
 
     # ------------------------------------------------------------------ loads
@@ -185,12 +195,12 @@ class MeshModel:
         for pl in self.pair_laws(flank, phi_p):
             d = delta - pl.offset
             if d > 0.0:
-                total += self.approach.force(pl.K, pl.W_r, d)
+                total += self.approach.force(pl.K, pl.W_r, d, pl.c_t)
         return total
 
     def elastic_energy(self, flank: int, phi_p: float, delta: float) -> float:
         """sum_i integral_0^(delta - g_i) W_i [J] over the pairs of ``flank`` that touch."""
-        return sum(self.approach.energy(pl.K, pl.W_r, delta - pl.offset)
+        return sum(self.approach.energy(pl.K, pl.W_r, delta - pl.offset, pl.c_t)
                    for pl in self.pair_laws(flank, phi_p) if delta > pl.offset)
 
     def torques(self, flank: int, phi_p: float, w_p: float, phi_w: float, w_w: float,
@@ -215,7 +225,7 @@ class MeshModel:
         onset = dissipation.onset(self, flank, phi_p, v_impact)
         pair_laws = self.pair_laws(flank, phi_p)
         ratio = dissipation.ratio_dampings(self, [
-            a.stiffness(pl.K, pl.W_r, delta - pl.offset)
+            a.stiffness(pl.K, pl.W_r, delta - pl.offset, pl.c_t)
             for pl in pair_laws if delta - pl.offset > 0.0])
         for pl in pair_laws:
             slot, s, offset, dg = pl.slot, pl.s, pl.offset, pl.dg
@@ -225,7 +235,7 @@ class MeshModel:
                 out.pairs.append(PairLoad(slot, s, offset, r_x, K, pen,
                                           0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 continue
-            W = a.force(K, pl.W_r, pen)
+            W = a.force(K, pl.W_r, pen, pl.c_t)
             c = (dissipation.film_damping(self, r_x, pl.r_y, pl.length, pen) if onset.sticks
                  else ratio.pop(0) if ratio else 0.0)
             if onset.d > 0.0:
@@ -245,7 +255,8 @@ class MeshModel:
                 A_e = friction.asperity_area(W, self.E_star, p.gamma, p.sigma)
                 A = a.area(kz, W)
                 d_max = a.film_delta_max(v_impact, K, r_x, ka, pl.length, p.density)
-                h = friction.film_thickness(-pen, d_max)
+                # eq. 11 on the flanks' own approach
+                h = friction.film_thickness(-a.surface(K, pl.W_r, pen, pl.c_t), d_max)
                 if p.film == friction.FILM_EHL:
                     h = max(h, friction.central_film_thickness(
                         u, W, r_x, pl.r_y, self.E_star, p.eta, p.alpha_pv))
