@@ -1,8 +1,10 @@
 """Which phase starts reach the periodic orbit at 0.4 M* and 0.2 mm, per engine and per last bit
 (docs/analysis.md section 7, docs/model.md section 6.2).
 
-At that point of the paper's model (default physics) a periodic orbit -- one impact per flank
-and forcing period -- coexists with the chaotic rattle, and its basin is small.  This runs the
+At that point of the paper's model (default physics with rigid teeth, ``tooth.compliance`` = 0,
+where it was found) a periodic orbit -- one impact per flank and forcing period -- coexists with
+the chaotic rattle, and its basin is small.  ``--teeth compliant`` runs today's default (the
+teeth's compliance in series with the contact) instead.  This runs the
 smooth start at N - 1 phases of the forcing cycle (``multistability.phase_starts``) for a fixed
 time in each variant and reports the phases whose run is in the orbit at its end (exactly one
 drive and one coast onset in each of the last ``--periods`` forcing periods):
@@ -15,7 +17,7 @@ drive and one coast onset in each of the last ``--periods`` forcing periods):
   (``pinion.phi_start``) moved by one unit in the last place.
 
     python benchmarks/orbit_reach.py [--fmu-dir dist/fmi3] [--phases 24] [--seconds 60]
-        [--select 11,12] [--variants library,fmu,...] [--workers 2]
+        [--select 11,12] [--variants library,fmu,...] [--teeth rigid|compliant] [--workers 2]
 """
 
 from __future__ import annotations
@@ -35,10 +37,12 @@ from drive_rattle_cosim import multistability as ms
 
 LOAD, BACKLASH, STEP = 0.4, 0.2e-3, 1e-4
 VARIANTS = ("library", "fmu", "fmu-accumulated", "angle+1ulp", "angle-1ulp")
+#: ``tooth.compliance`` per ``--teeth``
+TEETH = {"rigid": 0, "compliant": 1}
 
 
-def point() -> tuple[MeshParameters, DrivelineParameters]:
-    mesh = replace(MeshParameters(), backlash=BACKLASH)
+def point(teeth: str = "rigid") -> tuple[MeshParameters, DrivelineParameters]:
+    mesh = replace(MeshParameters(), backlash=BACKLASH, tooth_compliance=TEETH[teeth])
     drive = DrivelineParameters()
     return mesh, ms.paper_driveline(LOAD * ms.separation_load(mesh, drive), drive)
 
@@ -46,8 +50,8 @@ def point() -> tuple[MeshParameters, DrivelineParameters]:
 def final_onsets(job) -> tuple[str, int, int, int]:
     """``(variant, k, drive onsets, coast onsets)`` in the last ``periods`` forcing periods of
     the run of phase start k/n for ``seconds``."""
-    variant, k, n, seconds, periods, fmu_dir = job
-    mesh, drive = ms.start_parameters(*point(), ms.Start(f"phase {k}/{n}", phase=k / n))
+    variant, k, n, seconds, periods, fmu_dir, teeth = job
+    mesh, drive = ms.start_parameters(*point(teeth), ms.Start(f"phase {k}/{n}", phase=k / n))
     if variant.startswith("angle"):
         drive = replace(drive, phi_start=math.nextafter(
             drive.phi_start, math.inf if variant == "angle+1ulp" else -math.inf))
@@ -68,10 +72,10 @@ def final_onsets(job) -> tuple[str, int, int, int]:
 
 
 def reach(variants, phases: int, seconds: float, periods: int, fmu_dir: Path | None,
-          select=None, workers: int = 2) -> dict[str, list[int]]:
+          select=None, workers: int = 2, teeth: str = "rigid") -> dict[str, list[int]]:
     """``{variant: [k, ...]}``: the phases k/phases whose run ends in the orbit."""
     ks = list(select or range(1, phases))
-    jobs = [(v, k, phases, seconds, periods, fmu_dir) for v in variants for k in ks]
+    jobs = [(v, k, phases, seconds, periods, fmu_dir, teeth) for v in variants for k in ks]
     with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
         results = list(pool.map(final_onsets, jobs))
     return {v: [k for w, k, d, c in results if w == v and d == c == periods] for v in variants}
@@ -86,6 +90,9 @@ def main(argv=None) -> int:
                     help="the orbit: one onset per flank in each of the last PERIODS periods")
     ap.add_argument("--select", default="", help="only these phases k (comma-separated)")
     ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--teeth", choices=tuple(TEETH), default="rigid",
+                    help="tooth.compliance: rigid (0, where the orbit was found) or compliant "
+                         "(1, today's default)")
     ap.add_argument("--workers", type=int, default=2, help="processes")
     args = ap.parse_args(argv)
     variants = [v.strip() for v in args.variants.split(",")]
@@ -95,10 +102,10 @@ def main(argv=None) -> int:
     select = [int(k) for k in args.select.split(",") if k.strip()]
     wall = time.perf_counter()
     found = reach(variants, args.phases, args.seconds, args.periods, args.fmu_dir, select,
-                  args.workers)
+                  args.workers, args.teeth)
     tried = len(select) if select else args.phases - 1
-    print(f"| variant | phase starts k/{args.phases} in the orbit after {args.seconds:g} s | "
-          "of |")
+    print(f"| variant ({args.teeth} teeth) | phase starts k/{args.phases} in the orbit after "
+          f"{args.seconds:g} s | of |")
     print("|---|---|---|")
     for v, ks in found.items():
         print(f"| {v} | {', '.join(map(str, ks)) or 'none'} | {len(ks)} of {tried} |")
