@@ -395,3 +395,23 @@ def test_one_ulp_of_the_start_angle_decides_which_state_a_start_reaches(fmi3_fmu
             for line in run.stdout.splitlines()[2:]}
     assert rows == {"library": "11", "fmu": "11", "angle+1ulp": "none",
                     "angle-1ulp": "none"}, run.stdout
+
+
+@pytest.mark.slow
+def test_the_compliant_teeth_have_two_states_at_0_4_and_0_1_mm():
+    """With the teeth's compliance (the default physics today) the coexisting states move: at
+    0.4 M* and backlash 0.1 mm the smooth start reaches the chaotic double-sided rattle and the
+    kick of +1 rad/s a periodic orbit of three drive onsets per forcing period and five coast
+    onsets per two periods (a period-doubled orbit), with no window-to-window scatter; the
+    grid with ``--phases 24`` finds that orbit from kick +1, free and phases 11, 18 and 23 of
+    24 (docs/model.md section 6.2, measured with the command of docs/analysis.md section 7)."""
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+    point = ms.study_point(0.4, 1e-4, MeshParameters(), starts=[
+        ms.STARTS_BY_KEY["smooth"], ms.STARTS_BY_KEY["kick+1"]], workers=2)
+    assert point.verdict == "multistable", ms.report([point], {})
+    by_start = {a.starts[0]: a for a in point.attractors}
+    rattle, orbit = by_start["smooth"], by_start["kick +1"]
+    assert rattle.scatter["drive_rate"] > 1.0  # chaotic: it varies between windows
+    assert orbit.mean["drive_rate"] == pytest.approx(3 / period, rel=1e-3)
+    assert orbit.mean["coast_rate"] == pytest.approx(2.5 / period, rel=1e-3)
+    assert orbit.scatter["drive_rate"] < 1e-9 * orbit.mean["drive_rate"]
