@@ -145,4 +145,6 @@ def ratio_dampings(model, stiffnesses: list[float]) -> list[float]:
     if not (model.params.dissipation == DISSIPATION_RATIO and k > 0.0):
         return [0.0 for _ in stiffnesses]
     c = 2.0 * model.params.damping_ratio * math.sqrt(model.normal_mass * k)
-    return [c * k_i / k for k_i in stiffnesses]
+    # the share k_i / k first: c k_i underflows below the smallest double at first contact
+    # (c ~ 1e-108 N s/m, k_i ~ 1e-216 N/m at 1e-38 m of approach), the share does not
+    return [c * (k_i / k) for k_i in stiffnesses]
