@@ -359,8 +359,13 @@ static void put_given(RmText* t, int type, const void* values, size_t i)
     case RM_INTEGER: rm_printf(t, "%d", (int)((const int32_t*)values)[i]); break;
     case RM_BOOLEAN: rm_puts(t, ((const int32_t*)values)[i] ? "true" : "false"); break;
     default: {
+        /* a refusal names what it was given, a NULL string included (FMI lets a host pass
+         * one; the check that refuses it comes after the mode's) */
         const char* s = ((const char* const*)values)[i];
-        rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
+        if (s == NULL)
+            rm_puts(t, "NULL");
+        else
+            rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
     }
     }
 }

@@ -216,6 +216,17 @@ def row_4(fmus, work):
     assert inst.set("String", [vr], ["Übersetzung.csv"]) == OK
     assert inst.get_named("engine.speed_table") == "Übersetzung.csv"
     inst.free()
+    # A NULL String after initialization (the fixed parameter's refusal names the value) and
+    # after terminate: refused, nothing changed.
+    inst = started(model, DRIVE_INPUTS, steps=1)
+    for mode, fragment in (("stepping", "is fixed"), ("terminated", "after terminate")):
+        if mode == "terminated":
+            assert inst.terminate() == OK
+        before = inst.snapshot()
+        n = len(inst.log)
+        refused(inst, inst.set("String", [vr], [None]), n, fragment)
+        assert inst.snapshot() == before
+    inst.free()
 
 
 def row_5(fmus, work):

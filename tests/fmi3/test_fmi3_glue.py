@@ -237,6 +237,29 @@ def test_strings_checked_by_the_library(models, tmp_path):
     inst.free()
 
 
+def test_a_null_string_refused_in_every_mode(models):
+    """fmi3SetString with a NULL value: refused with a message naming it, in every mode --
+    after initialization the fixed parameter's refusal names the value it was given."""
+    driveline = models["Driveline"]
+    vr = driveline.vr("engine.speed_table")
+    inst = driveline.instantiate(b"glue")
+    expected = {"instantiated": "is NULL", "initialization": "is NULL",
+                "stepping": "is fixed", "terminated": "cannot be set after terminate"}
+    for mode, fragment in expected.items():
+        if mode == "initialization":
+            assert inst.enter(0.0) == OK
+        elif mode == "stepping":
+            assert inst.exit() == OK and inst.step(0.0, 1e-4) == OK
+        elif mode == "terminated":
+            assert inst.terminate() == OK
+        before = inst.snapshot()
+        assert inst.set("String", [vr], [None]) == ERROR, mode
+        assert fragment in last(inst)[2], (mode, last(inst))
+        assert "NULL" in last(inst)[2] or mode == "terminated", (mode, last(inst))
+        assert inst.snapshot() == before
+    inst.free()
+
+
 # ------------------------------------------------------------------ the step
 def test_do_step_outputs_and_refusals(mesh):
     inst = mesh.instantiate(b"glue")
