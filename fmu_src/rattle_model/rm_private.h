@@ -20,6 +20,7 @@
  *   driveline.c     input-shaft kinematics and the output shaft
  *   speed_table.c   reading a measured speed table
  *   unit.c          the unit: variables, phases, checks, save/restore (rattle_model.h)
+ *   record.c        the unit's state as a versioned binary record: writer, reader, checks
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
  *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
@@ -97,14 +98,15 @@ enum {
     RM_FAIL_NONE = 0,
     RM_FAIL_DIVERGED,     /* wheel angle, speed */
     RM_FAIL_PENETRATION,  /* depth, limit */
-    RM_FAIL_TOO_STIFF,    /* fastest rate, k, c, mass */
+    RM_FAIL_TOO_STIFF,    /* fastest rate, the budget's substeps, h */
     RM_FAIL_NO_BRACKET,   /* a, f(a), b, f(b) */
     RM_FAIL_MATH,         /* which (RM_MATH_...), x, y */
     RM_FAIL_TOO_MANY_PAIRS, /* limit */
     RM_FAIL_PAIR_RANGE,   /* roll coordinate, pair number */
     RM_FAIL_NO_PROGRESS,  /* time */
-    RM_FAIL_SUBSTEPS,     /* h, substeps */
-    RM_FAIL_PAIR_LEFT     /* (a pair left the zone of action while its event was located) */
+    RM_FAIL_SUBSTEPS,     /* h, substeps, the budget's substeps */
+    RM_FAIL_PAIR_LEFT,    /* (a pair left the zone of action while its event was located) */
+    RM_FAIL_WORK          /* time, the budget's substeps and evaluations, h */
 };
 enum { RM_MATH_POW, RM_MATH_SQRT, RM_MATH_LOG, RM_MATH_EXP, RM_MATH_FLOOR, RM_MATH_CEIL,
        RM_MATH_INT };
@@ -807,6 +809,26 @@ RM_INTERNAL int rm_read_ended(const RmReader* r, const char* what, RmText* err);
  * naming `what`. */
 RM_INTERNAL int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out,
                                RmText* err);
+/* A saved double within [-bound, bound] (in `unit`): what the unit reaches from legal inputs,
+ * `why` saying how.  1, or 0 with the refusal naming `what`, the value and the range. */
+RM_INTERNAL int rm_read_within(RmReader* r, const char* what, double bound, const char* unit,
+                               const char* why, double* out, RmText* err);
+
+/* ------------------------------------------------------------------ the record (record.c) */
+/* The header of a unit's record. */
+typedef struct {
+    uint32_t version, kind, phase, motion_set, n_variables;
+    double start_time, time;
+} RmRecordHeader;
+/* The unit's record (header, parameters and inputs, the model's own fields): 1, or 0 when
+ * out of memory. */
+RM_INTERNAL int rm_record_write(const RmUnit* u, RmWriter* w);
+/* The header: its magic, its length and this version checked.  1, or 0 with the refusal. */
+RM_INTERNAL int rm_record_read_header(RmReader* r, RmRecordHeader* h, RmText* err);
+/* The parameters and inputs of a unit of these variables into values (Strings malloc'ed, UTF-8
+ * checked; Integers 32-bit, Booleans 0 or 1).  1, or 0 with the refusal. */
+RM_INTERNAL int rm_record_read_values(RmReader* r, const RmVariable* variables, size_t n,
+                                      RmValue* values, RmText* err);
 
 /* The mesh model's parameters from a GearMeshRattle unit's values. */
 RM_INTERNAL int rm_mesh_params(const RmValue* values, RmMeshParams* p);

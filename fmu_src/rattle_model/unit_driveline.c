@@ -383,7 +383,11 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
     }
     ok = ok && rm_boundary_restore(&RM_DRIVELINE_CLASS, &m->boundary, r, err)
          && rm_read_finite(r, "the wheel's angle at the last step's end", 0, &m->wheel_end[0], err)
-         && rm_read_finite(r, "the wheel's speed at the last step's end", 0, &m->wheel_end[1], err);
+         && rm_read_within(r, "the wheel's speed at the last step's end",
+                           rm_max(fabs(u->variables[RM_DRIVELINE_WHEEL_W].min),
+                                  fabs(u->variables[RM_DRIVELINE_WHEEL_W].max)),
+                           "rad/s", "input wheel.w's range: a held wheel keeps its speed",
+                           &m->wheel_end[1], err);
     if (!ok) {
         free_model(m);
         return NULL;

@@ -189,6 +189,35 @@ def test_the_independent_variable_time(mesh):
     inst.free()
 
 
+def test_a_state_taken_before_the_first_step_restores_its_time_and_outputs(mesh):
+    """FMU states taken in Initialization Mode at startTime 3, in Instantiated Mode, and
+    after terminate from Initialization Mode, set into the instance after a run: `time` is
+    the state's in every mode (it read 0 until exitInitializationMode), and the outputs are
+    those the state was taken with (wheel.w came back as the earlier run's, 44.57, not 0)."""
+    inst = mesh.instantiate(b"glue")
+    time, w = mesh.vr("time"), mesh.vr("wheel.w")
+    taken = {}
+    st, taken["instantiated"] = inst.get_state()
+    expected = {"instantiated": inst.get("Float64", [time, w])[1]}
+    assert st == OK and inst.enter(3.0) == OK
+    st, taken["initialization"] = inst.get_state()
+    expected["initialization"] = inst.get("Float64", [time, w])[1]
+    assert st == OK and expected["initialization"][0] == 3.0
+    assert inst.terminate() == OK
+    st, taken["terminated"] = inst.get_state()
+    expected["terminated"] = inst.get("Float64", [time, w])[1]
+    assert st == OK
+    for mode, state in taken.items():  # each set into the instance after a run
+        assert inst.reset() == OK, mode
+        assert inst.enter(0.0) == OK and inst.exit() == OK and inst.step(0.0, 1e-4) == OK
+        assert inst.get("Float64", [w])[1] != [expected[mode][1]]  # the run moved it
+        assert inst.set_state(state) == OK, (mode, inst.log[-2:])
+        assert inst.get("Float64", [time, w]) == (OK, expected[mode]), mode
+    for state in taken.values():
+        assert inst.free_state(state) == OK
+    inst.free()
+
+
 def test_arrays_and_types_the_units_lack(mesh):
     inst = mesh.instantiate(b"glue")
     L, vr = mesh.lib, (c_uint * 1)(mesh.vr("gear.backlash"))
