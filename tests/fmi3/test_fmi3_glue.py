@@ -10,6 +10,7 @@ The cases are the FMI 2.0 face's (tests/native/test_native_glue.py) where they a
 from __future__ import annotations
 
 import ctypes
+import itertools
 import os
 import subprocess
 import sys
@@ -498,3 +499,65 @@ def test_types_map_onto_the_library_tables(mesh):
         assert len(values) == len(names)
     assert not inst.log
     inst.free()
+
+
+# ------------------------------------------------------------------ the cost of a call
+def test_the_slowest_call_at_costly_states_within_its_bound(fmi3_fmus, tmp_path):
+    """Every call timed (tests/adversarial/call_clock.py) while both units run on inputs at
+    their declared bounds, for steps of 1e-4 and 1e-3 s, and the mesh holds the fastest pinion
+    a state may hold (1.001e7 rad/s, set through an edited, re-sealed state): no call longer
+    than its bound (docs/fmi.md: 50 ms per 1e-4 s of step), with the fuzzer's margin for a
+    loaded machine; the slowest is printed for the closing note."""
+    sys.path.insert(0, str(ROOT / "tests" / "adversarial"))
+    from call_clock import CallClock
+    from raw_fmi import state_payload, with_payload
+    from records import Record
+
+    from ..adversarial.boundary_fuzz import (
+        EXTREME_ACCELERATIONS,
+        EXTREME_LOADS,
+        EXTREME_SPEEDS,
+    )
+    from ..adversarial.test_fmi_boundary import LOADED
+
+    clock = CallClock()
+    for name, fmu in fmi3_fmus.items():
+        model = Model(unpack(fmu, tmp_path / name))
+        model.lib = clock.wrap(model.lib)
+        fmi2_types = {"Float64": "Real", "Int32": "Integer", "Enumeration": "Integer"}
+        variables = {n: (vr, fmi2_types.get(kind, kind), c)
+                     for n, (vr, kind, c) in model.variables.items() if n != "time"}
+        for w, a, tau in itertools.product(EXTREME_SPEEDS, EXTREME_ACCELERATIONS, EXTREME_LOADS):
+            if name == "Driveline" and (a, tau) != (0.0, 0.0):
+                continue
+            for h in (1e-4, 1e-3):
+                inst = model.instantiate(b"costly")
+                assert inst.enter(0.0) == OK and inst.exit() == OK, inst.log
+                t = 0.0
+                for _ in range(3):
+                    values = ({"pinion.phi": w * t, "pinion.w": w, "pinion.a": a,
+                               "wheel.tau_load": tau} if name == "GearMeshRattle"
+                              else {"wheel.phi": w * t, "wheel.w": w})
+                    assert inst.set_named(values) == OK
+                    if inst.step(t, h) != OK:
+                        break
+                    t += h
+                inst.free()
+        if name == "GearMeshRattle":  # the fastest pinion a state holds, held for a step
+            inst = model.instantiate(b"held")
+            assert inst.enter(0.0) == OK and inst.exit() == OK and inst.step(0.0, 1e-4) == OK
+            blob = inst.serialized()
+            record = Record.decode(state_payload(blob), variables)
+            record.model["pinion_w"] = 1.001e7
+            st, state = inst.deserialize(with_payload(blob, record))
+            assert st == OK and inst.set_state(state) == OK, inst.log[-2:]
+            assert inst.step(1e-4, 1e-4) == ERROR and "budget" in last(inst)[2]
+            inst.free_state(state)
+            inst.free()
+    summary = clock.summary()
+    slowest, nearest = summary["slowest call"], summary["nearest the bound"]
+    print(f"slowest call FMI 3.0: {slowest['seconds'] * 1e3:.1f} ms ({slowest['function']}, "
+          f"bound {slowest['bound'] * 1e3:.0f} ms); nearest its bound: "
+          f"{nearest['fraction']:.2f} of it ({nearest['function']}, "
+          f"{nearest['seconds'] * 1e3:.1f} ms), {summary['calls timed']} calls")
+    assert nearest["fraction"] <= LOADED, nearest
