@@ -163,7 +163,9 @@ void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w)
 
 int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmText* err)
 {
-    const RmVariable* variables = rm_variables(cls->kind);
+    /* the unit's table (rm_tables.c), read here to check the inputs against it */
+    const RmVariable* variables = cls->kind == RM_MESH ? RM_MESH_VARIABLES
+                                                       : RM_DRIVELINE_VARIABLES;
     for (int k = 0; k < cls->n_start; k++)
         if (!read_input(r, &variables[cls->start_vr[k]], "at the end of initialization", 1,
                         &b->initial_inputs[k], err))

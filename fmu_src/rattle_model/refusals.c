@@ -9,8 +9,6 @@
 
 /* Largest penetration a step may reach, in gear.m_n (stepper.c) */
 extern const double RM_MAX_PENETRATION_MODULES;
-/* The work budget of a communication step, per 1e-4 s of it (stepper.c) */
-extern const int64_t RM_WORK_SUBSTEPS, RM_WORK_EVALUATIONS;
 
 void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
 {

@@ -21,6 +21,7 @@
  *   speed_table.c   reading a measured speed table
  *   unit.c          the unit: variables, phases, checks, save/restore (rattle_model.h)
  *   record.c        the unit's state as a versioned binary record: writer, reader, checks
+ *   boundary.c      the inputs a master holds, or did not exchange during initialization
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
  *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
@@ -94,6 +95,10 @@ RM_INTERNAL int rm_parse_number(const char* text, size_t n, double* out);
 /* A refusal inside the physics: its code and the numbers its message quotes, then a longjmp
  * back to the entry point (stepper.c, the start and the probes), which leaves its state
  * unchanged.  refusals.c words them (rm_refusal_text). */
+/* The work budget of a communication step per 1e-4 s of it (stepper.c, where it is chosen;
+ * refusals.c words it): substeps and evaluations of the mesh's loads. */
+#define RM_WORK_SUBSTEPS 10000
+#define RM_WORK_EVALUATIONS 20000
 enum {
     RM_FAIL_NONE = 0,
     RM_FAIL_DIVERGED,     /* wheel angle, speed */
@@ -761,9 +766,9 @@ struct RmUnitClass {
     void* (*build)(RmUnit* u, RmText* err);
     void (*free_model)(void* model);
     void (*free_cache)(RmUnit* u);
-    /* The step from t by h with the current inputs: 1, or 0 with the refusal (the model
-     * unchanged); may report a warning (rm_report). */
-    int (*step)(RmUnit* u, double t, double h, RmText* err);
+    /* The step from t by h with the current inputs: 1 (with a warning, if any, in
+     * `warning`), or 0 with the refusal (the model unchanged). */
+    int (*step)(RmUnit* u, double t, double h, RmText* warning, RmText* err);
     /* The outputs of the groups asked for into values: 1, or 0 with the refusal.  Asking for
      * complete_group computes every output. */
     int (*outputs)(RmUnit* u, void* model, unsigned groups, RmValue* values, RmText* err);
@@ -787,6 +792,7 @@ RM_INTERNAL extern const RmUnitClass RM_DRIVELINE_CLASS;
 
 /* The current call returns at least `status` with `message` (the first of the highest). */
 RM_INTERNAL void rm_report(RmUnit* u, int status, const char* message);
+/* ------------------------------------------------------------------ held inputs (boundary.c) */
 /* The boundary at the end of initialization, from the current inputs. */
 RM_INTERNAL void rm_boundary_start(const RmUnit* u, RmBoundary* b);
 /* The master holds the motion inputs: set none since the last step, or set them to exactly
@@ -796,9 +802,9 @@ RM_INTERNAL void rm_motion_step_done(RmUnit* u, RmBoundary* b);
 /* The first step's inputs differ from initialization's (and settling is asked for). */
 RM_INTERNAL int rm_first_step_differs(const RmBoundary* b, int settle, const double* values,
                                       int n);
-/* The settling warning of a first step. */
-RM_INTERNAL void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given,
-                                    const char* what);
+/* The settling warning of a first step, into t. */
+RM_INTERNAL void rm_settled_warning(const RmUnit* u, const RmBoundary* b, const double* given,
+                                    const char* what, RmText* t);
 RM_INTERNAL void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w);
 RM_INTERNAL int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r,
                                     RmText* err);

@@ -61,20 +61,18 @@
 #define CONTACT_DAMPING_SAFETY_TEETH 2.0
 /* The work of one communication step, bounded before it is done: by the time t of the step
  * (from its start) at most RM_WORK_SUBSTEPS substeps (free flights and contact substeps) and
- * RM_WORK_EVALUATIONS evaluations of the mesh's loads (rhs) per WORK_SPAN of t, one span's
- * from the start; beyond either the step is refused there, so that a step of h costs at most
- * max(1, h / WORK_SPAN) spans' work, and a step that cannot be done stops early instead of
- * at its end.  The paper's scenario takes at most 34 substeps and 237 evaluations per 1e-4 s
- * step (docs/fmi.md), inputs at their declared bounds up to 2100 substeps and 13000
- * evaluations per span.  An evaluation costs at most about 0.7 us of CPU (a held pinion at
- * the fastest speed a record may hold, every pair loaded): 20000 are 14 ms, within the bound
- * of docs/fmi.md, 50 ms per 1e-4 s of step, with room for a loaded machine.  A contact
- * substep takes at least 4 evaluations (k1 and RK4's three, its events' Brent iterations on
- * top), so that solver.h_max below about 2e-8 s (its grid: 5000 substeps per span) asks more
- * than the budget has of a step in contact all along. */
+ * RM_WORK_EVALUATIONS evaluations of the mesh's loads (rhs; both rm_private.h) per WORK_SPAN
+ * of t, one span's from the start; beyond either the step is refused there, so that a step
+ * of h costs at most max(1, h / WORK_SPAN) spans' work, and a step that cannot be done stops
+ * early instead of at its end.  The paper's scenario takes at most 34 substeps and 237
+ * evaluations per 1e-4 s step (docs/fmi.md), inputs at their declared bounds up to 2100
+ * substeps and 13000 evaluations per span.  An evaluation costs at most about 0.7 us of CPU
+ * (a held pinion at the fastest speed a record may hold, every pair loaded): 20000 are
+ * 14 ms, within the bound of docs/fmi.md, 50 ms per 1e-4 s of step, with room for a loaded
+ * machine.  A contact substep takes at least 4 evaluations (k1 and RK4's three, its events'
+ * Brent iterations on top), so that solver.h_max below about 2e-8 s (its grid: 5000
+ * substeps per span) asks more than the budget has of a step in contact all along. */
 #define WORK_SPAN 1e-4
-const int64_t RM_WORK_SUBSTEPS = 10000;
-const int64_t RM_WORK_EVALUATIONS = 20000;
 /* xtol [s] and rtol of Brent's method for the release, friction reversals and engagements. */
 #define EVENT_XTOL 1e-15
 #define EVENT_RTOL RM_BRENT_RTOL

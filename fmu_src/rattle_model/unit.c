@@ -700,11 +700,21 @@ int rm_do_step(RmUnit* u, double t, double h)
             rm_put_number(&err, u->start_time);
             rm_printf(&err, " s + %g s", MAX_RUN_LENGTH);
         }
-        else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {
-            u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
-            u->time = t + h;
-            rm_text_free(&err);
-            return u->status;
+        else {
+            RmText warning;
+            rm_text_init(&warning);
+            int ok = check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &warning, &err);
+            if (ok) {
+                u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
+                u->time = t + h;
+                if (rm_text_str(&warning)[0] != '\0')
+                    rm_report(u, RM_WARNING, rm_text_str(&warning));
+            }
+            rm_text_free(&warning);
+            if (ok) {
+                rm_text_free(&err);
+                return u->status;
+            }
         }
     }
     refuse(u, action, &err);
@@ -758,63 +768,6 @@ int rm_last_successful_time(RmUnit* u, double* t)
 }
 
 double rm_time(const RmUnit* u) { return u != NULL ? u->time : NAN; }
-
-/* ------------------------------------------------------------------ held inputs */
-void rm_boundary_start(const RmUnit* u, RmBoundary* b)
-{
-    for (int k = 0; k < u->cls->n_start; k++) b->initial_inputs[k] = u->values[u->cls->start_vr[k]].r;
-    b->first_step = 1;
-    b->has_last_motion = 0;
-    for (int k = 0; k < 4; k++) b->last_motion[k] = 0.0;
-}
-
-int rm_motion_held(const RmUnit* u, const RmBoundary* b)
-{
-    if (!u->motion_set) return 1;
-    if (!b->has_last_motion) return 0;
-    for (int k = 0; k < u->cls->n_motion; k++)
-        if (!(u->values[u->cls->motion_vr[k]].r == b->last_motion[k])) return 0;
-    return 1;
-}
-
-void rm_motion_step_done(RmUnit* u, RmBoundary* b)
-{
-    for (int k = 0; k < u->cls->n_motion; k++) b->last_motion[k] = u->values[u->cls->motion_vr[k]].r;
-    b->has_last_motion = 1;
-    b->first_step = 0;
-    u->motion_set = 0;
-}
-
-int rm_first_step_differs(const RmBoundary* b, int settle, const double* values, int n)
-{
-    if (!b->first_step || !settle) return 0;
-    for (int k = 0; k < n; k++)
-        if (values[k] != b->initial_inputs[k]) return 1;
-    return 0;
-}
-
-void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given, const char* what)
-{
-    RmText t;
-    rm_text_init(&t);
-    rm_puts(&t, "doStep at the first step: the inputs (");
-    for (int k = 0; k < u->cls->n_start; k++) {
-        const RmVariable* v = &u->variables[u->cls->start_vr[k]];
-        if (k) rm_puts(&t, ", ");
-        rm_printf(&t, "%s = ", v->name);
-        rm_put_number(&t, given[k]);
-        rm_printf(&t, " %s", v->unit);
-    }
-    rm_puts(&t, ") differ from those at the end of initialization (");
-    for (int k = 0; k < u->cls->n_start; k++) {
-        if (k) rm_puts(&t, ", ");
-        rm_put_number(&t, b->initial_inputs[k]);
-    }
-    rm_printf(&t, "): %s (init.settle_first_step; a master that exchanges no values during "
-                  "initialization)", what);
-    rm_report(u, RM_WARNING, rm_text_str(&t));
-    rm_text_free(&t);
-}
 
 /* ------------------------------------------------------------------ states (record.c) */
 int rm_save(RmUnit* u, unsigned char* buf, size_t capacity, size_t* size)

@@ -221,7 +221,7 @@ int rm_driveline_start_outputs(RmUnit* u, double start_time, double phi_w, doubl
     return 1;
 }
 
-static int step(RmUnit* u, double t, double h, RmText* err)
+static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
 {
     DrivelineModel* m = u->model;
     RmDriveline* d = &m->d;
@@ -277,7 +277,8 @@ static int step(RmUnit* u, double t, double h, RmText* err)
     rm_motion_step_done(u, &m->boundary);
     if (settled)
         rm_settled_warning(u, &m->boundary, used,
-                           "the output shaft was started anew in steady state behind them");
+                           "the output shaft was started anew in steady state behind them",
+                           warning);
     return 1;
 }
 

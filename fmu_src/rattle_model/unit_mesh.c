@@ -174,7 +174,7 @@ int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
     return 1;
 }
 
-static int step(RmUnit* u, double t, double h, RmText* err)
+static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
 {
     MeshModel* m = u->model;
     const RmValue* values = u->values;
@@ -239,7 +239,8 @@ static int step(RmUnit* u, double t, double h, RmText* err)
     rm_motion_step_done(u, &m->boundary);
     if (settled)
         rm_settled_warning(u, &m->boundary, used,
-                           "the wheel was settled in the flank equilibrium for them first");
+                           "the wheel was settled in the flank equilibrium for them first",
+                           warning);
     return 1;
 }
 
