@@ -1,6 +1,7 @@
-"""The unit's binary record (rm_save and rm_restore, unit.c): a restored unit continues
-exactly, also in another unit never initialized and without its speed table's file; the
-onset counters saturate at the record's bound; a refused record changes nothing."""
+"""The unit's binary record (record.c; rm_save and rm_restore, unit.c): a restored unit
+continues exactly, also in another unit never initialized and without its speed table's file;
+the onset counters saturate at the record's bound; a refused record changes nothing; a record
+beyond what legal inputs reach is refused; a state without a model restores its outputs."""
 
 import math
 import struct
