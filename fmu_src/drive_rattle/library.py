@@ -123,6 +123,7 @@ _SIGNATURES = {
     "rm_terminate": ([_P], ctypes.c_int),
     "rm_reset": ([_P], ctypes.c_int),
     "rm_last_successful_time": ([_P, _D], ctypes.c_int),
+    "rm_time": ([_P], ctypes.c_double),
     "rm_set_real": ([_P, _U, ctypes.c_size_t, _D], ctypes.c_int),
     "rm_set_integer": ([_P, _U, ctypes.c_size_t, _I32], ctypes.c_int),
     "rm_set_boolean": ([_P, _U, ctypes.c_size_t, _I32], ctypes.c_int),

@@ -18,7 +18,8 @@
  *     requires), Boolean (bool <-> 0/1), String; which Integer is an Enumeration comes from
  *     the library's tables (choices), never from a list here;
  *   - the independent variable `time` (FMI 3.0 requires one) at the value reference after the
- *     unit's variables: readable, never settable;
+ *     unit's variables: readable, never settable, the unit's time in every mode (rm_time: a
+ *     restored state's too);
  *   - the pointers, arrays and nValues the importer passes, checked before anything reaches
  *     the library;
  *   - logging through logMessage (no format string in FMI 3.0): errors always, warnings when
@@ -71,7 +72,6 @@ typedef struct {
     const RmVariable* variables;
     size_t n_variables;
     fmi3ValueReference time_vr; /* the independent variable's value reference */
-    double start_time;          /* of the last fmi3EnterInitializationMode */
     State* states;              /* the FMU states made by this instance */
 } Instance;
 
@@ -209,13 +209,9 @@ static int wrong_integer_kind(const Instance* inst, const char* function,
     return 0;
 }
 
-/* The value of the independent variable: the end of the last accepted step, before the end
- * of initialization the start time of the last fmi3EnterInitializationMode. */
-static double current_time(const Instance* inst)
-{
-    double t;
-    return rm_last_successful_time(inst->unit, &t) == RM_OK ? t : inst->start_time;
-}
+/* The value of the independent variable: the unit's, in every mode (the start time until the
+ * first step, a restored state's time). */
+static double current_time(const Instance* inst) { return rm_time(inst->unit); }
 
 /* ------------------------------------------------------------------ resource location */
 /* The resources folder `path` names (malloc'ed; the model library resolves relative
@@ -412,7 +408,6 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
      * cannot be refused once the first was accepted (both need phase INSTANTIATED) */
     status = rm_setup(inst->unit, startTime);
     if (status == RM_OK) status = rm_enter_initialization(inst->unit);
-    if (status != RM_ERROR) inst->start_time = startTime;
     return done(inst, status);
 }
 
@@ -433,11 +428,8 @@ fmi3Status fmi3Terminate(fmi3Instance instance)
 fmi3Status fmi3Reset(fmi3Instance instance)
 {
     Instance* inst = instance;
-    int status;
     if (inst == NULL) return fmi3Error;
-    status = rm_reset(inst->unit);
-    if (status != RM_ERROR) inst->start_time = 0.0;
-    return done(inst, status);
+    return done(inst, rm_reset(inst->unit));
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,

@@ -118,6 +118,9 @@ RM_API int rm_reset(RmUnit* u);
 /* The end of the last accepted step (the start time before the first); RM_ERROR before
  * initialization has ended. */
 RM_API int rm_last_successful_time(RmUnit* u, double* t);
+/* The unit's time in every mode: the start time until the first step (0 before
+ * rm_setup), then the end of the last accepted step; a restored state's.  NaN for NULL. */
+RM_API double rm_time(const RmUnit* u);
 
 /* ------------------------------------------------------------------ values */
 /* n values by index.  A set checks every entry before it stores any: one bad entry refuses

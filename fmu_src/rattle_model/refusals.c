@@ -9,8 +9,6 @@
 
 /* Largest penetration a step may reach, in gear.m_n (stepper.c) */
 extern const double RM_MAX_PENETRATION_MODULES;
-/* Substeps of a contact in one communication step (stepper.c) */
-extern const int64_t RM_MAX_CONTACT_SUBSTEPS;
 
 void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
 {
@@ -63,14 +61,16 @@ void rm_refusal_text(RmText* t, int code, const double* v)
                    "transmission (check wheel.tau_load and the pinion kinematics, or reduce the "
                    "communication step)");
         return;
-    case RM_FAIL_TOO_STIFF: /* v: fastest rate [1/s], k, c, normal mass (k alone can read 0:
-                               the damping factor of a fast release) */
+    case RM_FAIL_TOO_STIFF: /* v: fastest rate [1/s], the budget's substeps, h */
         rm_puts(t, "the contact is too stiff to resolve in this step: the flanks are pressed so "
                    "deep into each other that its fastest time scale falls to ");
         rm_put_g(t, 1.0 / v[0], 3);
-        rm_printf(t, " s, which would take more than %lld substeps; reduce the communication "
-                     "step, the impact speed (inputs) or contact.damping, or raise wheel.J",
-                  (long long)RM_MAX_CONTACT_SUBSTEPS);
+        rm_puts(t, " s, which would take more than the step's budget of ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, " substeps (");
+        rm_put_number(t, (double)RM_WORK_SUBSTEPS);
+        rm_puts(t, " per 1e-4 s of the step); reduce the communication step, the impact speed "
+                   "(inputs) or contact.damping, or raise wheel.J");
         return;
     case RM_FAIL_NO_BRACKET:
         rm_puts(t, "Brent's method: f(");
@@ -109,12 +109,33 @@ void rm_refusal_text(RmText* t, int code, const double* v)
         rm_puts(t, " s (the integrator is stuck; reduce solver.h_max or the communication "
                    "step)");
         return;
-    case RM_FAIL_SUBSTEPS:
+    case RM_FAIL_SUBSTEPS: /* v: h, substeps, the budget's substeps */
         rm_puts(t, "step size h = ");
         rm_put_number(t, v[0]);
         rm_puts(t, " s needs ");
         rm_put_number(t, v[1]);
-        rm_puts(t, " substeps of solver.h_max");
+        rm_puts(t, " substeps of solver.h_max, more than the step's budget of ");
+        rm_put_number(t, v[2]);
+        rm_puts(t, " substeps (");
+        rm_put_number(t, (double)RM_WORK_SUBSTEPS);
+        rm_puts(t, " per 1e-4 s of the step); raise solver.h_max or reduce the step");
+        return;
+    case RM_FAIL_WORK: /* v: time in the step, the budget's substeps and evaluations by then, h */
+        rm_puts(t, "the step does more work than its budget allows: ");
+        rm_put_number(t, v[0]);
+        rm_puts(t, " s into this step of ");
+        rm_put_number(t, v[3]);
+        rm_puts(t, " s it took more than ");
+        rm_put_number(t, v[1]);
+        rm_puts(t, " substeps or ");
+        rm_put_number(t, v[2]);
+        rm_puts(t, " evaluations of the mesh's loads (allowed: ");
+        rm_put_number(t, (double)RM_WORK_SUBSTEPS);
+        rm_puts(t, " and ");
+        rm_put_number(t, (double)RM_WORK_EVALUATIONS);
+        rm_puts(t, " per 1e-4 s of the step, one 1e-4 s's from its start); the inputs move the "
+                   "teeth faster than the contact can be resolved in time (check the pinion's "
+                   "inputs, or reduce the communication step or raise solver.h_max)");
         return;
     case RM_FAIL_PAIR_LEFT:
         rm_puts(t, "a tooth pair left the zone of action while its engagement was located "

@@ -20,6 +20,8 @@
  *   driveline.c     input-shaft kinematics and the output shaft
  *   speed_table.c   reading a measured speed table
  *   unit.c          the unit: variables, phases, checks, save/restore (rattle_model.h)
+ *   record.c        the unit's state as a versioned binary record: writer, reader, checks
+ *   boundary.c      the inputs a master holds, or did not exchange during initialization
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
  *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
@@ -93,18 +95,23 @@ RM_INTERNAL int rm_parse_number(const char* text, size_t n, double* out);
 /* A refusal inside the physics: its code and the numbers its message quotes, then a longjmp
  * back to the entry point (stepper.c, the start and the probes), which leaves its state
  * unchanged.  refusals.c words them (rm_refusal_text). */
+/* The work budget of a communication step per 1e-4 s of it (stepper.c, where it is chosen;
+ * refusals.c words it): substeps and evaluations of the mesh's loads. */
+#define RM_WORK_SUBSTEPS 10000
+#define RM_WORK_EVALUATIONS 20000
 enum {
     RM_FAIL_NONE = 0,
     RM_FAIL_DIVERGED,     /* wheel angle, speed */
     RM_FAIL_PENETRATION,  /* depth, limit */
-    RM_FAIL_TOO_STIFF,    /* fastest rate, k, c, mass */
+    RM_FAIL_TOO_STIFF,    /* fastest rate, the budget's substeps, h */
     RM_FAIL_NO_BRACKET,   /* a, f(a), b, f(b) */
     RM_FAIL_MATH,         /* which (RM_MATH_...), x, y */
     RM_FAIL_TOO_MANY_PAIRS, /* limit */
     RM_FAIL_PAIR_RANGE,   /* roll coordinate, pair number */
     RM_FAIL_NO_PROGRESS,  /* time */
-    RM_FAIL_SUBSTEPS,     /* h, substeps */
-    RM_FAIL_PAIR_LEFT     /* (a pair left the zone of action while its event was located) */
+    RM_FAIL_SUBSTEPS,     /* h, substeps, the budget's substeps */
+    RM_FAIL_PAIR_LEFT,    /* (a pair left the zone of action while its event was located) */
+    RM_FAIL_WORK          /* time, the budget's substeps and evaluations, h */
 };
 enum { RM_MATH_POW, RM_MATH_SQRT, RM_MATH_LOG, RM_MATH_EXP, RM_MATH_FLOOR, RM_MATH_CEIL,
        RM_MATH_INT };
@@ -759,9 +766,9 @@ struct RmUnitClass {
     void* (*build)(RmUnit* u, RmText* err);
     void (*free_model)(void* model);
     void (*free_cache)(RmUnit* u);
-    /* The step from t by h with the current inputs: 1, or 0 with the refusal (the model
-     * unchanged); may report a warning (rm_report). */
-    int (*step)(RmUnit* u, double t, double h, RmText* err);
+    /* The step from t by h with the current inputs: 1 (with a warning, if any, in
+     * `warning`), or 0 with the refusal (the model unchanged). */
+    int (*step)(RmUnit* u, double t, double h, RmText* warning, RmText* err);
     /* The outputs of the groups asked for into values: 1, or 0 with the refusal.  Asking for
      * complete_group computes every output. */
     int (*outputs)(RmUnit* u, void* model, unsigned groups, RmValue* values, RmText* err);
@@ -785,6 +792,7 @@ RM_INTERNAL extern const RmUnitClass RM_DRIVELINE_CLASS;
 
 /* The current call returns at least `status` with `message` (the first of the highest). */
 RM_INTERNAL void rm_report(RmUnit* u, int status, const char* message);
+/* ------------------------------------------------------------------ held inputs (boundary.c) */
 /* The boundary at the end of initialization, from the current inputs. */
 RM_INTERNAL void rm_boundary_start(const RmUnit* u, RmBoundary* b);
 /* The master holds the motion inputs: set none since the last step, or set them to exactly
@@ -794,9 +802,9 @@ RM_INTERNAL void rm_motion_step_done(RmUnit* u, RmBoundary* b);
 /* The first step's inputs differ from initialization's (and settling is asked for). */
 RM_INTERNAL int rm_first_step_differs(const RmBoundary* b, int settle, const double* values,
                                       int n);
-/* The settling warning of a first step. */
-RM_INTERNAL void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given,
-                                    const char* what);
+/* The settling warning of a first step, into t. */
+RM_INTERNAL void rm_settled_warning(const RmUnit* u, const RmBoundary* b, const double* given,
+                                    const char* what, RmText* t);
 RM_INTERNAL void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w);
 RM_INTERNAL int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r,
                                     RmText* err);
@@ -807,6 +815,26 @@ RM_INTERNAL int rm_read_ended(const RmReader* r, const char* what, RmText* err);
  * naming `what`. */
 RM_INTERNAL int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out,
                                RmText* err);
+/* A saved double within [-bound, bound] (in `unit`): what the unit reaches from legal inputs,
+ * `why` saying how.  1, or 0 with the refusal naming `what`, the value and the range. */
+RM_INTERNAL int rm_read_within(RmReader* r, const char* what, double bound, const char* unit,
+                               const char* why, double* out, RmText* err);
+
+/* ------------------------------------------------------------------ the record (record.c) */
+/* The header of a unit's record. */
+typedef struct {
+    uint32_t version, kind, phase, motion_set, n_variables;
+    double start_time, time;
+} RmRecordHeader;
+/* The unit's record (header, parameters and inputs, the model's own fields): 1, or 0 when
+ * out of memory. */
+RM_INTERNAL int rm_record_write(const RmUnit* u, RmWriter* w);
+/* The header: its magic, its length and this version checked.  1, or 0 with the refusal. */
+RM_INTERNAL int rm_record_read_header(RmReader* r, RmRecordHeader* h, RmText* err);
+/* The parameters and inputs of a unit of these variables into values (Strings malloc'ed, UTF-8
+ * checked; Integers 32-bit, Booleans 0 or 1).  1, or 0 with the refusal. */
+RM_INTERNAL int rm_record_read_values(RmReader* r, const RmVariable* variables, size_t n,
+                                      RmValue* values, RmText* err);
 
 /* The mesh model's parameters from a GearMeshRattle unit's values. */
 RM_INTERNAL int rm_mesh_params(const RmValue* values, RmMeshParams* p);

@@ -59,9 +59,20 @@
  * tolerances at every damping tested (tests/model/test_closed_forms.py, test_dissipation.py,
  * test_properties.py). */
 #define CONTACT_DAMPING_SAFETY_TEETH 2.0
-/* Largest number of contact substeps in one communication step: beyond it the contact is
- * stiffer than the stepper resolves at a sensible cost and the step is refused. */
-const int64_t RM_MAX_CONTACT_SUBSTEPS = 200000;
+/* The work of one communication step, bounded before it is done: by the time t of the step
+ * (from its start) at most RM_WORK_SUBSTEPS substeps (free flights and contact substeps) and
+ * RM_WORK_EVALUATIONS evaluations of the mesh's loads (rhs; both rm_private.h) per WORK_SPAN
+ * of t, one span's from the start; beyond either the step is refused there, so that a step
+ * of h costs at most max(1, h / WORK_SPAN) spans' work, and a step that cannot be done stops
+ * early instead of at its end.  The paper's scenario takes at most 34 substeps and 237
+ * evaluations per 1e-4 s step (docs/fmi.md), inputs at their declared bounds up to 2100
+ * substeps and 13000 evaluations per span.  An evaluation costs at most about 0.7 us of CPU
+ * (a held pinion at the fastest speed a record may hold, every pair loaded): 20000 are
+ * 14 ms, within the bound of docs/fmi.md, 50 ms per 1e-4 s of step, with room for a loaded
+ * machine.  A contact substep takes at least 4 evaluations (k1 and RK4's three, its events'
+ * Brent iterations on top), so that solver.h_max below about 2e-8 s (its grid: 5000
+ * substeps per span) asks more than the budget has of a step in contact all along. */
+#define WORK_SPAN 1e-4
 /* xtol [s] and rtol of Brent's method for the release, friction reversals and engagements. */
 #define EVENT_XTOL 1e-15
 #define EVENT_RTOL RM_BRENT_RTOL
@@ -79,10 +90,10 @@ const int64_t RM_MAX_CONTACT_SUBSTEPS = 200000;
  * next grid substep: a substep of a few ulps integrates nothing and its end state is the
  * onset's to rounding. */
 #define MERGE_FRACTION 1e-6
-/* Main-loop iterations without progress in time before a step is refused, and the largest
- * number of grid substeps (an int64). */
-#define STALL_LIMIT 1000000
-#define MAX_GRID_SUBSTEPS 9.2e18
+/* Substeps in a row without progress in time before a step is refused as stuck: an event at
+ * an instant of another (a release and an onset) makes a few; the work budget bounds a stall
+ * too, but only by the budget left at that time of a long step, which this stops early. */
+#define STALL_LIMIT 1000
 /* Roll distance [m] of the forward difference that gives a contact point's roll rate (its
  * roll coordinate is piecewise linear in the roll). */
 #define ROLL_STEP 1e-9
@@ -97,6 +108,7 @@ typedef struct {
     double W_peak, delta_peak, int_tau_pinion;
     int64_t onsets_drive, onsets_coast;
     RmStepLog* log;
+    int64_t substeps; /* made so far (the budget: WORK_SPAN) */
     /* the friction direction of each pair slot on the current substep, and the directions a
      * located reversal prescribes for the substep after it */
     double signs[RM_MAX_PAIR_SLOTS];
@@ -119,6 +131,9 @@ static inline double grid(const Run* r, int64_t j)
 {
     return j >= r->n_sub ? r->H : r->H * (double)j / (double)r->n_sub;
 }
+
+/* The spans of the work budget by time t of the step: one span's from its start. */
+static inline double work_spans(double t) { return t > WORK_SPAN ? t / WORK_SPAN : 1.0; }
 
 /* A located event: its normal approach speed at the event, recorded in the log. */
 static double event(Run* r, double t, int kind, int flank)
@@ -320,9 +335,11 @@ static double resolved_substep(Run* r, double t, double span)
         need = fastest * span / safety;
     if (need <= 1.0) return span;
     double parts = rm_ceil_checked(r->f, need);
-    /* both sides are integers, exact below 2^53, above which the sum exceeds the cap anyway */
-    if ((double)r->log->contact_substeps + parts > (double)RM_MAX_CONTACT_SUBSTEPS)
-        rm_fail(r->f, RM_FAIL_TOO_STIFF, fastest, k, c, mass);
+    /* refused before the work: the substeps this span asks for exceed what is left of the
+     * step's budget (integers, exact below 2^53, above which the sum exceeds it anyway) */
+    double allowed = (double)RM_WORK_SUBSTEPS * work_spans(t + span);
+    if ((double)r->substeps + parts > allowed)
+        rm_fail(r->f, RM_FAIL_TOO_STIFF, fastest, allowed, r->H, 0.0);
     return span / parts;
 }
 
@@ -810,9 +827,11 @@ int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h, doubl
         return f.code;
     }
     {
+        double allowed = (double)RM_WORK_SUBSTEPS * work_spans(h);
         double x = rm_ceil_checked(&f, h / M->p.h_max * (1.0 - GRID_SLACK));
-        if (!(x < MAX_GRID_SUBSTEPS)) rm_fail(&f, RM_FAIL_SUBSTEPS, h, x, 0.0, 0.0);
+        if (!(x <= allowed)) rm_fail(&f, RM_FAIL_SUBSTEPS, h, x, allowed, 0.0);
         run.n_sub = x > 1.0 ? (int64_t)x : 1;
+        run.substeps = 0;
     }
 
     /* inputs may move the pinion discontinuously between steps: re-establish the mode */
@@ -841,6 +860,13 @@ int rm_wheel_step(const RmMesh* M, RmWheel* wheel, RmLast* last, double h, doubl
     double t = 0.0;
     long stall = 0;
     while (t < run.H) {
+        /* the budget, checked before each substep (one substep's evaluations are bounded:
+         * RK4's and its events' Brent iterations) */
+        double spans = work_spans(t);
+        if ((double)++run.substeps > (double)RM_WORK_SUBSTEPS * spans
+            || (double)log->rhs_evaluations > (double)RM_WORK_EVALUATIONS * spans)
+            rm_fail(&f, RM_FAIL_WORK, t, (double)RM_WORK_SUBSTEPS * spans,
+                    (double)RM_WORK_EVALUATIONS * spans, run.H);
         double t_new = st->flank == 0 ? free_flight(&run, t) : contact_substep(&run, t);
         if (t_new > t)
             stall = 0;

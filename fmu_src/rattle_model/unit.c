@@ -1,8 +1,8 @@
 /*
  * unit.c - the unit of rattle_model.h: its variables and their checks, its phases, the step
  * with the communication point's continuity, the outputs computed when read, the complete
- * state as a versioned binary record, and the coupled start values.  What is particular to a
- * kind of unit is behind RmUnitClass (unit_mesh.c, unit_driveline.c).
+ * state saved and restored (its binary record: record.c), and the coupled start values.  What
+ * is particular to a kind of unit is behind RmUnitClass (unit_mesh.c, unit_driveline.c).
  *
  * Every message of a refused call is "<action>: <reason>", the action named as the FMI
  * function it serves (setReal, doStep, ...), so that both FMI faces and the Python API log the
@@ -26,12 +26,6 @@
 /* The longest run [s] from the start time (127 years): a step that would end later is
  * refused, so that every state the unit saves it restores (rm_restore checks the same). */
 #define MAX_RUN_LENGTH (4.0 * MAX_START_TIME)
-/* Version of the record of rm_save (bumped when its fields change). */
-#define RECORD_MAGIC "RATLUNIT"
-/* 2: the contact, dissipation and friction options; 3: the teeth's compliance parameters */
-#define RECORD_VERSION 3u
-/* The record's header: magic, version, kind, phase, motion flag, start time, time, count. */
-#define RECORD_HEADER_BYTES ((size_t)(8 + 4 * 4 + 2 * 8 + 4))
 
 static const char* const PHASE_NAMES[4] = {"instantiated", "initialization", "stepping",
                                            "terminated"};
@@ -359,8 +353,13 @@ static void put_given(RmText* t, int type, const void* values, size_t i)
     case RM_INTEGER: rm_printf(t, "%d", (int)((const int32_t*)values)[i]); break;
     case RM_BOOLEAN: rm_puts(t, ((const int32_t*)values)[i] ? "true" : "false"); break;
     default: {
+        /* a refusal names what it was given, a NULL string included (FMI lets a host pass
+         * one; the check that refuses it comes after the mode's) */
         const char* s = ((const char* const*)values)[i];
-        rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
+        if (s == NULL)
+            rm_puts(t, "NULL");
+        else
+            rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
     }
     }
 }
@@ -701,11 +700,21 @@ int rm_do_step(RmUnit* u, double t, double h)
             rm_put_number(&err, u->start_time);
             rm_printf(&err, " s + %g s", MAX_RUN_LENGTH);
         }
-        else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {
-            u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
-            u->time = t + h;
-            rm_text_free(&err);
-            return u->status;
+        else {
+            RmText warning;
+            rm_text_init(&warning);
+            int ok = check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &warning, &err);
+            if (ok) {
+                u->stale = u->cls->all_groups & ~u->cls->fresh_after_step;
+                u->time = t + h;
+                if (rm_text_str(&warning)[0] != '\0')
+                    rm_report(u, RM_WARNING, rm_text_str(&warning));
+            }
+            rm_text_free(&warning);
+            if (ok) {
+                rm_text_free(&err);
+                return u->status;
+            }
         }
     }
     refuse(u, action, &err);
@@ -758,235 +767,16 @@ int rm_last_successful_time(RmUnit* u, double* t)
     return u->status;
 }
 
-/* ------------------------------------------------------------------ held inputs */
-void rm_boundary_start(const RmUnit* u, RmBoundary* b)
-{
-    for (int k = 0; k < u->cls->n_start; k++) b->initial_inputs[k] = u->values[u->cls->start_vr[k]].r;
-    b->first_step = 1;
-    b->has_last_motion = 0;
-    for (int k = 0; k < 4; k++) b->last_motion[k] = 0.0;
-}
+double rm_time(const RmUnit* u) { return u != NULL ? u->time : NAN; }
 
-int rm_motion_held(const RmUnit* u, const RmBoundary* b)
-{
-    if (!u->motion_set) return 1;
-    if (!b->has_last_motion) return 0;
-    for (int k = 0; k < u->cls->n_motion; k++)
-        if (!(u->values[u->cls->motion_vr[k]].r == b->last_motion[k])) return 0;
-    return 1;
-}
-
-void rm_motion_step_done(RmUnit* u, RmBoundary* b)
-{
-    for (int k = 0; k < u->cls->n_motion; k++) b->last_motion[k] = u->values[u->cls->motion_vr[k]].r;
-    b->has_last_motion = 1;
-    b->first_step = 0;
-    u->motion_set = 0;
-}
-
-int rm_first_step_differs(const RmBoundary* b, int settle, const double* values, int n)
-{
-    if (!b->first_step || !settle) return 0;
-    for (int k = 0; k < n; k++)
-        if (values[k] != b->initial_inputs[k]) return 1;
-    return 0;
-}
-
-void rm_settled_warning(RmUnit* u, const RmBoundary* b, const double* given, const char* what)
-{
-    RmText t;
-    rm_text_init(&t);
-    rm_puts(&t, "doStep at the first step: the inputs (");
-    for (int k = 0; k < u->cls->n_start; k++) {
-        const RmVariable* v = &u->variables[u->cls->start_vr[k]];
-        if (k) rm_puts(&t, ", ");
-        rm_printf(&t, "%s = ", v->name);
-        rm_put_number(&t, given[k]);
-        rm_printf(&t, " %s", v->unit);
-    }
-    rm_puts(&t, ") differ from those at the end of initialization (");
-    for (int k = 0; k < u->cls->n_start; k++) {
-        if (k) rm_puts(&t, ", ");
-        rm_put_number(&t, b->initial_inputs[k]);
-    }
-    rm_printf(&t, "): %s (init.settle_first_step; a master that exchanges no values during "
-                  "initialization)", what);
-    rm_report(u, RM_WARNING, rm_text_str(&t));
-    rm_text_free(&t);
-}
-
-/* ------------------------------------------------------------------ records */
-static void write_raw(RmWriter* w, const void* p, size_t n)
-{
-    if (w->failed) return;
-    if (w->len + n > w->cap) {
-        size_t cap = w->cap ? w->cap : 256;
-        while (cap < w->len + n) cap *= 2;
-        unsigned char* q = realloc(w->data, cap);
-        if (q == NULL) {
-            w->failed = 1;
-            return;
-        }
-        w->data = q;
-        w->cap = cap;
-    }
-    memcpy(w->data + w->len, p, n);
-    w->len += n;
-}
-
-void rm_write_bytes(RmWriter* w, const void* p, size_t n) { write_raw(w, p, n); }
-
-void rm_write_u32(RmWriter* w, uint32_t x)
-{
-    unsigned char b[4];
-    for (int k = 0; k < 4; k++) b[k] = (unsigned char)(x >> (8 * k));
-    write_raw(w, b, 4);
-}
-
-void rm_write_i64(RmWriter* w, int64_t x)
-{
-    uint64_t v = (uint64_t)x;
-    unsigned char b[8];
-    for (int k = 0; k < 8; k++) b[k] = (unsigned char)(v >> (8 * k));
-    write_raw(w, b, 8);
-}
-
-void rm_write_f64(RmWriter* w, double x)
-{
-    uint64_t v;
-    memcpy(&v, &x, 8);
-    rm_write_i64(w, (int64_t)v);
-}
-
-const unsigned char* rm_read_bytes(RmReader* r, size_t n)
-{
-    if (r->failed || n > r->len - r->pos) {
-        r->failed = 1;
-        return NULL;
-    }
-    const unsigned char* p = r->data + r->pos;
-    r->pos += n;
-    return p;
-}
-
-uint32_t rm_read_u32(RmReader* r)
-{
-    const unsigned char* b = rm_read_bytes(r, 4);
-    uint32_t x = 0;
-    if (b != NULL)
-        for (int k = 0; k < 4; k++) x |= (uint32_t)b[k] << (8 * k);
-    return x;
-}
-
-int64_t rm_read_i64(RmReader* r)
-{
-    const unsigned char* b = rm_read_bytes(r, 8);
-    uint64_t x = 0;
-    if (b != NULL)
-        for (int k = 0; k < 8; k++) x |= (uint64_t)b[k] << (8 * k);
-    return (int64_t)x;
-}
-
-double rm_read_f64(RmReader* r)
-{
-    uint64_t v = (uint64_t)rm_read_i64(r);
-    double x;
-    memcpy(&x, &v, 8);
-    return x;
-}
-
-int rm_read_ended(const RmReader* r, const char* what, RmText* err)
-{
-    if (!r->failed) return 0;
-    rm_printf(err, "the record ends before %s", what);
-    return 1;
-}
-
-int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out, RmText* err)
-{
-    double x = rm_read_f64(r);
-    if (rm_read_ended(r, what, err)) return 0;
-    if (!isfinite(x) || (nonnegative && !(x >= 0.0))) {
-        rm_printf(err, "%s = ", what);
-        rm_put_number(err, x);
-        rm_puts(err, nonnegative ? ": expected a finite number >= 0" : ": expected a finite number");
-        return 0;
-    }
-    *out = x;
-    return 1;
-}
-
-void rm_boundary_save(const RmUnitClass* cls, const RmBoundary* b, RmWriter* w)
-{
-    for (int k = 0; k < cls->n_start; k++) rm_write_f64(w, b->initial_inputs[k]);
-    rm_write_u32(w, (uint32_t)b->first_step);
-    rm_write_u32(w, (uint32_t)b->has_last_motion);
-    for (int k = 0; k < cls->n_motion; k++) rm_write_f64(w, b->last_motion[k]);
-}
-
-int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmText* err)
-{
-    for (int k = 0; k < cls->n_start; k++)
-        if (!rm_read_finite(r, "an input at the end of initialization", 0, &b->initial_inputs[k],
-                            err))
-            return 0;
-    uint32_t first = rm_read_u32(r), has_last = rm_read_u32(r);
-    if (rm_read_ended(r, "the first-step flags", err)) return 0;
-    if (first > 1 || has_last > 1) {
-        rm_puts(err, "the record's first-step flags are not 0 or 1");
-        return 0;
-    }
-    b->first_step = (int)first;
-    b->has_last_motion = (int)has_last;
-    for (int k = 0; k < cls->n_motion; k++) {
-        double x = rm_read_f64(r);
-        if (rm_read_ended(r, "the motion inputs of the last step", err)) return 0;
-        if (has_last && !isfinite(x)) {
-            rm_puts(err, "the record's motion inputs of the last step are not finite");
-            return 0;
-        }
-        b->last_motion[k] = x;
-    }
-    return 1;
-}
-
-static int save_record(RmUnit* u, RmWriter* w)
-{
-    rm_write_bytes(w, RECORD_MAGIC, 8);
-    rm_write_u32(w, RECORD_VERSION);
-    rm_write_u32(w, (uint32_t)u->kind);
-    rm_write_u32(w, (uint32_t)u->phase);
-    rm_write_u32(w, (uint32_t)u->motion_set);
-    rm_write_f64(w, u->start_time);
-    rm_write_f64(w, u->time);
-    rm_write_u32(w, (uint32_t)u->n_variables);
-    for (size_t k = 0; k < u->n_variables; k++) {
-        const RmVariable* v = &u->variables[k];
-        const RmValue* x = &u->values[k];
-        if (v->causality == RM_OUTPUT) continue; /* computed from the model */
-        switch (v->type) {
-        case RM_REAL: rm_write_f64(w, x->r); break;
-        case RM_STRING: {
-            size_t n = x->s != NULL ? strlen(x->s) : 0;
-            rm_write_u32(w, (uint32_t)n);
-            rm_write_bytes(w, x->s != NULL ? x->s : "", n);
-            break;
-        }
-        default: rm_write_i64(w, x->i);
-        }
-    }
-    rm_write_u32(w, u->model != NULL);
-    if (u->model != NULL) u->cls->save(u->model, w);
-    return !w->failed;
-}
-
+/* ------------------------------------------------------------------ states (record.c) */
 int rm_save(RmUnit* u, unsigned char* buf, size_t capacity, size_t* size)
 {
     if (u == NULL) return RM_ERROR;
     begin(u);
     if (size == NULL) return refuse_text(u, "getFMUstate", "the size pointer is NULL");
     RmWriter w = {NULL, 0, 0, 0};
-    if (!save_record(u, &w)) {
+    if (!rm_record_write(u, &w)) {
         free(w.data);
         return refuse_text(u, "getFMUstate", "out of memory");
     }
@@ -1003,13 +793,98 @@ int rm_save_alloc(RmUnit* u, unsigned char** record, size_t* size)
     if (record == NULL || size == NULL)
         return refuse_text(u, "getFMUstate", "the record or size pointer is NULL");
     RmWriter w = {NULL, 0, 0, 0};
-    if (!save_record(u, &w) || w.data == NULL) {
+    if (!rm_record_write(u, &w) || w.data == NULL) {
         free(w.data);
         return refuse_text(u, "getFMUstate", "out of memory");
     }
     *record = w.data;
     *size = w.len;
     return u->status;
+}
+
+/* The header's fields that must go with this unit and with each other: 1, or 0 with the
+ * refusal. */
+static int header_fits(const RmUnit* u, const RmRecordHeader* h, RmText* err)
+{
+    if (h->kind != (uint32_t)u->kind || h->n_variables != u->n_variables) {
+        rm_printf(err, "it is a state of another unit (kind %u with %u variables, this is kind "
+                       "%d with %zu)", h->kind, h->n_variables, u->kind, u->n_variables);
+        return 0;
+    }
+    if (h->phase > RM_TERMINATED || h->motion_set > 1) {
+        rm_printf(err, "its mode %u is not one of 0 (instantiated) to 3 (terminated)", h->phase);
+        return 0;
+    }
+    double t0 = h->start_time, t = h->time;
+    if (!(isfinite(t0) && fabs(t0) <= MAX_START_TIME && isfinite(t) && t >= t0
+          && t - t0 <= MAX_RUN_LENGTH && (h->phase >= RM_STEPPING || t == t0))) {
+        rm_puts(err, "its start time ");
+        rm_put_number(err, t0);
+        rm_puts(err, " s and time ");
+        rm_put_number(err, t);
+        rm_printf(err, " s do not go together; allowed: finite, |start time| <= %g s, start "
+                       "time <= time <= start time + %g s, time = start time before the "
+                       "first step", MAX_START_TIME, MAX_RUN_LENGTH);
+        return 0;
+    }
+    return 1;
+}
+
+/* The model of the record's state (NULL when it has none) read after its values, checked
+ * against the record's parameters: 1 with *model, or 0 with the refusal. */
+static int read_model(RmUnit* u, RmReader* r, const RmRecordHeader* h, RmValue* values,
+                      void** model, RmText* err)
+{
+    *model = NULL;
+    uint32_t has_model = rm_read_u32(r);
+    if (rm_read_ended(r, "the flag of the model state", err)) return 0;
+    int expected = h->phase == RM_STEPPING || (h->phase == RM_TERMINATED && has_model == 1);
+    if (has_model > 1 || expected != (int)has_model) {
+        rm_printf(err, "mode '%s' does not go with %s model state", PHASE_NAMES[h->phase],
+                  has_model == 1 ? "a" : "no");
+        return 0;
+    }
+    if (!has_model) return 1;
+    /* the parameters of the state, checked, build the model's fixed part; the record sets its
+     * state (nothing is solved, no file read) */
+    RmValue* mine = u->values;
+    double saved_start = u->start_time, saved_time = u->time;
+    u->values = values;
+    u->start_time = h->start_time;
+    u->time = h->time;
+    if (check_parameter_values(u, values, err)) *model = u->cls->restore(u, r, err);
+    u->values = mine;
+    u->start_time = saved_start;
+    u->time = saved_time;
+    return *model != NULL;
+}
+
+/* The restored state made the unit's: its values (the outputs computed from the model; a
+ * state without one -- taken before the end of initialization, or terminated from it --
+ * outputs what a fresh unit does, the table's values, not what this unit's earlier run
+ * left), model, mode and times.  Takes values and model over. */
+static void commit_state(RmUnit* u, const RmRecordHeader* h, RmValue* values, void* model)
+{
+    for (size_t k = 0; k < u->n_variables; k++) {
+        const RmVariable* v = &u->variables[k];
+        if (v->causality != RM_OUTPUT) continue;
+        values[k] = u->values[k];
+        if (model == NULL) {
+            values[k].r = v->type == RM_REAL ? v->start : 0.0;
+            values[k].i = v->type == RM_REAL ? 0 : (int64_t)v->start;
+        }
+    }
+    if (u->model != NULL) u->cls->free_model(u->model);
+    u->model = model;
+    free_values(u->values, u->n_variables);
+    free(u->values);
+    u->values = values;
+    u->phase = (int)h->phase;
+    u->start_time = h->start_time;
+    u->time = h->time;
+    u->motion_set = (int)h->motion_set;
+    u->stale = u->model != NULL ? u->cls->all_groups : 0;
+    u->provisional_valid = 0;
 }
 
 int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
@@ -1019,151 +894,29 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
     begin(u);
     if (buf == NULL && size > 0) return refuse_text(u, action, "the record is NULL");
     RmReader r = {buf, size, 0, 0};
+    RmRecordHeader h;
     RmText err;
     rm_text_init(&err);
     RmValue* values = calloc(u->n_variables, sizeof *values);
     void* model = NULL;
     int ok = 0;
-    if (values == NULL) {
+    if (values == NULL)
         rm_puts(&err, "out of memory");
-        goto done;
+    else if (rm_record_read_header(&r, &h, &err) && header_fits(u, &h, &err)
+             && rm_record_read_values(&r, u->variables, u->n_variables, values, &err)
+             && read_model(u, &r, &h, values, &model, &err)) {
+        if (r.pos != r.len)
+            rm_printf(&err, "%zu bytes follow the end of the record", r.len - r.pos);
+        else
+            ok = 1;
     }
-    if (size == 0) {
-        rm_puts(&err, "it is not a state of this model (the record is empty)");
-        goto done;
+    if (ok) {
+        commit_state(u, &h, values, model);
     }
-    /* a record cut inside its magic is a truncated record; other bytes are no record */
-    const unsigned char* magic = rm_read_bytes(&r, 8);
-    if (memcmp(buf, RECORD_MAGIC, size < 8 ? size : 8) != 0) {
-        rm_puts(&err, "it is not a state of this model (no record header)");
-        goto done;
-    }
-    uint32_t version = rm_read_u32(&r), kind = rm_read_u32(&r), phase = rm_read_u32(&r);
-    uint32_t motion_set = rm_read_u32(&r);
-    double start_time = rm_read_f64(&r), time = rm_read_f64(&r);
-    uint32_t n = rm_read_u32(&r);
-    if (magic == NULL || r.failed) {
-        rm_printf(&err, "the record ends before the end of its header (%zu bytes of %zu)", size,
-                  RECORD_HEADER_BYTES);
-        goto done;
-    }
-    if (version != RECORD_VERSION) {
-        rm_printf(&err, "its record version is %u, this model reads version %u", version,
-                  RECORD_VERSION);
-        goto done;
-    }
-    if (kind != (uint32_t)u->kind || n != u->n_variables) {
-        rm_printf(&err, "it is a state of another unit (kind %u with %u variables, this is kind "
-                        "%d with %zu)", kind, n, u->kind, u->n_variables);
-        goto done;
-    }
-    if (phase > RM_TERMINATED || motion_set > 1) {
-        rm_printf(&err, "its mode %u is not one of 0 (instantiated) to 3 (terminated)", phase);
-        goto done;
-    }
-    if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME && isfinite(time)
-          && time >= start_time && time - start_time <= MAX_RUN_LENGTH
-          && (phase >= RM_STEPPING || time == start_time))) {
-        rm_puts(&err, "its start time ");
-        rm_put_number(&err, start_time);
-        rm_puts(&err, " s and time ");
-        rm_put_number(&err, time);
-        rm_printf(&err, " s do not go together; allowed: finite, |start time| <= %g s, start "
-                        "time <= time <= start time + %g s, time = start time before the "
-                        "first step", MAX_START_TIME, MAX_RUN_LENGTH);
-        goto done;
-    }
-    for (size_t k = 0; k < u->n_variables; k++) {
-        const RmVariable* v = &u->variables[k];
-        RmValue* x = &values[k];
-        if (v->causality == RM_OUTPUT) continue;
-        switch (v->type) {
-        case RM_REAL: x->r = rm_read_f64(&r); break;
-        case RM_STRING: {
-            uint32_t len = rm_read_u32(&r);
-            const unsigned char* s = rm_read_bytes(&r, len);
-            if (s == NULL) break;
-            x->s = malloc((size_t)len + 1);
-            if (x->s == NULL) {
-                rm_puts(&err, "out of memory");
-                goto done;
-            }
-            memcpy(x->s, s, len);
-            x->s[len] = '\0';
-            if (strlen(x->s) != len
-                || rm_utf8_error_at((const unsigned char*)x->s, len) != (size_t)-1) {
-                rm_printf(&err, "variable '%s' is not UTF-8 text without NUL characters",
-                          v->name);
-                goto done;
-            }
-            break;
-        }
-        default: {
-            int64_t i = rm_read_i64(&r);
-            if (!r.failed && ((v->type == RM_BOOLEAN && (i < 0 || i > 1))
-                              || (v->type == RM_INTEGER && (i < -2147483647LL - 1 || i > 2147483647LL)))) {
-                rm_printf(&err, "variable '%s' = %lld: expected %s", v->name, (long long)i,
-                          v->type == RM_BOOLEAN ? "0 or 1" : "a 32-bit integer");
-                goto done;
-            }
-            x->i = i;
-        }
-        }
-        if (r.failed) {
-            rm_printf(&err, "the record ends before variable '%s'", v->name);
-            goto done;
-        }
-    }
-    uint32_t has_model = rm_read_u32(&r);
-    if (rm_read_ended(&r, "the flag of the model state", &err)) goto done;
-    int model_expected = phase == RM_STEPPING || (phase == RM_TERMINATED && has_model == 1);
-    if (has_model > 1 || model_expected != (int)has_model) {
-        rm_printf(&err, "mode '%s' does not go with %s model state", PHASE_NAMES[phase],
-                  has_model == 1 ? "a" : "no");
-        goto done;
-    }
-    if (has_model) {
-        /* the parameters of the state, checked, build the model's fixed part; the record sets
-         * its state (nothing is solved, no file read) */
-        RmValue* mine = u->values;
-        u->values = values;
-        double saved_start = u->start_time, saved_time = u->time;
-        u->start_time = start_time;
-        u->time = time;
-        if (check_parameter_values(u, values, &err)) model = u->cls->restore(u, &r, &err);
-        u->values = mine;
-        u->start_time = saved_start;
-        u->time = saved_time;
-        if (model == NULL) goto done;
-    }
-    if (r.pos != r.len) {
-        rm_printf(&err, "%zu bytes follow the end of the record", r.len - r.pos);
-        goto done;
-    }
-    /* commit */
-    for (size_t k = 0; k < u->n_variables; k++)
-        if (u->variables[k].causality == RM_OUTPUT) values[k] = u->values[k];
-    if (u->model != NULL) u->cls->free_model(u->model);
-    u->model = model;
-    model = NULL;
-    free_values(u->values, u->n_variables);
-    free(u->values);
-    u->values = values;
-    values = NULL;
-    u->phase = (int)phase;
-    u->start_time = start_time;
-    u->time = time;
-    u->motion_set = (int)motion_set;
-    u->stale = u->model != NULL ? u->cls->all_groups : 0;
-    u->provisional_valid = 0;
-    ok = 1;
-done:
-    if (model != NULL) u->cls->free_model(model);
-    if (values != NULL) {
-        free_values(values, u->n_variables);
+    else {
+        if (model != NULL) u->cls->free_model(model);
+        if (values != NULL) free_values(values, u->n_variables);
         free(values);
-    }
-    if (!ok) {
         RmText t;
         rm_text_init(&t);
         rm_printf(&t, "the FMU state is invalid: %s; nothing changed", rm_text_str(&err));

@@ -221,7 +221,7 @@ int rm_driveline_start_outputs(RmUnit* u, double start_time, double phi_w, doubl
     return 1;
 }
 
-static int step(RmUnit* u, double t, double h, RmText* err)
+static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
 {
     DrivelineModel* m = u->model;
     RmDriveline* d = &m->d;
@@ -277,7 +277,8 @@ static int step(RmUnit* u, double t, double h, RmText* err)
     rm_motion_step_done(u, &m->boundary);
     if (settled)
         rm_settled_warning(u, &m->boundary, used,
-                           "the output shaft was started anew in steady state behind them");
+                           "the output shaft was started anew in steady state behind them",
+                           warning);
     return 1;
 }
 
@@ -383,7 +384,11 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
     }
     ok = ok && rm_boundary_restore(&RM_DRIVELINE_CLASS, &m->boundary, r, err)
          && rm_read_finite(r, "the wheel's angle at the last step's end", 0, &m->wheel_end[0], err)
-         && rm_read_finite(r, "the wheel's speed at the last step's end", 0, &m->wheel_end[1], err);
+         && rm_read_within(r, "the wheel's speed at the last step's end",
+                           rm_max(fabs(u->variables[RM_DRIVELINE_WHEEL_W].min),
+                                  fabs(u->variables[RM_DRIVELINE_WHEEL_W].max)),
+                           "rad/s", "input wheel.w's range: a held wheel keeps its speed",
+                           &m->wheel_end[1], err);
     if (!ok) {
         free_model(m);
         return NULL;

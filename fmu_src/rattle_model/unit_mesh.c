@@ -174,7 +174,7 @@ int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
     return 1;
 }
 
-static int step(RmUnit* u, double t, double h, RmText* err)
+static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
 {
     MeshModel* m = u->model;
     const RmValue* values = u->values;
@@ -239,7 +239,8 @@ static int step(RmUnit* u, double t, double h, RmText* err)
     rm_motion_step_done(u, &m->boundary);
     if (settled)
         rm_settled_warning(u, &m->boundary, used,
-                           "the wheel was settled in the flank equilibrium for them first");
+                           "the wheel was settled in the flank equilibrium for them first",
+                           warning);
     return 1;
 }
 
@@ -419,6 +420,13 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
     RmWheel* st = &m->wheel;
     RmLast* l = &m->last;
     int64_t flank = 0;
+    /* the pinion's speed at a step's end, w_p + a_p h: within pinion.w's range plus
+     * pinion.a's over the longest step (a held pinion keeps it); beyond it a held step would
+     * run the teeth through each other at any speed */
+    const RmVariable* vars = u->variables;
+    double w_reach = rm_max(fabs(vars[RM_MESH_PINION_W].min), fabs(vars[RM_MESH_PINION_W].max))
+                     + rm_max(fabs(vars[RM_MESH_PINION_A].min), fabs(vars[RM_MESH_PINION_A].max))
+                           * u->values[RM_MESH_SOLVER_H_COMM_MAX].r;
     int ok = rm_read_finite(r, "the wheel angle", 0, &st->phi, err)
              && rm_read_finite(r, "the wheel speed", 0, &st->w, err);
     if (ok) {
@@ -444,7 +452,9 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
          && read_count(r, "the last step's drive onsets", &l->onsets_drive, err)
          && read_count(r, "the last step's coast onsets", &l->onsets_coast, err)
          && rm_read_finite(r, "the pinion angle", 0, &l->pinion_phi, err)
-         && rm_read_finite(r, "the pinion speed", 0, &l->pinion_w, err)
+         && rm_read_within(r, "the pinion speed", w_reach, "rad/s", "|pinion.w| + |pinion.a| "
+                           "solver.h_comm_max at their bounds, what a step reaches", &l->pinion_w,
+                           err)
          && rm_boundary_restore(&RM_MESH_CLASS, &m->boundary, r, err)
          && rm_read_finite(r, "the contact's Hunt-Crossley factor", 1, &st->diss.d, err);
     if (ok) {

@@ -11,8 +11,10 @@ with any values (NaN, infinities, huge, invalid UTF-8, FIFO and device paths), s
 size and communication point, FMU states got, reused, set, freed, serialized into short and
 long buffers, deserialized from damaged bytes and from edited records RE-SEALED (a valid
 envelope around a changed record, so that they reach the library's checks in rm_restore),
-debug-logging categories, status queries, unsupported functions -- and frees it.  NULL and
-dangling pointers are left out (FMI does not allow them).
+debug-logging categories, status queries, unsupported functions, inputs at their declared
+bounds and steps on them (the costliest work a step does) -- and frees it.  NULL and dangling
+pointers are left out (FMI does not allow them).  Every call into the FMU is timed
+(call_clock.py): the summary holds the slowest and the one nearest its bound.
 
 What makes a run fail:
 
@@ -61,6 +63,7 @@ from raw_fmi import (
     unpack,
     with_payload,
 )
+from call_clock import CallClock
 from records import MESH_MODEL, Record
 from shadow import TYPES, Shadow
 
@@ -73,18 +76,23 @@ PRISTINE_STEPS = (H, 5e-5)
 #: The operations on FMU states whose counts a run must reach.
 STATE_OPS = ("get_state", "set_state", "free_state", "serialize", "deserialize",
              "set_resealed")
-#: Refusals of a step that cost the stepper its whole budget (up to 200 000 contact substeps,
-#: about 0.3 s): after one of them an example makes no more steps (the run's time stays
+#: Refusals of a step that cost the stepper its whole work budget (docs/fmi.md: "How long a
+#: call can take"): after one of them an example makes no more steps (the run's time stays
 #: bounded; the same refusal again tells nothing new).
-COSTLY_REFUSALS = ("too stiff to resolve", "would penetrate")
+COSTLY_REFUSALS = ("too stiff to resolve", "would penetrate", "more work than its budget")
+#: The inputs' declared bounds and a few values between, for the costly steps: a pinion at
+#: its fastest and most accelerated, the largest load, the Driveline's fastest wheel.
+EXTREME_SPEEDS = (1e4, -1e4, 3e3, 0.0)
+EXTREME_ACCELERATIONS = (1e7, -1e7, 1e5, 0.0)
+EXTREME_LOADS = (1e5, -1e5, 0.15, 0.0)
 COSTLY_PER_EXAMPLE = 1
 #: Deserialize variants: the envelope intact (accepted) or damaged (refused).
 INTACT = ("as is", "pad", "reseal flip", "reseal truncate", "reseal field", "reseal extend")
 DAMAGED = ("flip", "truncate", "guid", "garbage")
 
-interesting_floats = [0.0, -0.0, 1.0, -1.0, 1e-4, 0.15, 44.57, 86.92, 300.0, 1e5, -1e5, 1e6,
-                      1e9, 5e9, 1e15, 1e300, -1e300, 1.7e308, 5e-324, math.nan, math.inf,
-                      -math.inf]
+interesting_floats = [0.0, -0.0, 1.0, -1.0, 1e-4, 0.15, 44.57, 86.92, 300.0, 1e4, -1e4, 1e5,
+                      -1e5, 1e6, 1e7, -1e7, 1.001e7, 1e9, 5e9, 1e15, 1e300, -1e300, 1.7e308,
+                      5e-324, math.nan, math.inf, -math.inf]
 floats_any = st.one_of(st.sampled_from(interesting_floats),
                        st.floats(allow_nan=True, allow_infinity=True))
 ints_any = st.one_of(st.sampled_from([0, 1, -1, 2, 3, 7, 20, 39, 400, 2**31 - 1, -(2**31)]),
@@ -254,13 +262,20 @@ def call_strategy(f: Fuzz):
                                       ("inputs", 1.0), ("exit",)]
                         + [c for _ in range(n) for c in (("inputs", 1.0), ("step", "next", h))],
                         st.integers(1, 4), st.sampled_from(PRISTINE_STEPS))
+    # Inputs at their declared bounds and steps on them: the costliest work of a step.
+    costly = st.builds(lambda w, a, tau, n, h: [c for _ in range(n)
+                                                for c in (("extreme", w, a, tau),
+                                                          ("step", "next", h))],
+                       st.sampled_from(EXTREME_SPEEDS), st.sampled_from(EXTREME_ACCELERATIONS),
+                       st.sampled_from(EXTREME_LOADS), st.integers(1, 3),
+                       st.sampled_from([H, H, 5e-5, 1e-3]))
     resealed = st.builds(lambda d: [d, ("set_state", d[1])],
                          st.tuples(st.just("deserialize"), slot, st.integers(0, 10**6),
                                    st.sampled_from(INTACT[2:]), floats_any, wide_ints))
     one = single.map(lambda c: [c])
     # sampled_from weighs its choices evenly (one_of favours its first branches)
     return st.sampled_from([one, one, one, one, initialize, session, run, run, rollback,
-                            resealed, mixed_set(f)]).flatmap(lambda s: s)
+                            resealed, costly, mixed_set(f)]).flatmap(lambda s: s)
 
 
 def mixed_set(f: Fuzz):
@@ -304,6 +319,14 @@ def realistic(f: Fuzz, scale: float, t: float) -> dict:
         w = 86.92 * scale
         return {"pinion.phi": w * t, "pinion.w": w, "pinion.a": 0.0, "wheel.tau_load": 0.15}
     return {"wheel.phi": 44.57 * scale * t, "wheel.w": 44.57 * scale}
+
+
+def extreme(f: Fuzz, w: float, a: float, tau: float, t: float) -> dict:
+    """Inputs at or near their declared bounds at time t (the angle consistent with the
+    speed)."""
+    if "pinion.w" in f.inputs:
+        return {"pinion.phi": w * t, "pinion.w": w, "pinion.a": a, "wheel.tau_load": tau}
+    return {"wheel.phi": w * t, "wheel.w": w}
 
 
 def damaged(blob: bytes, how: str, at: int) -> bytes:
@@ -468,6 +491,14 @@ class Example:
                 for name, value in values.items():
                     expected = max(expected, shadow.set("Real", [m.vr(name)], [value]))
             keeps_pristine = call[1] == 1.0
+            self.motion_fresh = status == OK
+        elif op == "extreme":
+            values = extreme(f, *call[1:], next_t)
+            status = inst.set_named(values)
+            if shadow is not None:
+                expected = OK
+                for name, value in values.items():
+                    expected = max(expected, shadow.set("Real", [m.vr(name)], [value]))
             self.motion_fresh = status == OK
         elif op == "defaults":  # every parameter back to its start value
             status = OK
@@ -726,6 +757,8 @@ def minimum_counts(examples: int) -> dict:
 def main(fmu: Path, examples: int, seed_value: int, work: Path, use_shadow: bool = True,
          shrink: bool = True) -> dict:
     model = Model(unpack(fmu, work / fmu.stem))
+    clock = CallClock()
+    model.lib = clock.wrap(model.lib)  # every call into the FMU timed
     assert CO_SIMULATION == 1
     table = work / "speed.csv"
     table.write_text("time,speed\n0,80\n0.5,95\n1,85\n")
@@ -748,6 +781,7 @@ def main(fmu: Path, examples: int, seed_value: int, work: Path, use_shadow: bool
     summary = {"fmu": fmu.stem, "examples": examples, "seed": seed_value, "calls": f.calls,
                "refused": f.refusals, "compared with the library": f.compared,
                "counts": counts, "steps skipped after costly refusals": f.steps_skipped,
+               **clock.summary(),
                "by_call": f.by_op,
                "statuses": {name: f.by_status.get(s, 0) for s, name in
                             ((OK, "OK"), (WARNING, "Warning"), (DISCARD, "Discard"),

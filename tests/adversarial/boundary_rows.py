@@ -216,6 +216,20 @@ def row_4(fmus, work):
     assert inst.set("String", [vr], ["Übersetzung.csv"]) == OK
     assert inst.get_named("engine.speed_table") == "Übersetzung.csv"
     inst.free()
+    # A NULL String after initialization and after terminate: refused (by the library as a
+    # fixed parameter, naming the NULL value, or as a call after terminate; by the pythonfmu
+    # face's glue as a NULL value first), nothing changed.
+    inst = started(model, DRIVE_INPUTS, steps=1)
+    for mode, fragment in (("stepping", "value NULL rejected"),
+                           ("terminated", "after terminate")):
+        if mode == "terminated":
+            assert inst.terminate() == OK
+        before = inst.snapshot()
+        n = len(inst.log)
+        text = refused(inst, inst.set("String", [vr], [None]), n)
+        assert fragment in text or "is NULL" in text, (mode, text)
+        assert inst.snapshot() == before
+    inst.free()
 
 
 def row_5(fmus, work):
@@ -716,6 +730,34 @@ def row_15(fmus, work):
         n = len(inst.log)
         refused(inst, inst.step(5e9, 1e-7), n, "does not advance the time 5e+09 s")
         inst.free_state(state)
+        inst.free()
+
+
+def row_16(fmus, work):
+    """A state taken before the first step -- in Instantiated Mode, or after terminate from
+    Initialization Mode -- set into an instance that ran since: its outputs are those it was
+    taken with, not the run's (wheel.w came back as 44.57 instead of 0)."""
+    for name, fmu in fmus.items():
+        model = Model(unpack(fmu, work / name))
+        inputs = MESH_INPUTS if name == "GearMeshRattle" else DRIVE_INPUTS
+        inst = model.instantiate()
+        taken = []
+        for how in ("instantiated", "terminated from initialization"):
+            if how != "instantiated":
+                assert inst.setup(0.0) == OK and inst.enter() == OK and inst.terminate() == OK
+            st, state = inst.get_state()
+            assert st == OK, inst.log[-2:]
+            taken.append((how, state, inst.snapshot()))
+        for how, state, snapshot in taken:
+            assert inst.reset() == OK
+            assert inst.setup(0.0) == OK and inst.enter() == OK
+            assert inst.set_named(inputs) == OK and inst.exit() == OK, inst.log[-2:]
+            for k in range(3):
+                advance(inst, k)
+            assert inst.snapshot() != snapshot  # the run moved the outputs
+            assert inst.set_state(state) == OK, (how, inst.log[-2:])
+            assert inst.snapshot() == snapshot, how
+            inst.free_state(state)
         inst.free()
 
 

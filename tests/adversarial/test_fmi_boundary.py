@@ -38,9 +38,14 @@ ROWS = {
     13: "counters saturate at the fmi2Integer limit",
     14: "non-UTF-8 unpack path; value references >= 2^31 reported unsigned",
     15: "no OK with a non-finite output or state (issue 20)",
+    16: "a state taken before the first step restores its outputs",
 }
 #: Examples per FMU and run: about 6000 calls per FMU, 5 to 20 s on the CI machine.
 FUZZ_EXAMPLES = 250
+#: The factor by which a call may exceed its bound (docs/fmi.md, "How long a call can take")
+#: on a loaded machine: the bound is met on an idle one with room (a budget's step is some
+#: 14 ms of CPU); 2 cores shared by several test runs stretch its wall time about 2.5 times.
+LOADED = 4.0
 
 
 def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
@@ -86,6 +91,15 @@ def test_boundary_fuzzer(name, flavour_fmus, tmp_path):
     # the library's answer; the fuzzer itself enforced its minimum of every state call.
     assert summary["refused"] >= 200 and summary["statuses"]["OK"] >= 500
     assert summary["compared with the library"] >= summary["calls"] // 2
+    # No call ran longer than its bound (docs/fmi.md: 50 ms per 1e-4 s of step), with a
+    # margin of LOADED for a machine shared with other jobs (the fuzzer's own shadow runs
+    # beside it).
+    slowest, nearest = summary["slowest call"], summary["nearest the bound"]
+    print(f"slowest call {name}: {slowest['seconds'] * 1e3:.1f} ms ({slowest['function']}, "
+          f"bound {slowest['bound'] * 1e3:.0f} ms); nearest its bound: "
+          f"{nearest['fraction']:.2f} of it ({nearest['function']}, "
+          f"{nearest['seconds'] * 1e3:.1f} ms)")
+    assert nearest["fraction"] <= LOADED, nearest
 
 
 @pytest.mark.parametrize("kind", ["GearMeshRattle", "Driveline"])

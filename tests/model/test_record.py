@@ -1,8 +1,10 @@
-"""The unit's binary record (rm_save and rm_restore, unit.c): a restored unit continues
-exactly, also in another unit never initialized and without its speed table's file; the
-onset counters saturate at the record's bound; a refused record changes nothing."""
+"""The unit's binary record (record.c; rm_save and rm_restore, unit.c): a restored unit
+continues exactly, also in another unit never initialized and without its speed table's file;
+the onset counters saturate at the record's bound; a refused record changes nothing; a record
+beyond what legal inputs reach is refused; a state without a model restores its outputs."""
 
 import math
+import struct
 
 import pytest
 
@@ -13,6 +15,7 @@ from drive_rattle import (
     DrivelineUnit,
     MeshParameters,
     MeshUnit,
+    ModelError,
     Unit,
 )
 from drive_rattle.library import DRIVELINE, MESH
@@ -137,3 +140,83 @@ def test_refused_records_leave_the_unit_unchanged():
                                                match="state is invalid")
         assert message.endswith("nothing changed")
     unit.restore(saved)  # the good one still restores
+
+
+# ------------------------------------------------------------------ values beyond reach
+def edited(unit, **changes) -> bytes:
+    """The unit's record with model fields (records.MESH_MODEL) or held inputs changed: the
+    held inputs are "initial.<k>" (at the end of initialization) and "last.<k>" (the last
+    step's motion inputs) of the boundary that follows the mesh's fields."""
+    variables = {n: (v.vr, v.type, v.causality) for n, v in unit.variables.items()}
+    record = Record.decode(unit.save(), variables)
+    rest = bytearray(record.rest)
+    for name, value in changes.items():
+        if name.startswith(("initial.", "last.")):
+            k = int(name.split(".")[1])
+            at = 8 * k if name.startswith("initial.") else 32 + 8 * k
+            rest[at:at + 8] = struct.pack("<d", value)
+        else:
+            record.model[name] = value
+    record.rest = bytes(rest)
+    return record.encode()
+
+
+@pytest.mark.parametrize("changes, match", [
+    # the last pinion speed: |pinion.w| + |pinion.a| solver.h_comm_max at most
+    ({"pinion_w": -1e20}, r"the pinion speed = -1e\+20 rad/s: expected within "
+                          r"\[-1.001e\+07, 1.001e\+07\] rad/s"),
+    ({"pinion_w": 1.002e7}, r"the pinion speed = 1.002e\+07 rad/s"),
+    # the inputs held by the boundary: within their declared ranges
+    ({"initial.1": 2e4}, r"input 'pinion\.w' at the end of initialization = 2e\+04: "
+                         r"expected within \[-10000, 10000\] rad/s"),
+    ({"last.2": -1e8}, r"input 'pinion\.a' of the last step = -1e\+08: expected within "
+                       r"\[-1e\+07, 1e\+07\] rad/s2"),
+])
+def test_a_record_beyond_what_legal_inputs_reach_is_refused(changes, match):
+    """A record's pinion speed and held inputs beyond what the unit reaches from inputs in
+    their declared ranges (a state with the last pinion speed at -1e20 rad/s made the next
+    held 1e-4 s step run for 38 s) are refused, naming the field, the value and the range."""
+    unit = history(MeshParameters(init_in_contact=False))  # solver.h_comm_max = 1 s
+    unit.step(H, 87.0 * 5 * H, 87.0, 0.0, 0.1)  # a last step: its motion inputs are held
+    record = edited(unit, **changes)
+    assert_refused_and_unchanged(unit, "rm_restore", record, len(record), match=match)
+    unit.restore(edited(unit))  # the same record unedited restores
+
+
+def test_the_fastest_record_a_held_step_meets_is_refused_within_its_budget():
+    """The fastest last pinion speed a record may hold, held for a 1e-4 s step: the pinion
+    runs 1000 rad through the teeth, refused within the step's work budget (10000 substeps
+    and 20000 evaluations of the loads per 1e-4 s) with a message naming it."""
+    unit = history(MeshParameters(init_in_contact=False))
+    unit.step(H, 87.0 * 5 * H, 87.0, 0.0, 0.1)
+    unit.restore(edited(unit, pinion_w=1.001e7))
+    with pytest.raises(ModelError, match="budget"):
+        unit.call("rm_do_step", unit.time, H)
+
+
+# ------------------------------------------------------------------ states without a model
+def taken_before_the_first_step(kind, how):
+    """A fresh unit's record taken in Instantiated Mode, or after terminate from
+    Initialization Mode (no model either way), and that unit's outputs then."""
+    unit = Unit(kind, initialize=False)
+    if how == "terminated from initialization":
+        unit.call("rm_setup", 3.0)
+        unit.call("rm_enter_initialization")
+        unit.terminate()
+    return unit.save(), unit.outputs(), unit._lib.rm_time(unit._ptr)
+
+
+@pytest.mark.parametrize("how", ["instantiated", "terminated from initialization"])
+@pytest.mark.parametrize("kind", [MESH, DRIVELINE])
+def test_a_state_taken_before_the_first_step_restores_its_outputs_and_time(kind, how):
+    """Restored into a unit that ran, a state taken before any step outputs what it was taken
+    with (a fresh unit's values), not the earlier run's (wheel.w came back 44.57 instead of
+    0), and its time (rm_time) is the state's."""
+    record, outputs, time = taken_before_the_first_step(kind, how)
+    ran = Unit(kind)
+    ran.advance(H)
+    ran.advance(H)
+    assert ran.outputs() != outputs  # the run moved them
+    ran.restore(record)
+    assert ran.outputs() == outputs
+    assert ran._lib.rm_time(ran._ptr) == time == (0.0 if how == "instantiated" else 3.0)

@@ -200,6 +200,10 @@ int main(int argc, char** argv)
            fmi3Error);
     EXPECT(F.fmi3DoStep(c, 0.0, 1e-4, fmi3True, &flags[0], &flags[1], &flags[2], &value),
            fmi3OK);
+    if (has_string) { /* a NULL String in Step Mode: the fixed parameter's refusal */
+        text[0] = NULL;
+        EXPECT(F.fmi3SetString(c, &vr_string, 1, text, 1), fmi3Error);
+    }
     /* ---------------------------------------------------------------- FMU states */
     EXPECT(F.fmi3GetFMUState(c, NULL), fmi3Error);
     EXPECT(F.fmi3GetFMUState(c, &state), fmi3OK);
@@ -236,6 +240,10 @@ int main(int argc, char** argv)
     /* ---------------------------------------------------------------- the end */
     EXPECT(F.fmi3Terminate(c), fmi3OK);
     EXPECT(F.fmi3SetFloat64(c, &vr_input, 1, &value, 1), fmi3Error);
+    if (has_string) {
+        text[0] = NULL;
+        EXPECT(F.fmi3SetString(c, &vr_string, 1, text, 1), fmi3Error);
+    }
     EXPECT(F.fmi3Reset(c), fmi3OK);
     F.fmi3FreeInstance(c); /* with its live state */
     F.fmi3FreeInstance(other);

@@ -476,8 +476,18 @@ int main(int argc, char** argv)
         expect_status(F.fmi2Reset(c), fmi2OK, "reset with a state kept");
         expect_status(F.fmi2SetFMUstate(c, kept), fmi2OK, "a state kept over reset");
     }
+    if (has_string) { /* a NULL String in Step Mode: the fixed parameter's refusal */
+        const char* none = NULL;
+        expect_status(F.fmi2SetString(c, &vr_string, 1, &none), fmi2Error,
+                      "setString: NULL after initialization");
+    }
     expect_status(F.fmi2Terminate(c), fmi2OK, "terminate");
     expect_status(F.fmi2Terminate(c), fmi2Error, "terminate twice");
+    if (has_string) {
+        const char* none = NULL;
+        expect_status(F.fmi2SetString(c, &vr_string, 1, &none), fmi2Error,
+                      "setString: NULL after terminate");
+    }
     x = 0.0;
     /* nothing is set after terminate (the library refuses it: reset first) */
     expect_status(F.fmi2SetReal(c, &vr_input, 1, &x), fmi2Error, "an input after terminate");
