@@ -47,7 +47,7 @@ from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
 from .native import CONFIG_HEADER, RESOURCE_MARKER, model_sources, render_config
-from .paths import DIST, FMI2_SOURCE, FMI3_SOURCE, MODEL_SOURCE, TEMPLATES
+from .paths import DIST, FMI2_SOURCE, FMI3_SOURCE, TEMPLATES, model_files
 from .platforms import (
     FMI3_SHIPPED,
     PLATFORMS,
@@ -109,7 +109,7 @@ def fmi3_token(model: str) -> str:
 
 def source_files() -> list[str]:
     """The C files of an FMU's sources/ that are compiled (buildDescription.xml's order)."""
-    return sorted(p.name for p in MODEL_SOURCE.glob("*.c")) + list(GLUE_SOURCES)
+    return [p.name for p in model_files("*.c")] + list(GLUE_SOURCES)
 
 
 def build_description(model: str) -> Element:

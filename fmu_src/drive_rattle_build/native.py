@@ -48,7 +48,7 @@ from .fmu import validate
 from .icon import model_png
 from .identity import fmu_guid
 from .library import source_flags
-from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
+from .paths import DIST, FMI2_SOURCE, TEMPLATES, model_files
 from .platforms import (
     FMI2_SHIPPED,
     PLATFORMS,
@@ -79,8 +79,9 @@ NATIVE_SUBDIR = "native"
 
 # ------------------------------------------------------------------ sources
 def model_sources() -> list[Path]:
-    """The model library's C sources and headers (the generated tables included)."""
-    return sorted(MODEL_SOURCE.glob("*.[ch]"))
+    """The model library's C sources and headers that ship (the generated tables included;
+    the test-only probes left out: ``paths.TEST_ONLY_SOURCES``)."""
+    return model_files("*.[ch]")
 
 
 def glue_files() -> list[Path]:
@@ -103,7 +104,7 @@ def native_guid(model: str) -> str:
 
 def source_files() -> list[str]:
     """The C files of an FMU's sources/ that are compiled, in <SourceFiles> order."""
-    return sorted(p.name for p in MODEL_SOURCE.glob("*.c")) + list(GLUE_SOURCES)
+    return [p.name for p in model_files("*.c")] + list(GLUE_SOURCES)
 
 
 def render_config(model: str, guid: str, face: str = "fmi2_functions.c") -> str:

@@ -27,6 +27,10 @@ CHECKOUT = (ROOT / "pyproject.toml").is_file() and (ROOT / "fmu_src" / "rattle_m
 SOURCE = ROOT / "fmu_src" if CHECKOUT else _PACKAGE / "sources"
 #: The model library: the one C implementation of the model (rattle_model.h).
 MODEL_SOURCE = SOURCE / "rattle_model"
+#: The model library's test-only files: the probes of its laws at given arguments (rm_probe.h).
+#: Compiled into the library built in place (what the Python API and the tests load), never into
+#: a shipped FMU's binary nor its sources/.
+TEST_ONLY_SOURCES = ("probe.c", "rm_probe.h")
 #: The FMI 2.0 face of the native FMUs and what it shares with the pythonfmu FMUs' status shim.
 FMI2_SOURCE = SOURCE / "fmi2"
 #: The FMI 3.0 face of the native FMI 3.0 FMUs (it compiles fmi2/rattle_fmi_common.c too).
@@ -52,6 +56,13 @@ def runtime_package(name: str) -> Path:
     import importlib
 
     return Path(importlib.import_module(name).__file__).resolve().parent
+
+
+def model_files(pattern: str = "*.[ch]", test_only: bool = False) -> list[Path]:
+    """The model library's files matching ``pattern``, sorted: those that ship
+    (``TEST_ONLY_SOURCES`` left out), or all of them with ``test_only``."""
+    return sorted(p for p in MODEL_SOURCE.glob(pattern)
+                  if test_only or p.name not in TEST_ONLY_SOURCES)
 
 
 def slave_module(model: str) -> Path:

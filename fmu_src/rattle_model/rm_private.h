@@ -23,6 +23,7 @@
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
  *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
+ *   probe.c         the laws at given arguments for the tests (rm_probe.h; test builds only)
  *   rm_tables.c     GENERATED from the Python specs: the variables of both units
  *
  * Numbers: every expression keeps the IEEE operations of the reference results (docs/model.md:
@@ -819,5 +820,8 @@ RM_INTERNAL int rm_driveline_start_outputs(RmUnit* u, double start_time, double 
                                            double w_w, double* out, RmText* err);
 RM_INTERNAL int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
                                     RmText* err);
+/* A GearMeshRattle unit's mesh model for its current parameters, built once per parameter
+ * set (unit_mesh.c): NULL with the refusal.  What the probes (probe.c) evaluate. */
+RM_INTERNAL const RmMesh* rm_mesh_configured(RmUnit* u, RmText* err);
 
 #endif
