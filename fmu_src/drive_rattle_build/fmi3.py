@@ -47,7 +47,7 @@ from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
 from .native import CONFIG_HEADER, RESOURCE_MARKER, model_sources, render_config
-from .paths import DIST, FMI2_SOURCE, FMI3_SOURCE, TEMPLATES, model_files
+from .paths import DIST, FMI3_SOURCE, FMI_COMMON_SOURCE, TEMPLATES, model_files
 from .platforms import (
     FMI3_SHIPPED,
     PLATFORMS,
@@ -89,8 +89,8 @@ def fmi3_headers() -> Path:
 
 def glue_files() -> list[Path]:
     """The FMI 3.0 face's sources and headers."""
-    return [FMI3_SOURCE / "fmi3_functions.c", FMI2_SOURCE / "rattle_fmi_common.c",
-            FMI2_SOURCE / "rattle_fmi_common.h"]
+    return [FMI3_SOURCE / "fmi3_functions.c", FMI_COMMON_SOURCE / "rattle_fmi_common.c",
+            FMI_COMMON_SOURCE / "rattle_fmi_common.h"]
 
 
 def glue_id() -> str:

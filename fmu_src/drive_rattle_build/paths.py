@@ -31,9 +31,12 @@ MODEL_SOURCE = SOURCE / "rattle_model"
 #: Compiled into the library built in place (what the Python API and the tests load), never into
 #: a shipped FMU's binary nor its sources/.
 TEST_ONLY_SOURCES = ("probe.c", "rm_probe.h")
+#: What every FMI face shares, of no FMI version (rattle_fmi_common.c: instantiate's checks,
+#: the resources folder, marker files, printable paths, the state envelope).
+FMI_COMMON_SOURCE = SOURCE / "fmi_common"
 #: The FMI 2.0 face of the native FMUs and what it shares with the pythonfmu FMUs' status shim.
 FMI2_SOURCE = SOURCE / "fmi2"
-#: The FMI 3.0 face of the native FMI 3.0 FMUs (it compiles fmi2/rattle_fmi_common.c too).
+#: The FMI 3.0 face of the native FMI 3.0 FMUs.
 FMI3_SOURCE = SOURCE / "fmi3"
 #: The slave modules of the pythonfmu FMUs (class = file stem = the FMU's model identifier).
 SLAVE_SOURCE = SOURCE / "slaves"
