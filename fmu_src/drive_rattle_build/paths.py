@@ -49,7 +49,7 @@ TEMPLATES = ROOT / "modelDescription_templates" if CHECKOUT else _PACKAGE / "tem
 DIST = ROOT / "dist" if CHECKOUT else Path("dist")
 #: The documentation page whose interface tables the build generates (a checkout only).
 FMI_DOCS = ROOT / "docs" / "fmi.md"
-#: The tools guide, whose numbers the build computes (drive_rattle_cosim.tools_doc).
+#: The tools guide, whose numbers the build computes (drive_rattle_build.tools_doc).
 TOOLS_DOCS = ROOT / "docs" / "tools.md"
 
 
