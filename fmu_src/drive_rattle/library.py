@@ -192,9 +192,11 @@ def load(path: str | Path | None = None) -> ctypes.CDLL:
                 fn = getattr(lib, name)
                 fn.argtypes, fn.restype = args, res
             for name, (args, res) in _PROBES.items():
-                if hasattr(lib, name):
+                try:
                     fn = getattr(lib, name)
-                    fn.argtypes, fn.restype = args, res
+                except (AttributeError, ValueError):  # absent (ValueError: ctypes decoding
+                    continue                          # the dlerror of a non-UTF-8 path)
+                fn.argtypes, fn.restype = args, res
         except (OSError, AttributeError) as err:
             raise LibraryError(f"the model library {p} cannot be loaded ({err}): {rebuild}"
                                ) from None
