@@ -29,11 +29,13 @@ ROOT = Path(__file__).resolve().parents[1]
 #: sources and headers, both faces', the slave modules, the templates, the references.
 NEEDED = sorted(
     str(p.relative_to(ROOT)) for pattern in (
-        "fmu_src/rattle_model/*.[ch]", "fmu_src/fmi2/*.[ch]", "fmu_src/fmi3/*.[ch]",
+        "fmu_src/rattle_model/*.[ch]", "fmu_src/fmi_common/*.[ch]", "fmu_src/fmi2/*.[ch]",
+        "fmu_src/fmi3/*.[ch]",
         "fmu_src/slaves/*.py", "modelDescription_templates/**/*.xml", "regression/*/*")
     for p in ROOT.glob(pattern))
 #: Where each checkout folder lands in the wheel (pyproject.toml's [tool.setuptools.package-dir]).
 IN_WHEEL = {"fmu_src/rattle_model": "drive_rattle_build/sources/rattle_model",
+            "fmu_src/fmi_common": "drive_rattle_build/sources/fmi_common",
             "fmu_src/fmi2": "drive_rattle_build/sources/fmi2",
             "fmu_src/fmi3": "drive_rattle_build/sources/fmi3",
             "fmu_src/slaves": "drive_rattle_build/sources/slaves",

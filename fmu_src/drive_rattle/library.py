@@ -143,6 +143,11 @@ _SIGNATURES = {
                         ctypes.POINTER(ctypes.c_size_t)], ctypes.c_int),
     "rm_describe": ([_P, ctypes.POINTER(ctypes.c_char_p), _D, ctypes.c_size_t,
                      ctypes.POINTER(ctypes.c_size_t)], ctypes.c_int),
+}
+
+#: The test-only probes (rm_probe.h): in the library built in place (what the Python API and
+#: the tests load), in no shipped FMU's library; bound where the library has them.
+_PROBES = {
     "rm_probe_contact_law": ([_P, ctypes.c_double, _D], ctypes.c_int),
     "rm_probe_exact_ellipse": ([_P, ctypes.c_double, _D], ctypes.c_int),
     "rm_probe_restitution": ([_P, ctypes.c_double, _D], ctypes.c_int),
@@ -186,6 +191,12 @@ def load(path: str | Path | None = None) -> ctypes.CDLL:
             lib = ctypes.CDLL(str(p.resolve()))
             for name, (args, res) in _SIGNATURES.items():
                 fn = getattr(lib, name)
+                fn.argtypes, fn.restype = args, res
+            for name, (args, res) in _PROBES.items():
+                try:
+                    fn = getattr(lib, name)
+                except (AttributeError, ValueError):  # absent (ValueError: ctypes decoding
+                    continue                          # the dlerror of a non-UTF-8 path)
                 fn.argtypes, fn.restype = args, res
         except (OSError, AttributeError) as err:
             raise LibraryError(f"the model library {p} cannot be loaded ({err}): {rebuild}"

@@ -47,8 +47,8 @@ DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co
 
 def update_docs() -> list[Path]:
     """Regenerate the interface tables of docs/fmi.md from the specs and the numbers of
-    docs/tools.md from the model library (``drive_rattle_cosim.tools_doc``); the files."""
-    from drive_rattle_cosim import tools_doc
+    docs/tools.md from the model library (``tools_doc``); the files."""
+    from . import tools_doc
 
     build_in_place()
     text = FMI_DOCS.read_text(encoding="utf-8")

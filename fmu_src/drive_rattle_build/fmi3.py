@@ -47,7 +47,7 @@ from .fmu import validate
 from .identity import fmu_guid
 from .library import source_flags
 from .native import CONFIG_HEADER, RESOURCE_MARKER, model_sources, render_config
-from .paths import DIST, FMI2_SOURCE, FMI3_SOURCE, MODEL_SOURCE, TEMPLATES
+from .paths import DIST, FMI3_SOURCE, FMI_COMMON_SOURCE, TEMPLATES, model_files
 from .platforms import (
     FMI3_SHIPPED,
     PLATFORMS,
@@ -89,8 +89,8 @@ def fmi3_headers() -> Path:
 
 def glue_files() -> list[Path]:
     """The FMI 3.0 face's sources and headers."""
-    return [FMI3_SOURCE / "fmi3_functions.c", FMI2_SOURCE / "rattle_fmi_common.c",
-            FMI2_SOURCE / "rattle_fmi_common.h"]
+    return [FMI3_SOURCE / "fmi3_functions.c", FMI_COMMON_SOURCE / "rattle_fmi_common.c",
+            FMI_COMMON_SOURCE / "rattle_fmi_common.h"]
 
 
 def glue_id() -> str:
@@ -109,7 +109,7 @@ def fmi3_token(model: str) -> str:
 
 def source_files() -> list[str]:
     """The C files of an FMU's sources/ that are compiled (buildDescription.xml's order)."""
-    return sorted(p.name for p in MODEL_SOURCE.glob("*.c")) + list(GLUE_SOURCES)
+    return [p.name for p in model_files("*.c")] + list(GLUE_SOURCES)
 
 
 def build_description(model: str) -> Element:

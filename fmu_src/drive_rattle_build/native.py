@@ -48,7 +48,7 @@ from .fmu import validate
 from .icon import model_png
 from .identity import fmu_guid
 from .library import source_flags
-from .paths import DIST, FMI2_SOURCE, MODEL_SOURCE, TEMPLATES
+from .paths import DIST, FMI2_SOURCE, FMI_COMMON_SOURCE, TEMPLATES, model_files
 from .platforms import (
     FMI2_SHIPPED,
     PLATFORMS,
@@ -60,9 +60,12 @@ from .platforms import (
 )
 from .shim import fmi2_headers
 
-#: The FMI 2.0 face, compiled with the model library into every native FMU.
+#: The FMI 2.0 face, compiled with the model library into every native FMU (flat in the FMU's
+#: sources/; in the checkout rattle_fmi_common.* are in fmu_src/fmi_common/, the rest in fmi2/).
 GLUE_SOURCES = ("fmi2_functions.c", "rattle_fmi_common.c", "rattle_fmi2_common.c")
 GLUE_HEADERS = ("rattle_fmi_common.h", "rattle_fmi2_common.h")
+#: The glue's files that every FMI face shares (paths.FMI_COMMON_SOURCE).
+COMMON_GLUE = ("rattle_fmi_common.c", "rattle_fmi_common.h")
 #: The generated header of each FMU: its unit kind, model identifier and GUID.
 CONFIG_HEADER = "rattle_fmu_config.h"
 #: The FMI 2.0 headers, as the standard ships them (fmpy bundles them).
@@ -79,13 +82,15 @@ NATIVE_SUBDIR = "native"
 
 # ------------------------------------------------------------------ sources
 def model_sources() -> list[Path]:
-    """The model library's C sources and headers (the generated tables included)."""
-    return sorted(MODEL_SOURCE.glob("*.[ch]"))
+    """The model library's C sources and headers that ship (the generated tables included;
+    the test-only probes left out: ``paths.TEST_ONLY_SOURCES``)."""
+    return model_files("*.[ch]")
 
 
 def glue_files() -> list[Path]:
     """The FMI 2.0 face's sources and header."""
-    return [FMI2_SOURCE / name for name in (*GLUE_SOURCES, *GLUE_HEADERS)]
+    return [(FMI_COMMON_SOURCE if name in COMMON_GLUE else FMI2_SOURCE) / name
+            for name in (*GLUE_SOURCES, *GLUE_HEADERS)]
 
 
 def glue_id() -> str:
@@ -103,7 +108,7 @@ def native_guid(model: str) -> str:
 
 def source_files() -> list[str]:
     """The C files of an FMU's sources/ that are compiled, in <SourceFiles> order."""
-    return sorted(p.name for p in MODEL_SOURCE.glob("*.c")) + list(GLUE_SOURCES)
+    return [p.name for p in model_files("*.c")] + list(GLUE_SOURCES)
 
 
 def render_config(model: str, guid: str, face: str = "fmi2_functions.c") -> str:

@@ -27,9 +27,16 @@ CHECKOUT = (ROOT / "pyproject.toml").is_file() and (ROOT / "fmu_src" / "rattle_m
 SOURCE = ROOT / "fmu_src" if CHECKOUT else _PACKAGE / "sources"
 #: The model library: the one C implementation of the model (rattle_model.h).
 MODEL_SOURCE = SOURCE / "rattle_model"
+#: The model library's test-only files: the probes of its laws at given arguments (rm_probe.h).
+#: Compiled into the library built in place (what the Python API and the tests load), never into
+#: a shipped FMU's binary nor its sources/.
+TEST_ONLY_SOURCES = ("probe.c", "rm_probe.h")
+#: What every FMI face shares, of no FMI version (rattle_fmi_common.c: instantiate's checks,
+#: the resources folder, marker files, printable paths, the state envelope).
+FMI_COMMON_SOURCE = SOURCE / "fmi_common"
 #: The FMI 2.0 face of the native FMUs and what it shares with the pythonfmu FMUs' status shim.
 FMI2_SOURCE = SOURCE / "fmi2"
-#: The FMI 3.0 face of the native FMI 3.0 FMUs (it compiles fmi2/rattle_fmi_common.c too).
+#: The FMI 3.0 face of the native FMI 3.0 FMUs.
 FMI3_SOURCE = SOURCE / "fmi3"
 #: The slave modules of the pythonfmu FMUs (class = file stem = the FMU's model identifier).
 SLAVE_SOURCE = SOURCE / "slaves"
@@ -42,7 +49,7 @@ TEMPLATES = ROOT / "modelDescription_templates" if CHECKOUT else _PACKAGE / "tem
 DIST = ROOT / "dist" if CHECKOUT else Path("dist")
 #: The documentation page whose interface tables the build generates (a checkout only).
 FMI_DOCS = ROOT / "docs" / "fmi.md"
-#: The tools guide, whose numbers the build computes (drive_rattle_cosim.tools_doc).
+#: The tools guide, whose numbers the build computes (drive_rattle_build.tools_doc).
 TOOLS_DOCS = ROOT / "docs" / "tools.md"
 
 
@@ -52,6 +59,13 @@ def runtime_package(name: str) -> Path:
     import importlib
 
     return Path(importlib.import_module(name).__file__).resolve().parent
+
+
+def model_files(pattern: str = "*.[ch]", test_only: bool = False) -> list[Path]:
+    """The model library's files matching ``pattern``, sorted: those that ship
+    (``TEST_ONLY_SOURCES`` left out), or all of them with ``test_only``."""
+    return sorted(p for p in MODEL_SOURCE.glob(pattern)
+                  if test_only or p.name not in TEST_ONLY_SOURCES)
 
 
 def slave_module(model: str) -> Path:

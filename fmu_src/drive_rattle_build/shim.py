@@ -88,12 +88,12 @@ from pathlib import Path
 from xml.etree import ElementTree
 
 from .compiler import compile_library
-from .paths import FMI2_SOURCE, MODEL_SOURCE
+from .paths import FMI2_SOURCE, FMI_COMMON_SOURCE, MODEL_SOURCE
 
 #: The C source of the shim.
 SHIM_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_shim.c"
 #: What the shim shares with the native FMUs' glue (the state envelope, UTF-8), compiled with it.
-COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi_common.c"
+COMMON_SOURCE: Path = FMI_COMMON_SOURCE / "rattle_fmi_common.c"
 #: What the shim shares with the native FMI 2.0 face (fmi2Instantiate's checks, logging).
 FMI2_COMMON_SOURCE: Path = FMI2_SOURCE / "rattle_fmi2_common.c"
 #: The model library's operating-system layer (UTF-8, files), which rattle_fmi_common.c uses:
@@ -149,7 +149,8 @@ def compile_shim(out_path: Path, inner_lib_name: str, vr_status_address: int, vr
         _check_vr("vr_last_successful_time", vr_last_successful_time)
     flags = [
         "-std=c99", "-O2", "-Wall", "-Wextra", "-shared", "-fPIC", "-pthread",
-        "-I", str(fmi2_headers()), "-I", str(FMI2_SOURCE), "-I", str(MODEL_SOURCE),
+        "-I", str(fmi2_headers()), "-I", str(FMI2_SOURCE), "-I", str(FMI_COMMON_SOURCE),
+        "-I", str(MODEL_SOURCE),
         f'-DRATTLE_INNER_LIB="{inner_lib_name}"',
         f"-DRATTLE_VR_STATUS_ADDRESS={vr_status_address}u",
         f"-DRATTLE_VR_MESSAGE={vr_message}u",

@@ -40,59 +40,13 @@ static double floored_mod(double v, double w)
  * printed: the radius of the point). */
 static double point_radius(double r_base, double rho) { return sqrt(r_base * r_base + rho * rho); }
 
-int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
+/* The gear pair's validity, once its geometry is computed: no undercut (a rack cutter whose
+ * dedendum matches the addendum h_a m_n), no tip interference, eps_alpha >= 1, eq. 6's radii
+ * where the layout uses them, and the pair slots: 1, or 0 with the refusal. */
+static int geometry_valid(const RmGearParams* p, const RmGeometry* g, RmText* err)
 {
-    double zp = (double)p->z_pinion, zw = (double)p->z_wheel;
     double m_n = p->m_n, alpha_n = p->alpha_n, beta = p->beta;
     double addendum = p->addendum, b = p->b;
-    g->ratio = zp / zw; /* wheel speed / pinion speed in rigid mesh */
-    /* transverse pressure angle and base helix angle (MODEL_NOTES section 4) */
-    g->alpha_t = atan(tan(alpha_n) / cos(beta));
-    g->beta_b = asin(sin(beta) * cos(alpha_n));
-    g->m_t = m_n / cos(beta);
-    /* pitch, base and tip radii; addendum h_a m_n, no profile shift */
-    g->r_pinion = 0.5 * zp * g->m_t;
-    g->r_wheel = 0.5 * zw * g->m_t;
-    g->centre_distance = g->r_pinion + g->r_wheel;
-    g->rb_pinion = g->r_pinion * cos(g->alpha_t);
-    g->rb_wheel = g->r_wheel * cos(g->alpha_t);
-    g->ra_pinion = g->r_pinion + addendum * m_n;
-    g->ra_wheel = g->r_wheel + addendum * m_n;
-    /* line of action between the base tangent points, and the path of contact on it (eq. 5) */
-    g->line_length = g->centre_distance * sin(g->alpha_t);
-    g->s_start = g->line_length - sqrt(rm_pow(g->ra_wheel, 2.0) - rm_pow(g->rb_wheel, 2.0));
-    g->s_end = sqrt(rm_pow(g->ra_pinion, 2.0) - rm_pow(g->rb_pinion, 2.0));
-    g->s_pitch = g->rb_pinion * tan(g->alpha_t);
-    g->base_pitch = 2.0 * RM_PI * g->rb_pinion / zp; /* transverse, p_bt */
-    g->eps_alpha = (g->s_end - g->s_start) / g->base_pitch;
-    g->eps_beta = b * sin(beta) / (RM_PI * m_n);
-    g->eps_gamma = g->eps_alpha + g->eps_beta;
-    /* transverse extent of one contact line across the face (eps_beta p_bt); a span below
-     * the roll resolution is a spur pair's */
-    g->line_span = b * tan(g->beta_b);
-    if (g->line_span < RM_BREAKPOINT_TOLERANCE) g->line_span = 0.0;
-    /* lead crowning: gap g = crown_factor d^2 at roll distance d from the face centre (C_b at
-     * d = w/2), and the flank radius along the contact line it implies (eq. 6 read as
-     * crowning): a distance l along the line is l sin(beta_b) of roll, and the face end lies
-     * at l = b / (2 cos beta_b), so r_y = (b / (2 cos beta_b))^2 / (2 C_b) */
-    g->crowning = p->crowning;
-    double half_span = 0.5 * g->line_span;
-    g->crown_factor = half_span > 0.0 ? g->crowning / (half_span * half_span) : 0.0;
-    double half_line = 0.5 * b / cos(g->beta_b);
-    g->r_y = half_line * half_line / (2.0 * g->crowning);
-    /* rigid-body kinematics onto the tooth normal: delta = cos(beta_b)(rb_p phi_p - rb_w phi_w) */
-    g->normal_factor = cos(g->beta_b);
-    g->cos_alpha_t = cos(g->alpha_t);
-    g->sin_alpha_t = sin(g->alpha_t);
-    g->sin_beta_b = sin(g->beta_b);
-    g->half_backlash = 0.5 * p->backlash;
-    g->layout = p->layout;
-    g->face_width = b;
-    /* roll coordinate of pair 0 at phi_p = 0: the flank a quarter base pitch ahead of the
-     * pitch point, both flanks */
-    g->flank_phase = g->s_pitch + 0.25 * g->base_pitch;
-
-    /* validity: undercut of a rack cutter whose dedendum matches the addendum h_a m_n */
     double sin2 = rm_pow(sin(g->alpha_t), 2.0);
     double z_min = 2.0 * addendum * cos(beta) / sin2;
     const char* names[2] = {"gear.z_pinion", "gear.z_wheel"};
@@ -165,7 +119,12 @@ int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
         rm_puts(err, " m");
         return 0;
     }
+    return 1;
+}
 
+/* The breakpoints of the pair set (RmGeometry.bp, .n_bp). */
+static void set_breakpoints(RmGeometry* g)
+{
     /* roll coordinates (mod the base pitch) of a pair's face centre where the pair enters or
      * leaves the zone (s_start - w/2, s_end + w/2) or its contact point starts or stops
      * following the face centre (s_start, s_end; crowned), or an end of its engaged line
@@ -191,6 +150,62 @@ int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
             g->bp[c - 1] = x;
         }
     g->n_bp = n;
+}
+
+int rm_geometry(const RmGearParams* p, RmGeometry* g, RmText* err)
+{
+    double zp = (double)p->z_pinion, zw = (double)p->z_wheel;
+    double m_n = p->m_n, alpha_n = p->alpha_n, beta = p->beta;
+    double addendum = p->addendum, b = p->b;
+    g->ratio = zp / zw; /* wheel speed / pinion speed in rigid mesh */
+    /* transverse pressure angle and base helix angle (MODEL_NOTES section 4) */
+    g->alpha_t = atan(tan(alpha_n) / cos(beta));
+    g->beta_b = asin(sin(beta) * cos(alpha_n));
+    g->m_t = m_n / cos(beta);
+    /* pitch, base and tip radii; addendum h_a m_n, no profile shift */
+    g->r_pinion = 0.5 * zp * g->m_t;
+    g->r_wheel = 0.5 * zw * g->m_t;
+    g->centre_distance = g->r_pinion + g->r_wheel;
+    g->rb_pinion = g->r_pinion * cos(g->alpha_t);
+    g->rb_wheel = g->r_wheel * cos(g->alpha_t);
+    g->ra_pinion = g->r_pinion + addendum * m_n;
+    g->ra_wheel = g->r_wheel + addendum * m_n;
+    /* line of action between the base tangent points, and the path of contact on it (eq. 5) */
+    g->line_length = g->centre_distance * sin(g->alpha_t);
+    g->s_start = g->line_length - sqrt(rm_pow(g->ra_wheel, 2.0) - rm_pow(g->rb_wheel, 2.0));
+    g->s_end = sqrt(rm_pow(g->ra_pinion, 2.0) - rm_pow(g->rb_pinion, 2.0));
+    g->s_pitch = g->rb_pinion * tan(g->alpha_t);
+    g->base_pitch = 2.0 * RM_PI * g->rb_pinion / zp; /* transverse, p_bt */
+    g->eps_alpha = (g->s_end - g->s_start) / g->base_pitch;
+    g->eps_beta = b * sin(beta) / (RM_PI * m_n);
+    g->eps_gamma = g->eps_alpha + g->eps_beta;
+    /* transverse extent of one contact line across the face (eps_beta p_bt); a span below
+     * the roll resolution is a spur pair's */
+    g->line_span = b * tan(g->beta_b);
+    if (g->line_span < RM_BREAKPOINT_TOLERANCE) g->line_span = 0.0;
+    /* lead crowning: gap g = crown_factor d^2 at roll distance d from the face centre (C_b at
+     * d = w/2), and the flank radius along the contact line it implies (eq. 6 read as
+     * crowning): a distance l along the line is l sin(beta_b) of roll, and the face end lies
+     * at l = b / (2 cos beta_b), so r_y = (b / (2 cos beta_b))^2 / (2 C_b) */
+    g->crowning = p->crowning;
+    double half_span = 0.5 * g->line_span;
+    g->crown_factor = half_span > 0.0 ? g->crowning / (half_span * half_span) : 0.0;
+    double half_line = 0.5 * b / cos(g->beta_b);
+    g->r_y = half_line * half_line / (2.0 * g->crowning);
+    /* rigid-body kinematics onto the tooth normal: delta = cos(beta_b)(rb_p phi_p - rb_w phi_w) */
+    g->normal_factor = cos(g->beta_b);
+    g->cos_alpha_t = cos(g->alpha_t);
+    g->sin_alpha_t = sin(g->alpha_t);
+    g->sin_beta_b = sin(g->beta_b);
+    g->half_backlash = 0.5 * p->backlash;
+    g->layout = p->layout;
+    g->face_width = b;
+    /* roll coordinate of pair 0 at phi_p = 0: the flank a quarter base pitch ahead of the
+     * pitch point, both flanks */
+    g->flank_phase = g->s_pitch + 0.25 * g->base_pitch;
+
+    if (!geometry_valid(p, g, err)) return 0;
+    set_breakpoints(g);
     return 1;
 }
 

@@ -7,9 +7,6 @@
 
 #include "rm_private.h"
 
-/* Largest penetration a step may reach, in gear.m_n (stepper.c) */
-extern const double RM_MAX_PENETRATION_MODULES;
-
 void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
 {
     f->code = code;
@@ -18,12 +15,6 @@ void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
     f->values[2] = v2;
     f->values[3] = v3;
     longjmp(f->jb, 1);
-}
-
-double rm_pow(double x, double y)
-{
-    double (*volatile libm_pow)(double, double) = pow;
-    return libm_pow(x, y);
 }
 
 static const char* math_call(int which)

@@ -3,6 +3,7 @@
  *
  *   text.c          message text (numbers as the shortest text that reads back exactly)
  *   refusals.c      the wording of every refusal the physics reports as a code
+ *   maths.c         x ** y through libm's pow (rm_pow)
  *   roots.c         Brent's method, exact quadratic crossings, Chebyshev series
  *   geometry.c      the helical involute pair and its tooth pairs (paper eq. 3-6)
  *   contact.c       the load-approach laws of a tooth pair: Hertz point contact (exact
@@ -14,6 +15,8 @@
  *   dissipation.c   the contact's dissipation set at each onset: the squeeze-film (Stokes
  *                   number) impact law, the squeeze films after a sticking impact, the mesh
  *                   damping ratio
+ *   pairs.c         the tooth pairs in the zone of action with their laws' coefficients,
+ *                   cached per step (what mesh.c and dissipation.c both read)
  *   mesh.c          the mesh model: loads and torques of every pair (eq. 1-2, 10-17)
  *   stepper.c       the wheel's equation of motion (eq. 10) over one communication step
  *   start.c         the start solutions: static flank equilibrium, free start
@@ -25,6 +28,7 @@
  *   unit_mesh.c     GearMeshRattle: parameters to model, held inputs, outputs
  *   unit_driveline.c  Driveline: the same for the driveline
  *   system.c        the two units coupled in a compiled loop (the co-simulation's numbers)
+ *   probe.c         the laws at given arguments for the tests (rm_probe.h; test builds only)
  *   rm_tables.c     GENERATED from the Python specs: the variables of both units
  *
  * Numbers: every expression keeps the IEEE operations of the reference results (docs/model.md:
@@ -133,7 +137,8 @@ RM_INTERNAL void rm_fail(RmFail* f, int code, double v0, double v1, double v2, d
 RM_INTERNAL void rm_refusal_text(RmText* t, int code, const double* values);
 
 /* x ** y through libm's pow, called through a volatile pointer so that the compiler cannot
- * fold a constant exponent (pow(x, 2.0) into x * x rounds differently in rare cases). */
+ * fold a constant exponent (pow(x, 2.0) into x * x rounds differently in rare cases)
+ * (maths.c). */
 RM_INTERNAL double rm_pow(double x, double y);
 
 /* The library calls of the physics, refused where their result is not a real number the
@@ -278,7 +283,7 @@ static inline double rm_flank_roll(const RmGeometry* g, int flank, double phi_p)
 }
 
 /* The tooth pairs in the zone of action at roll coordinate u, with the load-approach law's
- * coefficients at each pair's contact (filled on first use by mesh.c) and, per impact speed,
+ * coefficients at each pair's contact (filled on first use by pairs.c) and, per impact speed,
  * the eq. 7 delta_max.  `member` is the roll coordinate at which the pairs in the zone were
  * decided (u, or for the layouts without crown offsets the middle of the stepper's substep,
  * whose force jumps when a pair enters or leaves). */
@@ -516,11 +521,18 @@ typedef struct {
     RmPairSet set[RM_PAIR_CACHE];
 } RmPairCache;
 
+/* pairs.c: an empty cache; the pair set at u; the coefficients of pair i (once per set). */
 RM_INTERNAL void rm_pair_cache_init(RmPairCache* c);
 /* The pair set at roll coordinate u, from the cache or built into it (valid until the next
  * call); in the zone at c->member when that is set, else at u. */
 RM_INTERNAL RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u);
 RM_INTERNAL void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i);
+
+/* Largest penetration a step may reach, as a fraction of the normal module (mesh.c's
+ * pen_limit; refusals.c quotes it): far beyond it the Hertz contact of the flanks' surfaces is
+ * no longer a model of anything (the default pair reaches about 1e-3 of the module in
+ * rattle). */
+#define RM_MAX_PENETRATION_MODULES 0.05
 
 /* The loads of one flank. */
 typedef struct {
@@ -847,5 +859,8 @@ RM_INTERNAL int rm_driveline_start_outputs(RmUnit* u, double start_time, double 
                                            double w_w, double* out, RmText* err);
 RM_INTERNAL int rm_mesh_start_wheel(RmUnit* u, const double* inputs, double* phi, double* w,
                                     RmText* err);
+/* A GearMeshRattle unit's mesh model for its current parameters, built once per parameter
+ * set (unit_mesh.c): NULL with the refusal.  What the probes (probe.c) evaluate. */
+RM_INTERNAL const RmMesh* rm_mesh_configured(RmUnit* u, RmText* err);
 
 #endif

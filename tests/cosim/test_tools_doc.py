@@ -7,7 +7,7 @@ in a fresh folder holding ``dist/`` as the build writes it (both flavours and th
 this session's build) and links to the clone's ``regression/``, ``tests/`` and ``benchmarks/``,
 with the network closed (proxies pointing nowhere, pip without an index); ``<!-- run by: TEST
 -->`` blocks run in the test of that name here. The marked ``<!-- BEGIN name -->`` blocks must
-equal what ``drive_rattle_cosim.tools_doc`` computes now (``python build_fmu.py --update-docs``
+equal what ``drive_rattle_build.tools_doc`` computes now (``python build_fmu.py --update-docs``
 rewrites them).
 """
 
@@ -25,7 +25,7 @@ from drive_rattle.catalog import UNITS
 from drive_rattle.interface import MODELS
 from drive_rattle.parameters import specs
 from drive_rattle_build import write_systems
-from drive_rattle_cosim import tools_doc
+from drive_rattle_build import tools_doc
 from drive_rattle_cosim.environments import master_python
 
 ROOT = Path(__file__).resolve().parents[2]

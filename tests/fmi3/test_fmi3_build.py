@@ -40,6 +40,7 @@ from drive_rattle_build.native import (
     render_config,
 )
 from drive_rattle_build.templates import template_body
+from drive_rattle_build.paths import TEST_ONLY_SOURCES
 from drive_rattle_cosim.regression import reference_files
 
 
@@ -66,6 +67,8 @@ def test_contents(fmi3_fmus, model):
         assert "FMI 3.0 co-simulation" in page and "fmi2" not in page
         for path in model_sources():  # the one model: the library's sources as they are
             assert z.read(f"sources/{path.name}") == path.read_bytes(), path.name
+        # the probes of the laws are the tests' (rm_probe.h): not in the FMU's sources
+        assert not {f"sources/{name}" for name in TEST_ONLY_SOURCES} & names
         for name in FMI_HEADERS:  # the standard's headers as fmpy ships them
             assert z.read(f"sources/{name}") == (fmi3_headers() / name).read_bytes()
         config = z.read(f"sources/{CONFIG_HEADER}").decode()

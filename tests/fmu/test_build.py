@@ -16,7 +16,7 @@ from drive_rattle_build import BuildError, build_one, fmu, templates
 from drive_rattle_build.documentation import interface_docs
 from drive_rattle_build.icon import model_png
 from drive_rattle_build.identity import fmu_guid
-from drive_rattle_build.paths import RUNTIME_PACKAGES, SOURCE
+from drive_rattle_build.paths import RUNTIME_PACKAGES, SOURCE, TEST_ONLY_SOURCES
 
 from ..fmi.slave_driver import SLAVES
 
@@ -122,6 +122,28 @@ def test_fmu_contents(fmus, name):
     _, inputs, outputs = INTERFACE[name]
     for s in (*inputs, *outputs):
         assert f"<td>{s.name}</td>" in html
+
+
+def test_the_probes_are_in_the_tests_library_only(fmus, tmp_path):
+    """The probes of the laws at given arguments (rm_probe.h) are the tests': the library the
+    tests load exports every one the binding knows, the library a pythonfmu FMU ships none
+    (looked up as a host would, by name in the loaded library's dynamic symbols)."""
+    import ctypes
+
+    from drive_rattle import library
+
+    probes = sorted(library._PROBES)
+    assert len(probes) == 9 and all(p.startswith("rm_probe_") for p in probes)
+    assert "probe.c" in TEST_ONLY_SOURCES
+    tests_library = ctypes.CDLL(str(library.default_path()))
+    assert [p for p in probes if not hasattr(tests_library, p)] == []
+    with zipfile.ZipFile(fmus["GearMeshRattle"]) as z:
+        (tmp_path / "shipped.so").write_bytes(z.read("resources/drive_rattle/rattle_model.so"))
+    shipped = ctypes.CDLL(str(tmp_path / "shipped.so"))
+    assert hasattr(shipped, "rm_new") and hasattr(shipped, "rm_do_step")
+    assert [p for p in probes if hasattr(shipped, p)] == []
+    # the binding loads it all the same, without the probes
+    assert not hasattr(library.load(tmp_path / "shipped.so"), "rm_probe_loads")
 
 
 def test_docs_interface_tables_are_generated_from_the_specs():

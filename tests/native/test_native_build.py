@@ -29,6 +29,7 @@ from drive_rattle_build.native import (
     render_config,
     source_files,
 )
+from drive_rattle_build.paths import TEST_ONLY_SOURCES
 from drive_rattle_cosim.regression import reference_files
 
 #: The functions of the FMI 2.0 co-simulation interface (25 common, 9 co-simulation).
@@ -52,6 +53,8 @@ def test_contents(native_fmus, model):
         # the one model: the library's sources as they are in the repository
         for path in model_sources():
             assert z.read(f"sources/{path.name}") == path.read_bytes(), path.name
+        # the probes of the laws are the tests' (rm_probe.h): not in the FMU's sources
+        assert not {f"sources/{name}" for name in TEST_ONLY_SOURCES} & names
         config = z.read(f"sources/{CONFIG_HEADER}").decode()
     # FMI 2.0 importers load binaries/linux64 on aarch64 Linux too (docs/native_fmu.md): no
     # aarch64 binary, and no untested macOS one

@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 
-from drive_rattle_build.paths import FMI2_SOURCE, MODEL_SOURCE
+from drive_rattle_build.paths import FMI_COMMON_SOURCE, MODEL_SOURCE
 from drive_rattle_build.shim import fmi2_headers
 
 from .sanitizers import SANITIZE, compile_probe
@@ -21,8 +21,8 @@ PROBE = [
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is needed")
 def test_location_decoder_reads_no_byte_past_the_string(tmp_path):
     exe = compile_probe(tmp_path, "location_probe",
-                        [FMI2_SOURCE / "rattle_fmi_common.c", MODEL_SOURCE / "portable.c"],
-                        [FMI2_SOURCE, MODEL_SOURCE, fmi2_headers()])
+                        [FMI_COMMON_SOURCE / "rattle_fmi_common.c", MODEL_SOURCE / "portable.c"],
+                        [FMI_COMMON_SOURCE, MODEL_SOURCE, fmi2_headers()])
     proc = subprocess.run([str(exe), *PROBE], capture_output=True, text=True, timeout=60,
                           env=SANITIZE)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -7,7 +7,9 @@ messages and the rest follow the model library.
 
 The numbers come from the model library's units (``drive_rattle.units``), which compute what
 the FMUs compute bit for bit (tests/cosim/test_masters.py holds ``fmpy simulate`` of each FMU
-against these very loops), so no FMU needs to be built here.
+against these very loops), so no FMU needs to be built here.  It is the build's (``--update-docs``
+runs it, as it regenerates docs/fmi.md) and reads the studies' tools (``drive_rattle_cosim``:
+the step accuracy, the masters' environments, the time grid, the integer codes).
 """
 
 from __future__ import annotations
@@ -32,9 +34,9 @@ from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DEFAULT_EXPERIMENT, MESH_OUTPUTS, MODELS
 from drive_rattle.parameters import RPM, specs
 
-from . import environments, step_accuracy
-from .harness import time_grid
-from .variants import code_list
+from drive_rattle_cosim import environments, step_accuracy
+from drive_rattle_cosim.harness import time_grid
+from drive_rattle_cosim.variants import code_list
 
 #: The masters of the project's environment whose versions the document was measured with
 #: (distribution names); gemseo-fmu and cofmupy run in environments of their own
@@ -341,7 +343,7 @@ env -i "$work/fmu_host" "$work/GearMeshRattle/binaries/linux64/GearMeshRattle.so
 
 
 def _regression_inputs():
-    from .regression import reference_files
+    from drive_rattle_cosim.regression import reference_files
 
     return next(f for f in reference_files(MODELS[0]) if f.name.endswith("_in.csv"))
 

@@ -1,8 +1,9 @@
 /*
  * rattle_fmi_common.h - what every FMI layer of these FMUs does the same way, of no FMI version,
- * written once: the status shim of the pythonfmu FMUs (rattle_fmi_shim.c), the FMI 2.0 face
- * (fmi2_functions.c, with what FMI 2.0 layers share: rattle_fmi2_common.c) and the FMI 3.0
- * face (fmu_src/fmi3/fmi3_functions.c) compile rattle_fmi_common.c, with the model library's
+ * written once, in a folder of its own (fmu_src/fmi_common/): the status shim of the
+ * pythonfmu FMUs (rattle_fmi_shim.c), the FMI 2.0 face (fmi2_functions.c, with what FMI 2.0
+ * layers share: rattle_fmi2_common.c) and the FMI 3.0 face (fmu_src/fmi3/fmi3_functions.c)
+ * compile rattle_fmi_common.c, with the model library's
  * operating-system layer (rattle_model/portable.c: UTF-8, files).  It includes no FMI
  * header: the words of a message that differ between FMI versions (the names of the calls,
  * the standard's section) are the caller's.
