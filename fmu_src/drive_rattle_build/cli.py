@@ -58,7 +58,10 @@ def update_docs() -> list[Path]:
     TOOLS_DOCS.write_text(tools_doc.update(text), encoding="utf-8")
     text = model_doc.DOC.read_text(encoding="utf-8")
     model_doc.DOC.write_text(model_doc.update(text), encoding="utf-8")
-    return [FMI_DOCS, TOOLS_DOCS, model_doc.DOC]
+    text = model_doc.ANALYSIS_DOC.read_text(encoding="utf-8")
+    model_doc.ANALYSIS_DOC.write_text(
+        model_doc.update(text, blocks=model_doc.ANALYSIS_BLOCKS), encoding="utf-8")
+    return [FMI_DOCS, TOOLS_DOCS, model_doc.DOC, model_doc.ANALYSIS_DOC]
 
 
 def with_extra(shipped: tuple[str, ...], extra: list[str]) -> tuple[str, ...]:

@@ -1,7 +1,8 @@
-"""The numbers of docs/model.md, computed: every ``<!-- BEGIN name -->...<!-- END name -->``
-block of the document is the output of ``BLOCKS[name]``, written by
-``python -m drive_rattle_cosim.model_doc --update`` (``update``) and held against a fresh
-computation by tests/cosim/test_model_doc.py (``stale``).  After a change of the default physics,
+"""The numbers of docs/model.md (and of docs/analysis.md's runs), computed: every ``<!-- BEGIN
+name -->...<!-- END name -->`` block of docs/model.md is the output of ``BLOCKS[name]``, of
+docs/analysis.md of ``ANALYSIS_BLOCKS[name]``, written by ``python -m
+drive_rattle_cosim.model_doc --update`` (``update``) and held against a fresh computation by
+tests/cosim/test_model_doc.py (``stale``).  After a change of the default physics,
 run that command and review the diff: the findings written around the tables are generated
 from the same runs, so a sentence that no longer holds changes with its numbers.
 
@@ -22,6 +23,7 @@ from . import band, contact_laws, mesh_stiffness, paper_models
 from .analysis import PAPER_FIGURES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
+ANALYSIS_DOC = DOC.with_name("analysis.md")
 #: The scenario's horizon of every run of the document [s]: an 11 s run, the first second
 #: left out, five windows of 2 s (the README's main command).
 HORIZON = {"stop_time": 11.0, "transient": 1.0, "window": 2.0}
@@ -226,6 +228,44 @@ def band_findings(horizon: dict | None = None) -> str:
     return "\n" + "\n".join(out) + "\n"
 
 
+# --- section 6: the coupled system's memory ---------------------------------------------
+
+#: The coupled default's long run [s] (about four periods of the vehicle mode).
+MEMORY_SECONDS = 120.0
+
+
+def coupled_memory(seconds: float = MEMORY_SECONDS) -> str:
+    """The coupled default's load and drive onset rate in 1 s windows over ``seconds``."""
+    import numpy as np
+
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from .system import simulate
+
+    drive = DrivelineParameters()
+    rec = simulate(MeshParameters(), drive, stop_time=seconds, step=1e-4,
+                   signals=["wheel.tau_load", "vehicle.w"])
+    t = np.asarray(rec.time)
+    tau = np.asarray(rec.signals["wheel.tau_load"])
+    vw = np.asarray(rec.signals["vehicle.w"])
+    n = int(round(seconds))
+    edges = np.searchsorted(t, np.arange(n + 1), side="left")
+    means = [float(np.mean(tau[edges[k]:edges[k + 1]])) for k in range(n)]
+    onsets = np.asarray(rec.onset_times)[np.asarray(rec.onset_flanks) == 1]
+    rates = np.histogram(onsets, bins=np.arange(n + 1))[0]
+    half = n // 2
+    late = max(means[half:]) - min(means[half:])
+    early = max(means[:half]) - min(means[:half])
+    vdev = float(np.max(np.abs(vw - np.mean(vw))))
+    period = 1.0 / drive.derived()["vehicle_mode_frequency"]
+    return (f"Measured over {seconds:g} s of the coupled default (1 s means): `wheel.tau_load` "
+            f"{min(means):.4g}–{max(means):.4g} N·m around the drag {drive.drag:.4g} N·m "
+            f"(the vehicle mode's period {period:.3g} s), a swing of {late * 1e3:.3g} mN·m in "
+            f"the second half against {early * 1e3:.3g} in the first; the drive onsets per "
+            f"second of 1 s windows range from {rates.min()} to {rates.max()} "
+            f"(`vehicle.w` within ± {vdev:.2g} rad/s of its mean)")
+
+
 #: name -> function giving the block's text.
 BLOCKS: dict[str, Callable[[], str]] = {
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
@@ -235,7 +275,31 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "paper findings": paper_findings,
     "band": band_table,
     "band findings": band_findings,
+    "coupled memory": coupled_memory,
 }
+
+
+# --- docs/analysis.md section 5: what the default run shows -------------------------------
+
+def default_run(horizon: dict | None = None) -> str:
+    """The comparison table and the further statistics of the default model in the paper's
+    setup, as examples/paper_scenario.py writes them from the FMUs (the compiled loop's
+    numbers are theirs, bit for bit)."""
+    from .analysis import further_statistics, markdown_table
+    from .analysis import paper_comparison as comparison
+
+    paper, _, _ = _paper_runs(_h(horizon))
+    ws = paper[0].central.statistics
+    return ("\n" + markdown_table(comparison(ws), headers=(
+        "quantity", "this run: mean ± scatter (min–max over windows)", "paper")) + "\n"
+        + markdown_table(further_statistics(ws), headers=("further statistics", "this run"))
+        + "\n")
+
+
+#: name -> function giving the block's text, in docs/analysis.md.
+ANALYSIS_BLOCKS: dict[str, Callable[[], str]] = {"default run": default_run}
+#: Each document and its blocks.
+DOCUMENTS = {"model.md": BLOCKS, "analysis.md": ANALYSIS_BLOCKS}
 _BLOCK = re.compile(r"<!-- BEGIN (?P<name>[^>]+?) -->(?P<body>.*?)<!-- END (?P=name) -->", re.S)
 
 
@@ -243,51 +307,61 @@ def blocks_in(text: str) -> dict[str, str]:
     return {m["name"]: m["body"] for m in _BLOCK.finditer(text)}
 
 
-def compute(names) -> dict[str, str]:
-    return {name: BLOCKS[name]() for name in dict.fromkeys(names)}
+def compute(names, blocks=None) -> dict[str, str]:
+    blocks = BLOCKS if blocks is None else blocks
+    return {name: blocks[name]() for name in dict.fromkeys(names)}
 
 
-def update(text: str, computed: dict[str, str] | None = None) -> str:
+def update(text: str, computed: dict[str, str] | None = None, blocks=None) -> str:
     """``text`` with every block's body replaced by its computed text; ValueError when a
-    block of ``BLOCKS`` is missing or the text has a block ``BLOCKS`` lacks."""
+    block of ``blocks`` (default ``BLOCKS``, docs/model.md's) is missing or the text has a
+    block ``blocks`` lacks."""
+    blocks = BLOCKS if blocks is None else blocks
     found = blocks_in(text)
-    missing = sorted(set(BLOCKS) - set(found))
-    unknown = sorted(set(found) - set(BLOCKS))
+    missing = sorted(set(blocks) - set(found))
+    unknown = sorted(set(found) - set(blocks))
     if missing or unknown:
-        raise ValueError(f"docs/model.md's blocks: missing {', '.join(missing) or 'none'}, "
+        raise ValueError(f"the document's blocks: missing {', '.join(missing) or 'none'}, "
                          f"unknown {', '.join(unknown) or 'none'}; allowed: exactly "
-                         f"{', '.join(BLOCKS)}")
-    computed = computed if computed is not None else compute(found)
+                         f"{', '.join(blocks)}")
+    computed = computed if computed is not None else compute(found, blocks)
     return _BLOCK.sub(lambda m: f"<!-- BEGIN {m['name']} -->{computed[m['name']]}"
                                 f"<!-- END {m['name']} -->", text)
 
 
-def stale(text: str, names=None) -> list[str]:
+def stale(text: str, names=None, blocks=None) -> list[str]:
     """The names of the blocks of ``text`` (or of ``names`` only) whose body differs from a
-    fresh computation."""
+    fresh computation (``blocks``: default ``BLOCKS``, docs/model.md's)."""
+    blocks = BLOCKS if blocks is None else blocks
     bodies = blocks_in(text)
     names = list(bodies) if names is None else list(names)
-    return [n for n in names if bodies[n] != BLOCKS[n]()]
+    return [n for n in names if bodies[n] != blocks[n]()]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.model_doc",
                                  description=__doc__.split("\n\n")[0])
-    ap.add_argument("--update", action="store_true", help="rewrite docs/model.md's blocks")
-    ap.add_argument("--doc", type=Path, default=DOC, help="the document (docs/model.md)")
+    ap.add_argument("--update", action="store_true",
+                    help="rewrite the documents' blocks (else: name the stale ones)")
+    ap.add_argument("--doc", type=Path, action="append",
+                    help="a document (docs/model.md or docs/analysis.md; default both)")
     args = ap.parse_args(argv)
-    try:
-        text = args.doc.read_text(encoding="utf-8")
-        if args.update:
-            args.doc.write_text(update(text), encoding="utf-8")
-            print(f"updated {args.doc}")
-            return 0
-    except (OSError, ValueError) as err:
-        print(f"model_doc: {err}", file=sys.stderr)
-        return 1
-    names = stale(text)
-    print("stale: " + ", ".join(names) if names else "every block is current")
-    return 1 if names else 0
+    stale_names = []
+    for doc in args.doc or [DOC, ANALYSIS_DOC]:
+        blocks = DOCUMENTS.get(doc.name, BLOCKS)
+        try:
+            text = doc.read_text(encoding="utf-8")
+            if args.update:
+                doc.write_text(update(text, blocks=blocks), encoding="utf-8")
+                print(f"updated {doc}")
+                continue
+        except (OSError, ValueError) as err:
+            print(f"model_doc: {doc}: {err}", file=sys.stderr)
+            return 1
+        stale_names += [f"{doc.name}: {n}" for n in stale(text, blocks=blocks)]
+    if not args.update:
+        print("stale: " + ", ".join(stale_names) if stale_names else "every block is current")
+    return 1 if stale_names else 0
 
 
 if __name__ == "__main__":

@@ -70,3 +70,19 @@ def test_a_document_without_a_block_is_refused_in_one_line(tmp_path, capsys):
     assert err.startswith("model_doc: ") and "\n" not in err
     assert "unknown stray" in err and "missing" in err
     assert doc.read_text(encoding="utf-8").startswith("no block")  # left as it was
+
+
+def test_the_analysis_documents_default_run_is_the_paper_setups():
+    text = (ROOT / "docs" / "analysis.md").read_text(encoding="utf-8")
+    found = re.findall(r"<!-- BEGIN ([^>]+?) -->", text)
+    assert sorted(found) == sorted(model_doc.ANALYSIS_BLOCKS)
+    block = model_doc.default_run(SHORT)
+    assert "| mean wheel speed [rad/s] |" in block and "| 44.5 |" in block
+    assert "| further statistics | this run |" in block
+
+
+@pytest.mark.slow
+def test_every_block_of_the_analysis_document_is_current():
+    text = (ROOT / "docs" / "analysis.md").read_text(encoding="utf-8")
+    assert model_doc.stale(text, blocks=model_doc.ANALYSIS_BLOCKS) == [], (
+        "docs/analysis.md is stale: run `python -m drive_rattle_cosim.model_doc --update`")
