@@ -4,7 +4,7 @@
                        [--no-fmi3] [--platform NAME ...]
     drive-rattle-build --platform NAME [--platform NAME ...] --fmu FMU [--fmu FMU ...]
     drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
-    drive-rattle-build --update-docs   # docs/fmi.md's tables, docs/tools.md's and docs/model.md's numbers
+    drive-rattle-build --update-docs   # docs/fmi.md's tables; the numbers of tools.md, model.md
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their

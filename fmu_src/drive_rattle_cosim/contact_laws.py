@@ -28,6 +28,7 @@ import numpy as np
 
 from drive_rattle import DrivelineParameters, MeshParameters
 from drive_rattle.units import DrivelineUnit, MeshUnit, coupled_start_inputs, run_coupled
+
 from .analysis import onsets_from_counters, windowed_statistics
 
 #: The paper's setup: a constant resisting torque on the wheel (band.PAPER_SETUP).

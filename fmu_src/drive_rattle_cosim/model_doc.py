@@ -153,9 +153,13 @@ def paper_findings(horizon: dict | None = None) -> str:
 # --- section 6.4: the band ----------------------------------------------------------------
 
 def band_table(horizon: dict | None = None) -> str:
+    h = horizon or HORIZON
     rows = _band_runs(_h(horizon))
-    ws_note = (f"The paper's setup, {HORIZON['stop_time'] if horizon is None else horizon['stop_time']:g}"
-               " s per case (`python -m drive_rattle_cosim.band`):\n\n")
+    ws_note = (f"The paper's setup, one {h['stop_time']:g} s run per case from the smooth start "
+               f"(`python -m drive_rattle_cosim.band`); each cell the mean ± standard deviation "
+               f"over the windows of {h['window']:g} s after the {h['transient']:g} s start "
+               "transient: the ± covers the variation between windows of that run, not "
+               "other starts; the cases are the band.\n\n")
     return "\n" + ws_note + band.markdown(rows, timings=False) + "\n"
 
 
@@ -248,7 +252,7 @@ def coupled_memory(seconds: float = MEMORY_SECONDS) -> str:
     t = np.asarray(rec.time)
     tau = np.asarray(rec.signals["wheel.tau_load"])
     vw = np.asarray(rec.signals["vehicle.w"])
-    n = int(round(seconds))
+    n = round(seconds)
     edges = np.searchsorted(t, np.arange(n + 1), side="left")
     means = [float(np.mean(tau[edges[k]:edges[k + 1]])) for k in range(n)]
     onsets = np.asarray(rec.onset_times)[np.asarray(rec.onset_flanks) == 1]
