@@ -39,26 +39,43 @@ def test_paper_scenario_example(tmp_path, fmus):
     report = (tmp_path / "comparison.md").read_text()
     row = next(r for r in report.splitlines() if r.startswith("| mean wheel speed [rad/s] |"))
     assert " ± " in row and "| 44.5 |" in row  # this run with its scatter, the paper's figure
-    # The two models side by side, each cell "mean ± scatter [band]"; the default model at its
-    # defaults is the FMUs' run: the same statistic (the compiled loop gives their numbers)
+    # The contact models side by side in the paper's setup (a constant M_res on the wheel),
+    # each cell "mean ± scatter [band]"; the default model at its defaults is the FMUs' run,
+    # which runs the paper's setup too: the same statistic (the compiled loop gives their
+    # numbers)
     models = result["models"]
-    assert [m.model.name for m in models] == ["default model", "paper's contact model"]
+    assert [m.model.name for m in models] == ["default model", "paper's contact model",
+                                              "line contact"]
+    assert all(m.setup.name == "the paper's setup" for m in models)
+    assert all(m.central.driveline.vehicle_model == 1 for m in models)
     assert models[0].central.statistics.scatter("max_penetration").mean == \
         ws.scatter("max_penetration").mean
-    assert len(models[1].band) == 3
+    assert "constant M_res" in report.splitlines()[0]
+    # the band varies the friction and the teeth as well as the dissipation and the film;
+    # the rigid paper's model gets compliant teeth, the compliant ones rigid teeth
+    bands = [{r.setting.name for r in m.band} for m in models]
+    assert {"boundary mu 0.05", "boundary mu 0.15", "dissipation low"} <= bands[0] & bands[2]
+    assert "rigid teeth" in bands[0] and "compliant teeth" in bands[1]
+    assert "bodies 7" in bands[0] and "bodies 7" not in bands[1]
     table = result["models_table"]
     pairs = next(r for r in table.splitlines() if r.startswith("| pairs loaded"))
     cells = [c.strip() for c in pairs.strip("|").split("|")]
-    assert all(" ± " in c and c.endswith("]") for c in cells[1:3]) and "3–4" in cells[3]
+    assert all(" ± " in c and c.endswith("]") for c in cells[1:4]) and "3–4" in cells[4]
+    # the coupled driveline apart, labelled, its scope naming the slow load modulation
+    assert [m.setup.name for m in result["coupled"]] == ["coupled driveline"] * 3
+    assert all(m.central.driveline.vehicle_model == 0 for m in result["coupled"])
+    assert "modulates the wheel's load" in result["coupled_scope"]
+    assert "modulates" not in result["scope"] and "windows of 0.2 s" in result["scope"]
     text = (tmp_path / "models.md").read_text()
     assert "hypothesis" in text and "381.4 Hz" in text
+    assert text.index("## The paper's setup") < text.index("## Coupled driveline")
     # No statistic reads nan or inf: a missing one says why in words.
     assert not re.search(r"\b(nan|inf)\b", report + text, re.IGNORECASE)
     # Fig. 5 names only detected lines, the strongest few; the rest are in the line table.
     full = result["lines"]
     named = mod.named_lines(full.lines)
     assert result["fig5_names"] == [ln.name or f"{ln.frequency:.0f} Hz ?" for ln in named]
-    assert 0 < len(named) <= min(mod.NAMED_LINES, len(full.lines))
+    assert len(named) == min(mod.NAMED_LINES, len(full.lines))
     assert all(any(ln is d for d in full.lines) for ln in named)
     # The strongest line of the comparison is one of the lines the windows found.
     line = strongest_line(ws)

@@ -4,7 +4,7 @@
                        [--no-fmi3] [--platform NAME ...]
     drive-rattle-build --platform NAME [--platform NAME ...] --fmu FMU [--fmu FMU ...]
     drive-rattle-build --library       # build the model library in place (fmu_src/drive_rattle/)
-    drive-rattle-build --update-docs   # docs/fmi.md's tables, docs/tools.md's numbers
+    drive-rattle-build --update-docs   # docs/fmi.md's tables; the numbers of tools.md, model.md
 
 Besides the pythonfmu FMUs, the same two units implemented entirely in C (no Python at run
 time; linux64 and win64 binaries and the C sources) are built into ``<out>/native/`` with their
@@ -47,7 +47,10 @@ DESCRIPTION = ("Build dist/GearMeshRattle.fmu and dist/Driveline.fmu (FMI 2.0 co
 
 def update_docs() -> list[Path]:
     """Regenerate the interface tables of docs/fmi.md from the specs and the numbers of
-    docs/tools.md from the model library (``tools_doc``); the files."""
+    docs/tools.md and docs/model.md from the model library (``tools_doc``,
+    ``drive_rattle_cosim.model_doc``: a few minutes of runs); the files."""
+    from drive_rattle_cosim import model_doc
+
     from . import tools_doc
 
     build_in_place()
@@ -55,7 +58,12 @@ def update_docs() -> list[Path]:
     FMI_DOCS.write_text(interface_docs(text), encoding="utf-8")
     text = TOOLS_DOCS.read_text(encoding="utf-8")
     TOOLS_DOCS.write_text(tools_doc.update(text), encoding="utf-8")
-    return [FMI_DOCS, TOOLS_DOCS]
+    text = model_doc.DOC.read_text(encoding="utf-8")
+    model_doc.DOC.write_text(model_doc.update(text), encoding="utf-8")
+    text = model_doc.ANALYSIS_DOC.read_text(encoding="utf-8")
+    model_doc.ANALYSIS_DOC.write_text(
+        model_doc.update(text, blocks=model_doc.ANALYSIS_BLOCKS), encoding="utf-8")
+    return [FMI_DOCS, TOOLS_DOCS, model_doc.DOC, model_doc.ANALYSIS_DOC]
 
 
 def with_extra(shipped: tuple[str, ...], extra: list[str]) -> tuple[str, ...]:

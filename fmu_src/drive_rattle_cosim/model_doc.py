@@ -1,0 +1,426 @@
+"""The numbers of docs/model.md (and of docs/analysis.md's runs), computed: every ``<!-- BEGIN
+name -->...<!-- END name -->`` block of docs/model.md is the output of ``BLOCKS[name]``, of
+docs/analysis.md of ``ANALYSIS_BLOCKS[name]``, written by ``python -m
+drive_rattle_cosim.model_doc --update`` (``update``) and held against a fresh computation by
+tests/cosim/test_model_doc.py (``stale``).  After a change of the default physics,
+run that command and review the diff: the findings written around the tables are generated
+from the same runs, so a sentence that no longer holds changes with its numbers.
+
+The runs are the model library's compiled loop (the FMUs' numbers bit for bit), deterministic:
+the same text on every machine with the same library.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+
+from . import band, contact_laws, mesh_stiffness, paper_models
+from .analysis import PAPER_FIGURES
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
+ANALYSIS_DOC = DOC.with_name("analysis.md")
+#: The scenario's horizon of every run of the document [s]: an 11 s run, the first second
+#: left out, five windows of 2 s (the README's main command).
+HORIZON = {"stop_time": 11.0, "transient": 1.0, "window": 2.0}
+
+
+def _h(horizon: dict | None) -> tuple:
+    return tuple(sorted((horizon or HORIZON).items()))
+
+
+@lru_cache(maxsize=4)
+def _contact_runs(horizon: tuple) -> dict:
+    return contact_laws.results(**dict(horizon))
+
+
+@lru_cache(maxsize=4)
+def _paper_runs(horizon: tuple):
+    kw = dict(horizon)
+    return (paper_models.compare(**kw), paper_models.compare(**kw, setup=paper_models.COUPLED),
+            paper_models.hypothesis(**kw))
+
+
+@lru_cache(maxsize=4)
+def _band_runs(horizon: tuple) -> list:
+    return band.band(**dict(horizon))
+
+
+def _g(x: float, digits: int = 3) -> str:
+    return f"{x:.{digits}g}"
+
+
+def _pct(new: float, old: float) -> str:
+    return f"{(new / old - 1) * 100:+.1f} %"
+
+
+def _in(x: float, lo: float, hi: float) -> str:
+    return "inside" if lo <= x <= hi else "outside"
+
+
+# --- section 3.6: the contact options -----------------------------------------------------
+
+def contact_options(horizon: dict | None = None) -> str:
+    runs = _contact_runs(_h(horizon))
+    return "\n" + contact_laws.report(progress=False, runs=runs) + "\n"
+
+
+def contact_findings(horizon: dict | None = None) -> str:
+    runs = _contact_runs(_h(horizon))
+    sc = {n: {f: ws.scatter(f) for _, f, _ in contact_laws.ROWS} for n, ws in runs.items()}
+    crowned, paper, line = ("default (crowned, exact law)", "paper, exact law",
+                            "line (Palmgren)")
+
+    def pairs(name):
+        return sc[name]["mean_loaded_pairs"].mean
+
+    def three_to_four(name):
+        return "within" if 3.0 <= pairs(name) <= 4.0 else "outside"
+
+    yes = [label for label, f, _ in contact_laws.ROWS
+           if contact_laws.sensitive([runs[n].scatter(f) for n in runs])]
+    no = [label for label, f, _ in contact_laws.ROWS if label not in yes]
+    delta = {n: sc[n]["max_penetration"].mean * 1e6 for n in runs}
+    onsets = {n: sc[n]["impacts_per_second_drive"].mean for n in runs}
+    return (
+        "\n* **Pairs in contact**: the paper's ellipsoids load "
+        f"{_g(pairs(paper))} pairs on average ({three_to_four(paper)} the paper's 3–4) and the "
+        f"line contact {_g(pairs(line))} ({three_to_four(line)} 3–4): wherever every pair in "
+        "the zone of action carries load, the transverse and overlap contact ratios "
+        f"(ε_γ ≈ 3) set the count; the crowned default loads {_g(pairs(crowned))}. The "
+        "paper's \"3–4 teeth pairs in simultaneous impact\" is a property of its contact "
+        "geometry, not of rattle.\n"
+        f"* **Sensitive to the contact law** (the spread of the means over the cases beyond "
+        f"three window scatters): {'; '.join(yes) or 'none'}. **Not sensitive**: "
+        f"{'; '.join(no) or 'none'}.\n"
+        "* Peak approach δmax " + ", ".join(f"{n} {_g(delta[n])} µm" for n in runs)
+        + "; drive-flank onsets per second " + ", ".join(f"{n} {_g(onsets[n])}" for n in runs)
+        + ".\n")
+
+
+# --- sections 6.3: the paper comparison ---------------------------------------------------
+
+def paper_comparison(horizon: dict | None = None) -> str:
+    paper, coupled, h = _paper_runs(_h(horizon))
+    return "\n" + paper_models.report(paper, h, coupled)
+
+
+def _band_range(mb, statistic: str) -> tuple[float, float]:
+    means = [r.statistics.scatter(statistic) for r in (mb.central, *mb.band)]
+    means = [m.mean for m in means if m.n]
+    return min(means), max(means)
+
+
+def paper_findings(horizon: dict | None = None) -> str:
+    paper, coupled, _ = _paper_runs(_h(horizon))
+    out = []
+    speed = paper[0].central.statistics.scatter("mean_wheel_speed").mean
+    out.append(f"* **Mean wheel speed** {_g(speed, 4)} rad/s against the paper's "
+               f"{PAPER_FIGURES['mean wheel speed [rad/s]']}: the kinematic ratio of the "
+               "830 rpm pinion, not a test of the contact.")
+    for mb in paper:
+        pairs = mb.central.statistics.scatter("mean_loaded_pairs").mean
+        d = mb.central.statistics.scatter("max_penetration").mean * 1e6
+        v = mb.central.statistics.scatter("impact_speed_p50_drive").mean * 1e3
+        dlo, dhi = (x * 1e6 for x in _band_range(mb, "max_penetration"))
+        vlo, vhi = (x * 1e3 for x in _band_range(mb, "impact_speed_p50_drive"))
+        coast = mb.central.statistics.scatter("impacts_per_second_coast").mean
+        out.append(
+            f"* **{mb.model.name.capitalize()}** in the paper's setup: {_g(pairs)} pairs loaded "
+            f"while in contact; δmax {_g(d)} µm at its defaults, {_g(dlo)}–{_g(dhi)} µm over "
+            f"its band (1 µm {_in(1.0, dlo, dhi)} it); median drive onset speed {_g(v)} mm/s, "
+            f"{_g(vlo)}–{_g(vhi)} mm/s over the band (4 mm/s {_in(4.0, vlo, vhi)} it); "
+            f"{_g(coast)} coast onsets per second.")
+    d0, c0 = paper[0].central.statistics, coupled[0].central.statistics
+    lo, hi = coupled[0].load_range()
+    out.append(
+        "* **The load path matters**: the default model in the coupled driveline gives a "
+        f"median drive onset speed of {_g(c0.scatter('impact_speed_p50_drive').mean * 1e3)} "
+        f"mm/s, δmax {_g(c0.scatter('max_penetration').mean * 1e6)} µm and "
+        f"{_g(c0.scatter('impacts_per_second_coast').mean)} coast onsets/s, against "
+        f"{_g(d0.scatter('impact_speed_p50_drive').mean * 1e3)} mm/s, "
+        f"{_g(d0.scatter('max_penetration').mean * 1e6)} µm and "
+        f"{_g(d0.scatter('impacts_per_second_coast').mean)}/s under the paper's constant "
+        f"M_res; its load's window means span {_g(lo * 1e3, 4)}–{_g(hi * 1e3, 4)} mN·m over the "
+        "run, which the window scatter does not cover.")
+    return "\n" + "\n".join(out) + "\n"
+
+
+# --- section 6.4: the band ----------------------------------------------------------------
+
+def band_table(horizon: dict | None = None) -> str:
+    h = horizon or HORIZON
+    rows = _band_runs(_h(horizon))
+    ws_note = (f"The paper's setup, one {h['stop_time']:g} s run per case from the smooth start "
+               f"(`python -m drive_rattle_cosim.band`); each cell the mean ± standard deviation "
+               f"over the windows of {h['window']:g} s after the {h['transient']:g} s start "
+               "transient: the ± covers the variation between windows of that run, not "
+               "other starts; the cases are the band.\n\n")
+    return "\n" + ws_note + band.markdown(rows, timings=False) + "\n"
+
+
+#: (label, statistic, scale, unit) of the band's findings.
+EFFECTS = (("drive onsets", "impacts_per_second_drive", 1.0, "/s"),
+           ("coast onsets", "impacts_per_second_coast", 1.0, "/s"),
+           ("median drive onset speed", "impact_speed_p50_drive", 1e3, " mm/s"),
+           ("δmax", "max_penetration", 1e6, " µm"),
+           ("rattle index", "impact_energy_rate", 1e3, " mW"))
+
+
+def _effect(rows: dict, name: str, reference: str = "default") -> str:
+    parts = []
+    for label, stat, scale, unit in EFFECTS:
+        new, old = rows[name].values[stat], rows[reference].values[stat]
+        if not (new.n and old.n):
+            continue
+        beyond = abs(new.mean - old.mean) > 2.0 * max(old.std, new.std)
+        parts.append(f"{label} {_g(old.mean * scale)} → {_g(new.mean * scale)}{unit} "
+                     f"({_pct(new.mean, old.mean)}, {'beyond' if beyond else 'within'} twice "
+                     f"the window scatter ± {_g(max(old.std, new.std) * scale, 2)})")
+    return "; ".join(parts)
+
+
+def _largest(rows: dict, names, reference: str = "default") -> str:
+    """The largest relative change of the findings' statistics over the cases ``names``
+    against ``reference``, and how many of the changes exceed twice the window scatter."""
+    changes, beyond, total = [], 0, 0
+    for name in names:
+        for _label, stat, _scale, _unit in EFFECTS:
+            new, old = rows[name].values[stat], rows[reference].values[stat]
+            if new.n and old.n:
+                changes.append(abs(new.mean / old.mean - 1) * 100)
+                beyond += abs(new.mean - old.mean) > 2.0 * max(old.std, new.std)
+                total += 1
+    return (f"at most {max(changes):.0f} % (in {beyond} of {total} statistic–case pairs beyond "
+            "twice the window scatter)")
+
+
+def band_findings(horizon: dict | None = None) -> str:
+    rows = {r.case.name: r for r in _band_runs(_h(horizon))}
+
+    def span(stat, names, scale):
+        values = [rows[n].values[stat].mean * scale for n in names if rows[n].values[stat].n]
+        return f"{_g(min(values))}–{_g(max(values))}"
+
+    dissipation = [n for n in rows if n.startswith(("squeeze", "e ", "zeta")) or n == "default"]
+    out = [
+        "* **Friction, measured** (against the defaults, boundary coefficient 0.1): it moves "
+        "the statistics below by "
+        f"{_largest(rows, ('friction off', 'boundary mu 0.05', 'boundary mu 0.15'))}. Friction "
+        f"off: {_effect(rows, 'friction off')}. Boundary coefficient 0.05: "
+        f"{_effect(rows, 'boundary mu 0.05')}. 0.15: {_effect(rows, 'boundary mu 0.15')}.",
+        "* **The teeth's compliance** moves them by "
+        f"{_largest(rows, ('rigid teeth', 'bodies 1.4', 'bodies 7'))}. Rigid teeth: "
+        f"{_effect(rows, 'rigid teeth')}. Gear "
+        f"bodies 1.4: {_effect(rows, 'bodies 1.4')}; 7: {_effect(rows, 'bodies 7')}.",
+        "* **The dissipation** (the squeeze-film law over its range, Hunt–Crossley e = "
+        "0.7–0.9, damping ratios 0.03–0.1): drive onsets "
+        f"{span('impacts_per_second_drive', dissipation, 1.0)}/s, coast onsets "
+        f"{span('impacts_per_second_coast', dissipation, 1.0)}/s, median drive onset speed "
+        f"{span('impact_speed_p50_drive', dissipation, 1e3)} mm/s, δmax "
+        f"{span('max_penetration', dissipation, 1e6)} µm, rattle index "
+        f"{span('impact_energy_rate', dissipation, 1e3)} mW.",
+        "* **The film**: with the EHL film "
+        f"{_g(rows['Barus + EHL film'].values['psi'].mean * 100)} % of the in-contact samples "
+        f"are mixed (ψ < 1), against {_g(rows['default'].values['psi'].mean * 100)} % with "
+        f"eq. 11's film; its effect: {_effect(rows, 'Barus + EHL film')}.",
+    ]
+    return "\n" + "\n".join(out) + "\n"
+
+
+# --- section 6.1: the paper's setup over the load -----------------------------------------
+
+#: The loads of section 6.1's table [M*] and its backlash [m].
+LOADS = (0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+LOAD_BACKLASH = 1e-4
+
+
+@lru_cache(maxsize=1)
+def _load_study():
+    from . import multistability
+
+    return multistability.study(LOADS, [LOAD_BACKLASH], workers=2)
+
+
+def separation_loads() -> str:
+    """The multistability study's attractors over the load at the default backlash (the
+    command of section 6.1, one backlash), a row per attractor, and what they show."""
+    points = _load_study()
+    rows = ["| load | verdict | starts | drive / coast onsets [1/s] | drive onset speed p10 / "
+            "p50 / p90 [mm/s] | impact energy rate [mW] | δmax [µm] | pairs loaded |",
+            "|---|---|---|---|---|---|---|---|"]
+    for p in points:
+        for a in p.attractors:
+            m = a.mean
+            rows.append(
+                f"| {p.load_fraction:g} M* ({p.load:.4g} N·m) | {p.verdict} | "
+                f"{len(a.starts)} of {len(p.runs)} | {m['drive_rate']:.3g} / "
+                f"{m['coast_rate']:.3g} | {m['drive_p10'] * 1e3:.2g} / "
+                f"{m['drive_p50'] * 1e3:.3g} / {m['drive_p90'] * 1e3:.3g} | "
+                f"{m['energy_rate'] * 1e3:.3g} | {m['delta_max'] * 1e6:.3g} | "
+                f"{m['pairs']:.3g} |")
+        if p.unsettled:
+            rows.append(f"| {p.load_fraction:g} M* | unsettled: {', '.join(p.unsettled)} "
+                        "| | | | | | |")
+    both = [p.load_fraction for p in points
+            if all(a.mean["coast_rate"] > 0 for a in p.attractors)]
+    drive_only = [p.load_fraction for p in points
+                  if all(a.mean["coast_rate"] == 0 for a in p.attractors)]
+    top = points[-1]
+    p90 = max(a.mean["drive_p90"] for a in top.attractors) * 1e3
+    multi = [f"{p.load_fraction:g} M*" for p in points if p.verdict == "multistable"]
+    text = ("\n" + "\n".join(rows) + "\n\n"
+            f"(`python -m drive_rattle_cosim.multistability --loads "
+            f"{','.join(f'{x:g}' for x in LOADS)} --backlash {LOAD_BACKLASH:g}`.) Impacts on "
+            f"both flanks (creep rattle) at {', '.join(f'{x:g}' for x in both) or 'no load'} "
+            f"M*; on the drive flank only at "
+            f"{', '.join(f'{x:g}' for x in drive_only) or 'no load'} M*; at "
+            f"{top.load_fraction:g} M* the drive onsets' 90th percentile is {p90:.2g} mm/s. "
+            + (f"Several attractors at {', '.join(multi)} (section 6.2)." if multi
+               else "Every point single-valued from these starts.") + "\n")
+    return text
+
+
+# --- section 6: the coupled system's memory ---------------------------------------------
+
+#: The coupled default's long run [s] (about four periods of the vehicle mode).
+MEMORY_SECONDS = 120.0
+
+
+def coupled_memory(seconds: float = MEMORY_SECONDS) -> str:
+    """The coupled default's load and drive onset rate in 1 s windows over ``seconds``."""
+    import numpy as np
+
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from .system import simulate
+
+    drive = DrivelineParameters()
+    rec = simulate(MeshParameters(), drive, stop_time=seconds, step=1e-4,
+                   signals=["wheel.tau_load", "vehicle.w"])
+    t = np.asarray(rec.time)
+    tau = np.asarray(rec.signals["wheel.tau_load"])
+    vw = np.asarray(rec.signals["vehicle.w"])
+    n = round(seconds)
+    edges = np.searchsorted(t, np.arange(n + 1), side="left")
+    means = [float(np.mean(tau[edges[k]:edges[k + 1]])) for k in range(n)]
+    onsets = np.asarray(rec.onset_times)[np.asarray(rec.onset_flanks) == 1]
+    rates = np.histogram(onsets, bins=np.arange(n + 1))[0]
+    half = n // 2
+    late = max(means[half:]) - min(means[half:])
+    early = max(means[:half]) - min(means[:half])
+    vdev = float(np.max(np.abs(vw - np.mean(vw))))
+    period = 1.0 / drive.derived()["vehicle_mode_frequency"]
+    return (f"Measured over {seconds:g} s of the coupled default (1 s means): `wheel.tau_load` "
+            f"{min(means):.4g}–{max(means):.4g} N·m around the drag {drive.drag:.4g} N·m "
+            f"(the vehicle mode's period {period:.3g} s), a swing of {late * 1e3:.3g} mN·m in "
+            f"the second half against {early * 1e3:.3g} in the first; the drive onsets per "
+            f"second of 1 s windows range from {rates.min()} to {rates.max()} "
+            f"(`vehicle.w` within ± {vdev:.2g} rad/s of its mean)")
+
+
+#: name -> function giving the block's text.
+BLOCKS: dict[str, Callable[[], str]] = {
+    "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
+    "contact options": contact_options,
+    "contact findings": contact_findings,
+    "paper comparison": paper_comparison,
+    "paper findings": paper_findings,
+    "band": band_table,
+    "band findings": band_findings,
+    "coupled memory": coupled_memory,
+    "separation loads": separation_loads,
+}
+
+
+# --- docs/analysis.md section 5: what the default run shows -------------------------------
+
+def default_run(horizon: dict | None = None) -> str:
+    """The comparison table and the further statistics of the default model in the paper's
+    setup, as examples/paper_scenario.py writes them from the FMUs (the compiled loop's
+    numbers are theirs, bit for bit)."""
+    from .analysis import further_statistics, markdown_table
+    from .analysis import paper_comparison as comparison
+
+    paper, _, _ = _paper_runs(_h(horizon))
+    ws = paper[0].central.statistics
+    return ("\n" + markdown_table(comparison(ws), headers=(
+        "quantity", "this run: mean ± scatter (min–max over windows)", "paper")) + "\n"
+        + markdown_table(further_statistics(ws), headers=("further statistics", "this run"))
+        + "\n")
+
+
+#: name -> function giving the block's text, in docs/analysis.md.
+ANALYSIS_BLOCKS: dict[str, Callable[[], str]] = {"default run": default_run}
+#: Each document and its blocks.
+DOCUMENTS = {"model.md": BLOCKS, "analysis.md": ANALYSIS_BLOCKS}
+_BLOCK = re.compile(r"<!-- BEGIN (?P<name>[^>]+?) -->(?P<body>.*?)<!-- END (?P=name) -->", re.S)
+
+
+def blocks_in(text: str) -> dict[str, str]:
+    return {m["name"]: m["body"] for m in _BLOCK.finditer(text)}
+
+
+def compute(names, blocks=None) -> dict[str, str]:
+    blocks = BLOCKS if blocks is None else blocks
+    return {name: blocks[name]() for name in dict.fromkeys(names)}
+
+
+def update(text: str, computed: dict[str, str] | None = None, blocks=None) -> str:
+    """``text`` with every block's body replaced by its computed text; ValueError when a
+    block of ``blocks`` (default ``BLOCKS``, docs/model.md's) is missing or the text has a
+    block ``blocks`` lacks."""
+    blocks = BLOCKS if blocks is None else blocks
+    found = blocks_in(text)
+    missing = sorted(set(blocks) - set(found))
+    unknown = sorted(set(found) - set(blocks))
+    if missing or unknown:
+        raise ValueError(f"the document's blocks: missing {', '.join(missing) or 'none'}, "
+                         f"unknown {', '.join(unknown) or 'none'}; allowed: exactly "
+                         f"{', '.join(blocks)}")
+    computed = computed if computed is not None else compute(found, blocks)
+    return _BLOCK.sub(lambda m: f"<!-- BEGIN {m['name']} -->{computed[m['name']]}"
+                                f"<!-- END {m['name']} -->", text)
+
+
+def stale(text: str, names=None, blocks=None) -> list[str]:
+    """The names of the blocks of ``text`` (or of ``names`` only) whose body differs from a
+    fresh computation (``blocks``: default ``BLOCKS``, docs/model.md's)."""
+    blocks = BLOCKS if blocks is None else blocks
+    bodies = blocks_in(text)
+    names = list(bodies) if names is None else list(names)
+    return [n for n in names if bodies[n] != blocks[n]()]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m drive_rattle_cosim.model_doc",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--update", action="store_true",
+                    help="rewrite the documents' blocks (else: name the stale ones)")
+    ap.add_argument("--doc", type=Path, action="append",
+                    help="a document (docs/model.md or docs/analysis.md; default both)")
+    args = ap.parse_args(argv)
+    stale_names = []
+    for doc in args.doc or [DOC, ANALYSIS_DOC]:
+        blocks = DOCUMENTS.get(doc.name, BLOCKS)
+        try:
+            text = doc.read_text(encoding="utf-8")
+            if args.update:
+                doc.write_text(update(text, blocks=blocks), encoding="utf-8")
+                print(f"updated {doc}")
+                continue
+        except (OSError, ValueError) as err:
+            print(f"model_doc: {doc}: {err}", file=sys.stderr)
+            return 1
+        stale_names += [f"{doc.name}: {n}" for n in stale(text, blocks=blocks)]
+    if not args.update:
+        print("stale: " + ", ".join(stale_names) if stale_names else "every block is current")
+    return 1 if stale_names else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

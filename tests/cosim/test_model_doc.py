@@ -1,0 +1,88 @@
+"""docs/model.md's numbers as a reader meets them: every ``<!-- BEGIN name -->`` block equals
+what ``drive_rattle_cosim.model_doc`` computes now from the runs it names (``python -m
+drive_rattle_cosim.model_doc --update`` rewrites them).  The contact options' block is checked
+whole here (seven 11 s runs of the compiled loop, a few seconds); the whole document in the
+slow layer; the findings' sentences on short runs."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from drive_rattle_cosim import model_doc
+
+ROOT = Path(__file__).resolve().parents[2]
+TEXT = (ROOT / "docs" / "model.md").read_text(encoding="utf-8")
+#: A short horizon: two windows of 0.5 s after 0.3 s.
+SHORT = {"stop_time": 1.3, "transient": 0.3, "window": 0.5}
+
+
+def test_the_document_holds_every_block_once():
+    names = re.findall(r"<!-- BEGIN ([^>]+?) -->", TEXT)
+    assert sorted(names) == sorted(model_doc.BLOCKS)
+
+
+def test_the_contact_options_are_a_fresh_runs():
+    assert model_doc.stale(TEXT, ["contact options", "contact findings"]) == [], (
+        "docs/model.md section 3.6 is stale: run `python -m drive_rattle_cosim.model_doc "
+        "--update` and review the diff")
+
+
+@pytest.mark.slow
+def test_every_block_of_the_document_is_current():
+    assert model_doc.stale(TEXT) == [], (
+        "docs/model.md is stale: run `python -m drive_rattle_cosim.model_doc --update` and "
+        "review the diff")
+
+
+def test_the_findings_are_written_from_the_runs_of_a_short_horizon():
+    contact = model_doc.contact_findings(SHORT)
+    paper = model_doc.paper_findings(SHORT)
+    band = model_doc.band_findings(SHORT)
+    for text in (contact, paper, band):
+        assert not re.search(r"\b(nan|inf)\b", text, re.IGNORECASE)
+    # the pairs in contact of the paper's and the line contact, each held against 3-4
+    assert "the paper's ellipsoids load 3.0" in contact and "the line contact 3.0" in contact
+    assert paper.count("pairs loaded while in contact") == 3
+    # the band measures friction and the teeth, each against the defaults and their scatter
+    assert "Friction off: drive onsets" in band and "window scatter ±" in band
+    assert "Rigid teeth: drive onsets" in band
+    assert "moves the statistics below by at most" in band
+    # the coupled driveline apart, with its load's range
+    assert "coupled driveline" in paper and "mN·m" in paper
+    # the same runs give the same text (the compiled loop is deterministic)
+    model_doc._band_runs.cache_clear()
+    assert model_doc.band_findings(SHORT) == band
+
+
+def test_the_update_replaces_the_blocks_and_nothing_else():
+    text = "".join(f"a {n}\n<!-- BEGIN {n} -->old<!-- END {n} -->\n" for n in model_doc.BLOCKS)
+    new = model_doc.update(text, {n: f"new {n}" for n in model_doc.BLOCKS})
+    assert new == "".join(f"a {n}\n<!-- BEGIN {n} -->new {n}<!-- END {n} -->\n"
+                          for n in model_doc.BLOCKS)
+
+
+def test_a_document_without_a_block_is_refused_in_one_line(tmp_path, capsys):
+    doc = tmp_path / "model.md"
+    doc.write_text("no block <!-- BEGIN stray -->x<!-- END stray -->\n", encoding="utf-8")
+    assert model_doc.main(["--update", "--doc", str(doc)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("model_doc: ") and "\n" not in err
+    assert "unknown stray" in err and "missing" in err
+    assert doc.read_text(encoding="utf-8").startswith("no block")  # left as it was
+
+
+def test_the_analysis_documents_default_run_is_the_paper_setups():
+    text = (ROOT / "docs" / "analysis.md").read_text(encoding="utf-8")
+    found = re.findall(r"<!-- BEGIN ([^>]+?) -->", text)
+    assert sorted(found) == sorted(model_doc.ANALYSIS_BLOCKS)
+    block = model_doc.default_run(SHORT)
+    assert "| mean wheel speed [rad/s] |" in block and "| 44.5 |" in block
+    assert "| further statistics | this run |" in block
+
+
+@pytest.mark.slow
+def test_every_block_of_the_analysis_document_is_current():
+    text = (ROOT / "docs" / "analysis.md").read_text(encoding="utf-8")
+    assert model_doc.stale(text, blocks=model_doc.ANALYSIS_BLOCKS) == [], (
+        "docs/analysis.md is stale: run `python -m drive_rattle_cosim.model_doc --update`")
