@@ -33,7 +33,6 @@ from drive_rattle import (
 from drive_rattle.catalog import UNITS
 from drive_rattle.interface import DEFAULT_EXPERIMENT, MESH_OUTPUTS, MODELS
 from drive_rattle.parameters import RPM, specs
-
 from drive_rattle_cosim import environments, step_accuracy
 from drive_rattle_cosim.harness import time_grid
 from drive_rattle_cosim.variants import code_list

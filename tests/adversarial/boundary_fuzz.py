@@ -46,6 +46,7 @@ import sys
 from ctypes import c_void_p
 from pathlib import Path
 
+from call_clock import CallClock
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 from raw_fmi import (
@@ -63,7 +64,6 @@ from raw_fmi import (
     unpack,
     with_payload,
 )
-from call_clock import CallClock
 from records import MESH_MODEL, Record
 from shadow import TYPES, Shadow
 

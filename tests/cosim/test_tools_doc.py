@@ -24,8 +24,7 @@ import pytest
 from drive_rattle.catalog import UNITS
 from drive_rattle.interface import MODELS
 from drive_rattle.parameters import specs
-from drive_rattle_build import write_systems
-from drive_rattle_build import tools_doc
+from drive_rattle_build import tools_doc, write_systems
 from drive_rattle_cosim.environments import master_python
 
 ROOT = Path(__file__).resolve().parents[2]

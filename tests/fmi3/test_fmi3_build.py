@@ -39,8 +39,8 @@ from drive_rattle_build.native import (
     native_guid,
     render_config,
 )
-from drive_rattle_build.templates import template_body
 from drive_rattle_build.paths import TEST_ONLY_SOURCES
+from drive_rattle_build.templates import template_body
 from drive_rattle_cosim.regression import reference_files
 
 
