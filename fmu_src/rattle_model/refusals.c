@@ -7,9 +7,6 @@
 
 #include "rm_private.h"
 
-/* Substeps of a contact in one communication step (stepper.c) */
-extern const int64_t RM_MAX_CONTACT_SUBSTEPS;
-
 void rm_fail(RmFail* f, int code, double v0, double v1, double v2, double v3)
 {
     f->code = code;

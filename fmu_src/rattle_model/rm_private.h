@@ -531,6 +531,11 @@ RM_INTERNAL void rm_pair_cache_init(RmPairCache* c);
 RM_INTERNAL RmPairSet* rm_pairs_at(const RmMesh* M, RmFail* f, RmPairCache* c, double u);
 RM_INTERNAL void rm_pair_coefficients(const RmMesh* M, RmFail* f, RmPairSet* ps, int i);
 
+/* Largest number of contact substeps in one communication step (stepper.c; refusals.c quotes
+ * it): beyond it the contact is stiffer than the stepper resolves at a sensible cost and the
+ * step is refused. */
+#define RM_MAX_CONTACT_SUBSTEPS ((int64_t)200000)
+
 /* Largest penetration a step may reach, as a fraction of the normal module (mesh.c's
  * pen_limit; refusals.c quotes it): far beyond it the Hertz contact of the flanks' surfaces is
  * no longer a model of anything (the default pair reaches about 1e-3 of the module in

@@ -59,9 +59,6 @@
  * tolerances at every damping tested (tests/model/test_closed_forms.py, test_dissipation.py,
  * test_properties.py). */
 #define CONTACT_DAMPING_SAFETY_TEETH 2.0
-/* Largest number of contact substeps in one communication step: beyond it the contact is
- * stiffer than the stepper resolves at a sensible cost and the step is refused. */
-const int64_t RM_MAX_CONTACT_SUBSTEPS = 200000;
 /* xtol [s] and rtol of Brent's method for the release, friction reversals and engagements. */
 #define EVENT_XTOL 1e-15
 #define EVENT_RTOL RM_BRENT_RTOL
