@@ -196,11 +196,10 @@ static int tooth_compliance(const Tooth* t, const Gauss* g, double rho, double* 
     L.ca = cos(a1);
     L.sa = sin(a1);
     if (!(L.x_c > 0.0)) {
-        rm_puts(err, "parameter 'tooth.compliance' = 1: the virtual spur tooth (normal section) "
-                     "of this pair is pointed below its contact at roll length ");
-        rm_put_g(err, rho * 1e3, 6);
-        rm_puts(err, " mm, where its bending is not modelled; allowed: tooth.compliance = 0, or "
-                     "a smaller gear.h_a");
+        rm_printf(err, "parameter 'tooth.compliance' = 1: the virtual spur tooth (normal section) "
+                       "of this pair is pointed below its contact at roll length %.6r mm, where "
+                       "its bending is not modelled; allowed: tooth.compliance = 0, or a smaller "
+                       "gear.h_a", rho * 1e3);
         return 0;
     }
     double beam = 0.0, t_0 = 0.0;
@@ -233,12 +232,9 @@ static int tooth_compliance(const Tooth* t, const Gauss* g, double rho, double* 
                      + t->body[2] * (1.0 + t->body[3] * ta * ta));
     *out = beam + body;
     if (!(*out > 0.0 && isfinite(*out))) {
-        rm_puts(err, "parameter 'tooth.compliance' = 1: the teeth's compliance is not positive ("
-                     "q = ");
-        rm_put_number(err, *out);
-        rm_puts(err, " m^2/N) at roll length ");
-        rm_put_g(err, rho * 1e3, 6);
-        rm_puts(err, " mm for this geometry; allowed: tooth.compliance = 0");
+        rm_printf(err, "parameter 'tooth.compliance' = 1: the teeth's compliance is not positive "
+                       "(q = %r m^2/N) at roll length %.6r mm for this geometry; allowed: "
+                       "tooth.compliance = 0", *out, rho * 1e3);
         return 0;
     }
     return 1;
@@ -298,12 +294,9 @@ static int hermite_grid(RmToothCompliance* c, double lo, double hi, RmText* err)
         }
         if (worst <= GRID_TOLERANCE) return 1;
     }
-    rm_puts(err, "parameter 'tooth.compliance' = 1: the teeth's compliance along the path of "
-                 "contact cannot be tabulated on a grid to ");
-    rm_put_g(err, GRID_TOLERANCE, 3);
-    rm_puts(err, " (reached ");
-    rm_put_g(err, worst, 3);
-    rm_puts(err, "); allowed: tooth.compliance = 0");
+    rm_printf(err, "parameter 'tooth.compliance' = 1: the teeth's compliance along the path of "
+                   "contact cannot be tabulated on a grid to %.3r (reached %.3r); allowed: "
+                   "tooth.compliance = 0", GRID_TOLERANCE, worst);
     return 0;
 }
 
@@ -344,12 +337,9 @@ int rm_tooth_compliance_build(const RmMeshParams* p, const RmGeometry* g, RmToot
             return hermite_grid(c, lo, hi, err) && pair_compliance(&T, g->s_pitch, &c->pitch, err);
         }
     }
-    rm_puts(err, "parameter 'tooth.compliance' = 1: the teeth's compliance along the path of "
-                 "contact cannot be tabulated to ");
-    rm_put_g(err, FIT_TOLERANCE, 3);
-    rm_puts(err, " (reached ");
-    rm_put_g(err, worst, 3);
-    rm_puts(err, "); allowed: tooth.compliance = 0");
+    rm_printf(err, "parameter 'tooth.compliance' = 1: the teeth's compliance along the path of "
+                   "contact cannot be tabulated to %.3r (reached %.3r); allowed: tooth.compliance "
+                   "= 0", FIT_TOLERANCE, worst);
     return 0;
 }
 

@@ -107,9 +107,7 @@ static double ellipse_residual(void* ctx, double y) /* y = ln q */
 int rm_exact_ellipse(double rho, RmEllipse* out, RmText* err)
 {
     if (!(rho >= 1.0)) {
-        rm_puts(err, "radius ratio rho = ");
-        rm_put_number(err, rho);
-        rm_puts(err, " must be >= 1 (larger over smaller)");
+        rm_printf(err, "radius ratio rho = %r must be >= 1 (larger over smaller)", rho);
         return 0;
     }
     if (rho <= CIRCLE_RATIO) {
@@ -125,9 +123,7 @@ int rm_exact_ellipse(double rho, RmEllipse* out, RmText* err)
     while (ellipse_residual(&target, y_lo) < 0.0) {
         y_lo *= 2.0;
         if (y_lo < -200.0) {
-            rm_puts(err, "radius ratio rho = ");
-            rm_put_number(err, rho);
-            rm_puts(err, " too large for an elliptical contact");
+            rm_printf(err, "radius ratio rho = %r too large for an elliptical contact", rho);
             return 0;
         }
     }
@@ -263,17 +259,10 @@ int rm_contact_law_build(int law, double E_star, double r_y, double x_lo, double
     free(cache.x);
     free(cache.e);
     if (!ok && !failed) {
-        rm_puts(err, "parameter 'contact.hertz_law' = 0 (exact elliptical Hertz contact): the "
-                     "exact Hertz law cannot be tabulated for ln(R/r) in [");
-        rm_put_g(err, lo, 4);
-        rm_puts(err, ", ");
-        rm_put_g(err, hi, 4);
-        rm_puts(err, "] to ");
-        rm_put_g(err, CHEBYSHEV_TOLERANCE, 6);
-        rm_puts(err, " (reached ");
-        rm_put_g(err, worst, 3);
-        rm_puts(err, "); allowed for this geometry: contact.hertz_law = 1 (equivalent "
-                     "sphere)");
+        rm_printf(err, "parameter 'contact.hertz_law' = 0 (exact elliptical Hertz contact): the "
+                       "exact Hertz law cannot be tabulated for ln(R/r) in [%.4r, %.4r] to %.6r "
+                       "(reached %.3r); allowed for this geometry: contact.hertz_law = 1 "
+                       "(equivalent sphere)", lo, hi, CHEBYSHEV_TOLERANCE, worst);
     }
     return ok;
 }
@@ -662,9 +651,7 @@ static double hc_balance_fn(void* ctx, double e) { return hc_balance(*(const dou
 int rm_hunt_crossley_restitution(double alpha, double* e, RmText* err)
 {
     if (!(alpha >= 0.0 && isfinite(alpha))) {
-        rm_puts(err, "alpha = d v = ");
-        rm_put_number(err, alpha);
-        rm_puts(err, " must be finite and >= 0");
+        rm_printf(err, "alpha = d v = %r must be finite and >= 0", alpha);
         return 0;
     }
     if (alpha == 0.0) {
@@ -700,11 +687,7 @@ static double hc_factor_fn(void* vctx, double a)
 int rm_hunt_crossley_factor(double e, double v, double* d, RmText* err)
 {
     if (!(0.0 < e && e <= 1.0) || !(v > 0.0)) {
-        rm_puts(err, "restitution e = ");
-        rm_put_number(err, e);
-        rm_puts(err, " must be in (0, 1] and speed v = ");
-        rm_put_number(err, v);
-        rm_puts(err, " > 0");
+        rm_printf(err, "restitution e = %r must be in (0, 1] and speed v = %r > 0", e, v);
         return 0;
     }
     if (e == 1.0) {

@@ -118,9 +118,7 @@ void rm_driveline_release(RmDriveline* d)
  * its file not counted (the reader's own messages name the file's rows). */
 static void sample_at(RmText* err, const char* source, size_t k, double t)
 {
-    rm_printf(err, "%s sample %zu (time ", source, k + 1);
-    rm_put_number(err, t);
-    rm_puts(err, " s)");
+    rm_printf(err, "%s sample %zu (time %r s)", source, k + 1, t);
 }
 
 int rm_check_speed_table(size_t n, const double* times, const double* speeds, double phi_0,
@@ -134,15 +132,13 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds, do
     for (size_t k = 0; k < n; k++) {
         if (!(isfinite(times[k]) && isfinite(speeds[k]))) {
             sample_at(err, source, k, times[k]);
-            rm_puts(err, ": speed ");
-            rm_put_number(err, speeds[k]);
-            rm_puts(err, " rad/s; allowed: finite numbers");
+            rm_printf(err, ": speed %r rad/s; allowed: finite numbers", speeds[k]);
             return 0;
         }
         if (!(fabs(times[k]) <= RM_MAX_TABLE_TIME)) {
             sample_at(err, source, k, times[k]);
-            rm_printf(err, ": the time is out of range; allowed: [%g, %g] s", -RM_MAX_TABLE_TIME,
-                      RM_MAX_TABLE_TIME);
+            rm_printf(err, ": the time is out of range; allowed: [%.6r, %.6r] s",
+                      -RM_MAX_TABLE_TIME, RM_MAX_TABLE_TIME);
             return 0;
         }
         if (k > 0 && !(times[k] > times[k - 1])) {
@@ -152,19 +148,16 @@ int rm_check_speed_table(size_t n, const double* times, const double* speeds, do
         }
         if (!(fabs(speeds[k]) <= RM_MAX_SPEED)) {
             sample_at(err, source, k, times[k]);
-            rm_puts(err, ": speed ");
-            rm_put_number(err, speeds[k]);
-            rm_printf(err, " rad/s is out of range; allowed: [%g, %g] rad/s", -RM_MAX_SPEED,
-                      RM_MAX_SPEED);
+            rm_printf(err, ": speed %r rad/s is out of range; allowed: [%.6r, %.6r] rad/s",
+                      speeds[k], -RM_MAX_SPEED, RM_MAX_SPEED);
             return 0;
         }
         if (k > 0) angle += 0.5 * (times[k] - times[k - 1]) * (speeds[k] + speeds[k - 1]);
         if (!(fabs(angle) <= RM_MAX_ANGLE)) {
             sample_at(err, source, k, times[k]);
-            rm_puts(err, ": the input-shaft angle reaches ");
-            rm_put_number(err, angle);
-            rm_printf(err, " rad there; allowed: within [%g, %g] rad (a shorter table, or "
-                           "pinion.phi_start nearer 0)", -RM_MAX_ANGLE, RM_MAX_ANGLE);
+            rm_printf(err, ": the input-shaft angle reaches %r rad there; allowed: within [%.6r, "
+                           "%.6r] rad (a shorter table, or pinion.phi_start nearer 0)",
+                      angle, -RM_MAX_ANGLE, RM_MAX_ANGLE);
             return 0;
         }
     }
@@ -294,11 +287,8 @@ int rm_driveline_step(RmDriveline* d, double t, double h, double phi_w, double w
     else
         shaft_rk4(d, h, n, phi_w, w_w, &phi, &w);
     if (!(isfinite(phi) && isfinite(w))) {
-        rm_puts(err, "the output shaft diverged (vehicle-side angle ");
-        rm_put_number(err, phi);
-        rm_puts(err, " rad, speed ");
-        rm_put_number(err, w);
-        rm_puts(err, " rad/s): reduce solver.h_max");
+        rm_printf(err, "the output shaft diverged (vehicle-side angle %r rad, speed %r rad/s): "
+                       "reduce solver.h_max", phi, w);
         return 0;
     }
     d->shaft_phi = phi;

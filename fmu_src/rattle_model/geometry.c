@@ -53,39 +53,27 @@ static int geometry_valid(const RmGearParams* p, const RmGeometry* g, RmText* er
     int zs[2] = {p->z_pinion, p->z_wheel};
     for (int k = 0; k < 2; k++) {
         if ((double)zs[k] < z_min) {
-            rm_printf(err, "parameter '%s' = %d undercuts with gear.alpha_n = ", names[k], zs[k]);
-            rm_put_g(err, alpha_n * (180.0 / RM_PI), 4);
-            rm_puts(err, " deg and gear.beta = ");
-            rm_put_g(err, beta * (180.0 / RM_PI), 4);
-            rm_printf(err, " deg; allowed: %s >= %.0f (2 cos(beta)/sin^2(alpha_t) * gear.h_a = ",
-                      names[k], ceil(z_min - 1e-9));
-            rm_put_g(err, z_min, 4);
-            rm_puts(err, ")");
+            rm_printf(err, "parameter '%s' = %d undercuts with gear.alpha_n = %.4r deg and "
+                           "gear.beta = %.4r deg; allowed: %s >= %r (2 cos(beta)/sin^2(alpha_t) * "
+                           "gear.h_a = %.4r)",
+                      names[k], zs[k], alpha_n * (180.0 / RM_PI), beta * (180.0 / RM_PI),
+                      names[k], ceil(z_min - 1e-9), z_min);
             return 0;
         }
     }
     if (g->s_start <= 0.0 || g->s_end >= g->line_length) {
-        rm_puts(err, "tip interference: the path of contact leaves the line of action (s_start = ");
-        rm_put_g(err, g->s_start, 4);
-        rm_puts(err, " m, s_end = ");
-        rm_put_g(err, g->s_end, 4);
-        rm_puts(err, " m, line length ");
-        rm_put_g(err, g->line_length, 4);
-        rm_printf(err, " m) for gear.z_pinion = %d, gear.z_wheel = %d; allowed: 0 < s_start "
-                       "< s_end < line length", zs[0], zs[1]);
+        rm_printf(err, "tip interference: the path of contact leaves the line of action (s_start "
+                       "= %.4r m, s_end = %.4r m, line length %.4r m) for gear.z_pinion = %d, "
+                       "gear.z_wheel = %d; allowed: 0 < s_start < s_end < line length",
+                  g->s_start, g->s_end, g->line_length, zs[0], zs[1]);
         return 0;
     }
     if (g->eps_alpha < 1.0) {
-        rm_puts(err, "transverse contact ratio eps_alpha = ");
-        rm_put_g(err, g->eps_alpha, 5);
-        rm_printf(err, " below 1 for gear.z_pinion = %d, gear.z_wheel = %d, gear.h_a = ", zs[0],
-                  zs[1]);
-        rm_put_g(err, addendum, 4);
-        rm_puts(err, ", gear.alpha_n = ");
-        rm_put_g(err, alpha_n * (180.0 / RM_PI), 4);
-        rm_puts(err, " deg, gear.beta = ");
-        rm_put_g(err, beta * (180.0 / RM_PI), 4);
-        rm_puts(err, " deg; allowed: eps_alpha >= 1");
+        rm_printf(err, "transverse contact ratio eps_alpha = %.5r below 1 for gear.z_pinion = %d, "
+                       "gear.z_wheel = %d, gear.h_a = %.4r, gear.alpha_n = %.4r deg, gear.beta = "
+                       "%.4r deg; allowed: eps_alpha >= 1",
+                  g->eps_alpha, zs[0], zs[1], addendum, alpha_n * (180.0 / RM_PI),
+                  beta * (180.0 / RM_PI));
         return 0;
     }
     if (g->layout == RM_LAYOUT_PAPER) {
@@ -94,29 +82,21 @@ static int geometry_valid(const RmGearParams* p, const RmGeometry* g, RmText* er
         double R_p = point_radius(g->rb_pinion, g->s_end);
         double R_w = point_radius(g->rb_wheel, g->line_length - g->s_end);
         if (!(R_w > R_p)) {
-            rm_printf(err, "parameter 'contact.geometry' = %d (the paper's eq. 6, r_y = R_p R_w "
-                           "/ (R_w - R_p)) needs the wheel's radius at every contact point larger "
-                           "than the pinion's; with gear.z_pinion = %d, gear.z_wheel = %d it is ",
-                      p->layout, zs[0], zs[1]);
-            rm_put_g(err, R_w * 1e3, 6);
-            rm_puts(err, " mm against ");
-            rm_put_g(err, R_p * 1e3, 6);
-            rm_puts(err, " mm at the pinion tip; allowed: contact.geometry = 0 or 2, or a wheel "
-                         "with more teeth");
+            rm_printf(err, "parameter 'contact.geometry' = %d (the paper's eq. 6, r_y = R_p R_w / "
+                           "(R_w - R_p)) needs the wheel's radius at every contact point larger "
+                           "than the pinion's; with gear.z_pinion = %d, gear.z_wheel = %d it is "
+                           "%.6r mm against %.6r mm at the pinion tip; allowed: contact.geometry "
+                           "= 0 or 2, or a wheel with more teeth",
+                      p->layout, zs[0], zs[1], R_w * 1e3, R_p * 1e3);
             return 0;
         }
     }
     double max_pairs = floor(g->eps_gamma) + 1.0;
     if (max_pairs > RM_MAX_PAIR_SLOTS) {
         double b_max = (RM_MAX_PAIR_SLOTS - g->eps_alpha) * RM_PI * m_n / rm_max(sin(beta), 1e-300);
-        rm_puts(err, "parameter 'gear.b' = ");
-        rm_put_number(err, b);
-        rm_puts(err, " gives a total contact ratio eps_gamma = ");
-        rm_put_g(err, g->eps_gamma, 4);
-        rm_printf(err, ", needing %.0f pair slots; at most %d are available; allowed: gear.b < ",
-                  max_pairs, RM_MAX_PAIR_SLOTS);
-        rm_put_g(err, b_max, 4);
-        rm_puts(err, " m");
+        rm_printf(err, "parameter 'gear.b' = %r gives a total contact ratio eps_gamma = %.4r, "
+                       "needing %r pair slots; at most %d are available; allowed: gear.b < %.4r m",
+                  b, g->eps_gamma, max_pairs, RM_MAX_PAIR_SLOTS, b_max);
         return 0;
     }
     return 1;

@@ -191,17 +191,9 @@ int rm_probe_approach(RmUnit* u, double K, double W_r, double c_t, double kz, do
           && (W_r > 0.0 || !M->approach.rough))) {
         RmText t;
         rm_text_init(&t);
-        rm_puts(&t, "probe: the load-approach law needs pen > 0, K > 0, c_t >= 0, kz >= 0 and "
-                    "W_r > 0 with contact.roughness = 1 (W_r >= 0 without); got pen = ");
-        rm_put_number(&t, pen);
-        rm_puts(&t, ", K = ");
-        rm_put_number(&t, K);
-        rm_puts(&t, ", W_r = ");
-        rm_put_number(&t, W_r);
-        rm_puts(&t, ", c_t = ");
-        rm_put_number(&t, c_t);
-        rm_puts(&t, ", kz = ");
-        rm_put_number(&t, kz);
+        rm_printf(&t, "probe: the load-approach law needs pen > 0, K > 0, c_t >= 0, kz >= 0 and "
+                      "W_r > 0 with contact.roughness = 1 (W_r >= 0 without); got pen = %r, K = "
+                      "%r, W_r = %r, c_t = %r, kz = %r", pen, K, W_r, c_t, kz);
         rm_report(u, RM_ERROR, rm_text_str(&t));
         rm_text_free(&t);
         return RM_ERROR;

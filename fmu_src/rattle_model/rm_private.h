@@ -1,7 +1,8 @@
 /*
  * rm_private.h - what the files of the model library share, by physical job:
  *
- *   text.c          message text (numbers as the shortest text that reads back exactly)
+ *   text.c          message text: the formatter (numbers as the shortest text that reads
+ *                   back exactly, whatever the locale)
  *   refusals.c      the wording of every refusal the physics reports as a code
  *   maths.c         x ** y through libm's pow (rm_pow)
  *   roots.c         Brent's method, exact quadratic crossings, Chebyshev series
@@ -50,6 +51,7 @@
 
 #include <math.h>
 #include <setjmp.h>
+#include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -80,17 +82,25 @@ RM_INTERNAL void rm_text_clear(RmText* t);
 RM_INTERNAL const char* rm_text_str(const RmText* t); /* "" when empty */
 RM_INTERNAL void rm_puts(RmText* t, const char* s);
 RM_INTERNAL void rm_putn(RmText* t, const char* s, size_t n);
-RM_INTERNAL void rm_printf(RmText* t, const char* fmt, ...)
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-/* A number as the shortest text that reads back to the same double (0.1, 1e-05, 2.5e+16,
- * nan, inf), whatever the locale. */
+/* The library's formatter, the same in every locale: printf's %s, %c, %d, %i, %u, %x, %X (flags,
+ * width, precision, '*', h, l, ll, z) and %%, and its own conversions:
+ *   %r    a double as the shortest text that reads back to it (0.1, 1e-05, 2.5e+16, nan, inf:
+ *         the digits Python's repr() chooses, in C's %g form);
+ *   %.Nr  a double with N significant digits, in C's %g form;
+ *   %q    a string in single quotes, bytes that are not printable as \xNN: two arguments, the
+ *         const char* and its length (size_t).
+ * %g is read as C's %g in the "C" locale (= %.6r) for call sites written for printf; printf's
+ * %f, %e and %a are not among them: a conversion it does not know ends the text there, visibly.  A message is one call at its check:
+ *     rm_printf(err, "parameter 'gear.b' = %r gives ... eps_gamma = %.4r", b, eps_gamma);
+ * rm_printf appends to t; rm_format writes at most size bytes with the NUL into buf and returns
+ * the length of the whole text.  No compiler checks these formats' arguments: a %r takes a
+ * double (not an int), a %q a size_t length. */
+RM_INTERNAL void rm_printf(RmText* t, const char* fmt, ...);
+RM_INTERNAL void rm_vprintf(RmText* t, const char* fmt, va_list ap);
+RM_INTERNAL size_t rm_format(char* buf, size_t size, const char* fmt, ...);
+/* %r, %.Nr and %q of one value. */
 RM_INTERNAL void rm_put_number(RmText* t, double x);
-/* A number with `digits` significant digits (%g), whatever the locale. */
 RM_INTERNAL void rm_put_g(RmText* t, double x, int digits);
-/* A string in single quotes, bytes that are not printable ASCII as \xNN. */
 RM_INTERNAL void rm_put_quoted(RmText* t, const char* s, size_t n);
 /* Locale-independent strtod of a whole string (surrounding blanks allowed); 1 on success. */
 RM_INTERNAL int rm_parse_number(const char* text, size_t n, double* out);

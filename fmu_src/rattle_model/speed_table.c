@@ -18,19 +18,25 @@
 
 #include "rm_private.h"
 
+/* How much of a text of n bytes a message quotes, at most `most` bytes (of whole UTF-8
+ * characters with `whole`), and what it adds when that is not all: "... (<n> bytes)" into
+ * more. */
+static size_t shown(const char* s, size_t n, size_t most, int whole, char* more, size_t size)
+{
+    more[0] = '\0';
+    if (n <= most) return n;
+    size_t k = most;
+    while (whole && k > 0 && ((unsigned char)s[k] & 0xC0) == 0x80) k--;
+    rm_format(more, size, "... (%zu bytes)", n);
+    return k;
+}
+
 /* "parameter 'engine.speed_table' = '<path, at most 80 bytes shown>'" */
 static void name_file(RmText* err, const char* path)
 {
-    size_t n = strlen(path);
-    rm_puts(err, "parameter 'engine.speed_table' = ");
-    if (n <= 80)
-        rm_put_quoted(err, path, n);
-    else {
-        size_t k = 80;
-        while (k > 0 && ((unsigned char)path[k] & 0xC0) == 0x80) k--; /* whole characters */
-        rm_put_quoted(err, path, k);
-        rm_printf(err, "... (%zu bytes)", n);
-    }
+    char more[48];
+    size_t n = strlen(path), k = shown(path, n, 80, 1, more, sizeof more);
+    rm_printf(err, "parameter 'engine.speed_table' = %q%s", path, k, more);
 }
 
 static void allowed(RmText* err)
@@ -200,32 +206,31 @@ int rm_read_speed_table(const char* path, size_t* n_out, double** times_out,
                      && rm_parse_number(rm_text_str(&b), b.len, &w);
         if (!parsed) {
             if (may_be_header && !begins_like_number(line, len)) continue; /* a header */
+            char more[48];
+            size_t k = shown(line, len, 80, 0, more, sizeof more);
             rm_printf(err, "speed table '%s' row %zu: expected two numbers (time [s], speed "
-                           "[rad/s]), found ", path, row);
-            rm_put_quoted(err, line, len > 80 ? 80 : len);
-            if (len > 80) rm_printf(err, "... (%zu bytes)", len);
-            rm_puts(err, "; allowed: two decimal numbers in ASCII digits, e.g. 0.01,95.5");
+                           "[rad/s]), found %q%s; allowed: two decimal numbers in ASCII digits, "
+                           "e.g. 0.01,95.5",
+                      path, row, line, k, more);
             ok = 0;
             break;
         }
         if (!(isfinite(t) && isfinite(w))) {
             int time_bad = !isfinite(t);
             const RmText* text = time_bad ? &a : &b;
-            rm_printf(err, "speed table '%s' row %zu: %s ", path, row, time_bad ? "time" : "speed");
-            rm_put_quoted(err, rm_text_str(text), text->len > 40 ? 40 : text->len);
-            if (text->len > 40) rm_printf(err, "... (%zu bytes)", text->len);
-            rm_puts(err, " reads as ");
-            rm_put_number(err, time_bad ? t : w);
-            rm_printf(err, "; allowed: finite numbers (times within [%g, %g] s, speeds within "
-                           "[%g, %g] rad/s)", -RM_MAX_TABLE_TIME, RM_MAX_TABLE_TIME,
-                      -RM_MAX_SPEED, RM_MAX_SPEED);
+            char more[48];
+            size_t k = shown(rm_text_str(text), text->len, 40, 0, more, sizeof more);
+            rm_printf(err, "speed table '%s' row %zu: %s %q%s reads as %r; allowed: finite "
+                           "numbers (times within [%.6r, %.6r] s, speeds within [%.6r, %.6r] "
+                           "rad/s)",
+                      path, row, time_bad ? "time" : "speed", rm_text_str(text), k, more,
+                      time_bad ? t : w, -RM_MAX_TABLE_TIME, RM_MAX_TABLE_TIME, -RM_MAX_SPEED,
+                      RM_MAX_SPEED);
             ok = 0;
             break;
         }
         if (count > 0 && !(t > times[count - 1])) {
-            rm_printf(err, "speed table '%s' row %zu: time ", path, row);
-            rm_put_number(err, t);
-            rm_puts(err, " s does not increase");
+            rm_printf(err, "speed table '%s' row %zu: time %r s does not increase", path, row, t);
             ok = 0;
             break;
         }

@@ -75,12 +75,10 @@ static int balance(Residual* r, double* delta, RmText* err)
     while ((r_hi > 0.0) != (flank == RM_DRIVE) || r_hi == 0.0) {
         hi *= 2.0;
         if (hi > EQUILIBRIUM_MAX_PENETRATION) {
-            rm_puts(err, "no static flank equilibrium for wheel.tau_load = ");
-            rm_put_number(err, r->tau_load);
-            rm_printf(err, " N.m: the mesh torque does not reach it within %g mm penetration "
-                           "(friction dominates the normal force?); allowed: "
-                           "init.in_contact = false (a free start)",
-                      EQUILIBRIUM_MAX_PENETRATION * 1e3);
+            rm_printf(err, "no static flank equilibrium for wheel.tau_load = %r N.m: the mesh "
+                           "torque does not reach it within %.6r mm penetration (friction "
+                           "dominates the normal force?); allowed: init.in_contact = false (a "
+                           "free start)", r->tau_load, EQUILIBRIUM_MAX_PENETRATION * 1e3);
             return 0;
         }
         r_hi = equilibrium_residual(r, hi);
@@ -141,17 +139,11 @@ int rm_free_start(const RmMesh* M, double phi_start, double w_start, double phi_
                           rm_penetration(M, RM_COAST, phi_p, phi_start));
     if (depth > MAX_INITIAL_PENETRATION) {
         double half = M->g.half_backlash / M->arm_wheel;
-        rm_puts(err, "parameter 'wheel.phi_start' = ");
-        rm_put_number(err, phi_start);
-        rm_puts(err, " rad puts the flanks ");
-        rm_put_g(err, depth * 1e3, 4);
-        rm_puts(err, " mm into each other at pinion.phi = ");
-        rm_put_number(err, phi_p);
-        rm_puts(err, " rad; allowed: within the backlash, |wheel.phi_start - ");
-        rm_put_g(err, M->g.ratio, 6);
-        rm_puts(err, " pinion.phi| <= ");
-        rm_put_g(err, half, 4);
-        rm_printf(err, " rad (plus %g um), or init.in_contact = true",
+        rm_printf(err, "parameter 'wheel.phi_start' = %r rad puts the flanks %.4r mm into each "
+                       "other at pinion.phi = %r rad; allowed: within the backlash, "
+                       "|wheel.phi_start - %.6r pinion.phi| <= %.4r rad (plus %.6r um), or "
+                       "init.in_contact = true",
+                  phi_start, depth * 1e3, phi_p, M->g.ratio, half,
                   MAX_INITIAL_PENETRATION * 1e6);
         return 0;
     }

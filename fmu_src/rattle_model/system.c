@@ -23,7 +23,7 @@ static const unsigned MESH_OUT[2] = {RM_MESH_WHEEL_PHI, RM_MESH_WHEEL_W};
 static int failed(RmUnit* mesh, RmUnit* unit, const char* what, double t)
 {
     char text[4096];
-    snprintf(text, sizeof text, "coupled run: %s at t = %.17g s: %s", what, t, rm_message(unit));
+    rm_format(text, sizeof text, "coupled run: %s at t = %r s: %s", what, t, rm_message(unit));
     mesh->status = RM_OK;
     rm_report(mesh, RM_ERROR, text);
     return RM_ERROR;

@@ -148,8 +148,7 @@ static DrivelineModel* started(RmUnit* u, double t_start, double phi_w, double w
         if (!read_table(u, &table, err)) return NULL;
         RmText source;
         rm_text_init(&source);
-        rm_puts(&source, "speed table ");
-        rm_put_quoted(&source, table->name, strlen(table->name));
+        rm_printf(&source, "speed table %q", table->name, strlen(table->name));
         int ok = rm_check_speed_table(table->n, table->times, table->speeds,
                                       u->values[RM_DRIVELINE_PINION_PHI_START].r,
                                       rm_text_str(&source), err);
@@ -233,13 +232,8 @@ static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
     }
     double used[2] = {phi_w, w_w};
     if (h > d->p.h_comm_max) {
-        rm_puts(err, "step size h = ");
-        rm_put_number(err, h);
-        rm_puts(err, " s exceeds solver.h_comm_max = ");
-        rm_put_number(err, d->p.h_comm_max);
-        rm_puts(err, " s; allowed: (0, ");
-        rm_put_number(err, d->p.h_comm_max);
-        rm_puts(err, "] s");
+        rm_printf(err, "step size h = %r s exceeds solver.h_comm_max = %r s; allowed: (0, %r] s",
+                  h, d->p.h_comm_max, d->p.h_comm_max);
         return 0;
     }
     double saved[3] = {d->shaft_phi, d->shaft_w, d->tau_load};
@@ -257,11 +251,9 @@ static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
     driveline_outputs(m, out);
     for (int k = 0; k < 5; k++) {
         if (!isfinite(out[k])) { /* the kinematics ran off (a table held far beyond its end) */
-            rm_printf(err, "the driveline's outputs are not finite at t = ");
-            rm_put_number(err, d->time);
-            rm_puts(err, " s (the input-shaft angle ");
-            rm_put_number(err, out[0]);
-            rm_puts(err, " rad); a speed table ends too early for this run");
+            rm_printf(err, "the driveline's outputs are not finite at t = %r s (the input-shaft "
+                           "angle %r rad); a speed table ends too early for this run",
+                      d->time, out[0]);
             d->shaft_phi = saved[0];
             d->shaft_w = saved[1];
             d->tau_load = saved[2];
@@ -330,19 +322,13 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
              && rm_read_finite(r, "the driveline's time", 0, &d->time, err)
              && rm_read_finite(r, "the last communication step", 1, &d->last_step, err);
     if (ok && d->last_step > d->p.h_comm_max) {
-        rm_puts(err, "the last communication step = ");
-        rm_put_number(err, d->last_step);
-        rm_puts(err, " s: expected within [0, solver.h_comm_max = ");
-        rm_put_number(err, d->p.h_comm_max);
-        rm_puts(err, "] s (a step the unit accepted)");
+        rm_printf(err, "the last communication step = %r s: expected within [0, solver.h_comm_max "
+                       "= %r] s (a step the unit accepted)", d->last_step, d->p.h_comm_max);
         ok = 0;
     }
     if (ok && d->time != u->time) {
-        rm_puts(err, "the driveline's time ");
-        rm_put_number(err, d->time);
-        rm_puts(err, " s differs from the state's time ");
-        rm_put_number(err, u->time);
-        rm_puts(err, " s");
+        rm_printf(err, "the driveline's time %r s differs from the state's time %r s",
+                  d->time, u->time);
         ok = 0;
     }
     int64_t n = ok ? rm_read_i64(r) : 0;

@@ -201,13 +201,8 @@ static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
     }
     int ok = 0;
     if (h > m->mesh.p.h_comm_max) {
-        rm_puts(err, "step size h = ");
-        rm_put_number(err, h);
-        rm_puts(err, " s exceeds solver.h_comm_max = ");
-        rm_put_number(err, m->mesh.p.h_comm_max);
-        rm_puts(err, " s; allowed: (0, ");
-        rm_put_number(err, m->mesh.p.h_comm_max);
-        rm_puts(err, "] s");
+        rm_printf(err, "step size h = %r s exceeds solver.h_comm_max = %r s; allowed: (0, %r] s",
+                  h, m->mesh.p.h_comm_max, m->mesh.p.h_comm_max);
     }
     else {
         double values4[4];
@@ -221,13 +216,10 @@ static int step(RmUnit* u, double t, double h, RmText* warning, RmText* err)
         else {
             rm_refusal_text(err, code, values4);
             if (h > RM_DEFAULT_STEP_SIZE) {
-                rm_puts(err, ". Reduce the communication step to at most ");
-                rm_put_number(err, RM_DEFAULT_STEP_SIZE);
-                rm_puts(err, " s, the default experiment's (this one, ");
-                rm_put_number(err, h);
-                rm_puts(err, " s, is ");
-                rm_put_g(err, h / RM_DEFAULT_STEP_SIZE, 3);
-                rm_puts(err, " times it; accuracy against the step: docs/tools.md)");
+                rm_printf(err, ". Reduce the communication step to at most %r s, the default "
+                               "experiment's (this one, %r s, is %.3r times it; accuracy against "
+                               "the step: docs/tools.md)",
+                          RM_DEFAULT_STEP_SIZE, h, h / RM_DEFAULT_STEP_SIZE);
             }
         }
     }
