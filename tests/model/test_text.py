@@ -78,16 +78,17 @@ def check_numbers(driver, locale="C", env=None):
     xs = doubles()
     rng = random.Random(7)
     ns = [rng.randint(0, 17) for _ in xs]
-    lines = ([f"r {bits(x)}" for x in xs] + [f"g {n} {bits(x)}" for n, x in zip(ns, xs)]
+    lines = ([f"r {bits(x)}" for x in xs]
+             + [f"g {n} {bits(x)}" for n, x in zip(ns, xs, strict=True)]
              + [f"G {bits(x)}" for x in xs])
     out = run(driver, lines, locale, env)
     shortest, general, plain_g = out[: len(xs)], out[len(xs): 2 * len(xs)], out[2 * len(xs):]
-    for x, text in zip(xs, shortest):
+    for x, text in zip(xs, shortest, strict=True):
         # reads back to x, with repr's digits: the same decimal value as repr's text
         assert float(text) == x and Decimal(text) == Decimal(repr(x)), (locale, repr(x), text)
-    for x, n, text in zip(xs, ns, general):
-        assert text == "%.*g" % (max(n, 1), x), (locale, repr(x), n, text)
-    assert plain_g == ["%g" % x for x in xs], locale
+    for x, n, text in zip(xs, ns, general, strict=True):
+        assert text == f"{x:.{max(n, 1)}g}", (locale, repr(x), n, text)
+    assert plain_g == [f"{x:g}" for x in xs], locale
     specials = run(driver, [f"r {bits(v)}" for v in (float("nan"), float("inf"), -float("inf"))]
                    + [f"g 3 {bits(v)}" for v in (float("inf"), -0.0)], locale, env)
     assert specials == ["nan", "inf", "-inf", "inf", "-0"]
