@@ -1,8 +1,8 @@
 """The FMI 3.0 FMUs are the model library under its FMI 3.0 face: in fmpy they give the FMI 2.0
 native face's numbers bit for bit -- each FMU alone on the committed regression inputs, the
 pair coupled in the harness in the paper scenario (and with other contact laws, friction
-readings and dissipation, set through the Enumerations) -- and their FMU states are the
-library's records.
+readings and dissipation, set through the Enumerations); their FMU states are the library's
+records (tests/faces/test_states.py).
 Every float is compared as its hexadecimal text, never with a tolerance: rattle is chaotic, and
 one ulp of difference would grow into another impact sequence."""
 
@@ -11,12 +11,10 @@ from __future__ import annotations
 import pytest
 
 from drive_rattle.interface import DRIVELINE, MESH, MODELS
-from drive_rattle.units import Unit
 from drive_rattle_cosim.harness import CoSimulation
 
 from ..native.test_native_hosts import run_fmpy
-from ..native.twin import KINDS, bits, input_rows, interface, twin_run
-from .raw_fmi3 import OK, Model, unpack
+from ..native.twin import bits, input_rows, interface, twin_run
 
 #: (mesh parameters, driveline parameters) by public name; the integer codes go through
 #: fmi3SetInt64 (Enumerations) in FMI 3.0 and fmi2SetInteger in FMI 2.0
@@ -71,48 +69,3 @@ def test_coupled_pair_is_the_fmi2_face(fmi3_fmus, native_fmus, variant):
 
 
 # ------------------------------------------------------------------ FMU states
-@pytest.mark.parametrize("model", MODELS)
-def test_fmu_states_are_the_library_records(fmi3_fmus, model, tmp_path):
-    """On the regression inputs the serialized state is the envelope (this FMU's token)
-    around the unit's own record (the library's rm_save at the same point, byte for byte);
-    deserialized into a fresh instance it continues as the original did."""
-    m = Model(unpack(fmi3_fmus[model], tmp_path / "unpacked"))
-    names = m.names(causality="input")
-    rows = input_rows(model)[:121]
-    inst = m.instantiate(b"original")
-    twin = Unit(KINDS[model], initialize=False)
-    assert inst.enter(rows[0][0]) == OK
-    twin.call("rm_setup", rows[0][0])
-    twin.call("rm_enter_initialization")
-    inst.set_named(dict(zip(names, rows[0][1:], strict=True)))
-    twin.set(dict(zip(names, rows[0][1:], strict=True)))
-    assert inst.exit() == OK
-    twin.call("rm_exit_initialization")
-    saved, after = None, []
-    for k in range(len(rows) - 1):
-        inputs = dict(zip(names, rows[k][1:], strict=True))
-        assert inst.set_named(inputs) == OK
-        twin.set(inputs)
-        t, h = rows[k][0], rows[k + 1][0] - rows[k][0]
-        assert inst.step(t, h) == OK, inst.log[-2:]
-        twin.call("rm_do_step", t, h)
-        if k % 40 == 0:
-            blob = inst.serialized()
-            assert blob[32:32 + len(m.token)] == m.token.encode()
-            assert blob[96:] == twin.save(), k
-            if k == 40:
-                saved = blob
-        if saved is not None:
-            after.append(inst.snapshot())
-    other = m.instantiate(b"restored")
-    status, state = other.deserialize(saved)
-    assert status == OK and other.set_state(state) == OK, other.log
-    assert other.snapshot() == after[0]
-    for k in range(41, len(rows) - 1):
-        other.set_named(dict(zip(names, rows[k][1:], strict=True)))
-        assert other.step(rows[k][0], rows[k + 1][0] - rows[k][0]) == OK
-        assert other.snapshot() == after[k - 40], k
-    assert not inst.log and not other.log
-    for i in (inst, other):
-        i.free()
-    twin.close()

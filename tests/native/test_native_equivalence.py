@@ -1,13 +1,11 @@
 """The native FMUs are the model library under an FMI face: bit for bit the in-process twin
 (``drive_rattle_cosim.system.simulate`` and the library's units, which run the same C), the
-library's records as their FMU states, the library's statuses and messages verbatim.  Every
+library's statuses and messages verbatim (the FMU states: tests/faces/test_states.py).  Every
 float is compared as its hexadecimal text, never with a tolerance: rattle is chaotic, and one
 ulp of difference would grow into another impact sequence.
 
 * the coupled system under the fmpy harness against ``system.simulate``, with other contact
   laws, friction forms, dissipation, a free start and a measured speed table;
-* the serialized FMU state's payload against the unit's ``rm_save`` record at points of the
-  regression inputs, and a restored instance continuing as the original did;
 * the committed regression references, packed in the FMU and in the repository.
 """
 
@@ -21,13 +19,11 @@ import pytest
 
 from drive_rattle.interface import DRIVELINE, MESH, MODELS
 from drive_rattle.parameters import DrivelineParameters, MeshParameters
-from drive_rattle.units import Unit
 from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.regression import REFERENCE_ROOT, check
 from drive_rattle_cosim.system import SIGNALS, simulate
 
-from ..adversarial.raw_fmi import HEADER, OK, Model, unpack
-from .twin import KINDS, bits, input_rows, interface
+from .twin import bits
 
 #: (mesh parameters, driveline parameters) by public name
 VARIANTS = {
@@ -89,57 +85,6 @@ def test_coupled_with_a_speed_table_is_the_twin(native_fmus, tmp_path):
 
 
 # ------------------------------------------------------------------ FMU states
-@pytest.fixture(scope="module")
-def unpacked(native_fmus, tmp_path_factory):
-    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"eq_{name}")))
-            for name, fmu in native_fmus.items()}
-
-
-@pytest.mark.parametrize("model", MODELS)
-def test_fmu_states_are_the_library_records(unpacked, native_fmus, model):
-    """At points of the regression inputs the serialized state is the envelope (this FMU's
-    GUID) around the unit's own record, the twin's rm_save at the same point byte for byte;
-    deserialized into a fresh instance it continues as the original did."""
-    m = unpacked[model]
-    _, guid, names, _ = interface(native_fmus[model])
-    rows = input_rows(model)
-    inst = m.instantiate(b"original")
-    twin = Unit(KINDS[model], initialize=False)
-    assert inst.setup(rows[0][0]) == OK and inst.enter() == OK
-    twin.call("rm_setup", rows[0][0])
-    twin.call("rm_enter_initialization")
-    inst.set_named(dict(zip(names, rows[0][1:], strict=True)))
-    twin.set(dict(zip(names, rows[0][1:], strict=True)))
-    assert inst.exit() == OK
-    twin.call("rm_exit_initialization")
-    saved = None
-    for k in range(len(rows) - 1):
-        inputs = dict(zip(names, rows[k][1:], strict=True))
-        assert inst.set_named(inputs) == OK
-        twin.set(inputs)
-        t, h = rows[k][0], rows[k + 1][0] - rows[k][0]
-        assert inst.step(t, h) == OK, inst.log[-2:]
-        twin.call("rm_do_step", t, h)
-        if k % 100 == 0 or k == 250:
-            blob = inst.serialized()
-            assert blob[32:32 + len(guid)] == guid.encode()
-            assert blob[HEADER:] == twin.save(), k
-            if k == 250:
-                saved, expected_after = blob, []
-        if saved is not None and k >= 250:
-            expected_after.append(inst.snapshot())
-    other = m.instantiate(b"restored")
-    status, state = other.deserialize(saved)
-    assert status == OK and other.set_state(state) == OK, other.log
-    assert other.snapshot() == expected_after[0]
-    for k in range(251, len(rows) - 1):
-        other.set_named(dict(zip(names, rows[k][1:], strict=True)))
-        assert other.step(rows[k][0], rows[k + 1][0] - rows[k][0]) == OK
-        assert other.snapshot() == expected_after[k - 250], k
-    assert not inst.log and not other.log
-    for i in (inst, other):
-        i.free()
-    twin.close()
 
 
 # ------------------------------------------------------------------ regression references
