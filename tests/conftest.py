@@ -91,6 +91,15 @@ def fmi3_fmus(tmp_path_factory):
     return {p.stem: p for p in build_fmi3(out)}
 
 
+@pytest.fixture(scope="session")
+def wine_env(tmp_path_factory) -> dict:
+    """The environment of every program run under wine this session: one wine prefix, made by
+    the first run (a new prefix takes about a minute)."""
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    return {**os.environ, "WINEPREFIX": str(prefix), "WINEDEBUG": "-all",
+            "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no .NET/Gecko installers in a new prefix
+
+
 FLAVOURS = ("pythonfmu", "native")
 
 

@@ -109,6 +109,7 @@ typedef void* Instance;
     X(fmi3EnterInitializationMode) X(fmi3ExitInitializationMode) X(fmi3Terminate)              \
     X(fmi3GetFloat64) X(fmi3GetInt32) X(fmi3SetFloat64) X(fmi3DoStep)
 #define GET_VERSION fmi3GetVersion
+#define INSTANTIATE "fmi3InstantiateCoSimulation"
 #else
 #define STANDARD "2.0"
 #define API(X)                                                                                 \
@@ -116,6 +117,7 @@ typedef void* Instance;
     X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate)              \
     X(fmi2GetReal) X(fmi2GetInteger) X(fmi2SetReal) X(fmi2DoStep)
 #define GET_VERSION fmi2GetVersion
+#define INSTANTIATE "fmi2Instantiate"
 #endif
 
 static struct {
@@ -550,7 +552,7 @@ int main(int argc, char** argv)
     run.out = &out;
     run.c = instantiate(argv[3], strcmp(argv[2], "-") == 0 ? NULL : argv[2]);
     if (run.c == NULL) {
-        fprintf(stderr, "fmu_host: instantiation returned NULL\n");
+        fprintf(stderr, "fmu_host: " INSTANTIATE " returned NULL\n");
         return 1;
     }
     run.csv = fopen(argv[5], "w");

@@ -13,7 +13,7 @@ import pytest
 from drive_rattle.interface import DRIVELINE, MESH, MODELS
 from drive_rattle_cosim.harness import CoSimulation
 
-from ..native.test_native_hosts import run_fmpy
+from ..faces.hosts import run_fmpy
 from ..native.twin import bits, input_rows, interface, twin_run
 
 #: (mesh parameters, driveline parameters) by public name; the integer codes go through
