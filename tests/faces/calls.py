@@ -10,7 +10,13 @@ from drive_rattle.library import ModelError
 from drive_rattle.units import Unit
 
 from ..native.twin import KINDS
-from .raw_fmi import OK, Model
+from .raw_fmi import OK, Model, unpack
+
+
+def loaded(fmus: dict, tmp_path_factory, tag: str) -> dict:
+    """``fmus`` ({model: path}) unpacked and loaded in the raw driver, by model."""
+    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"{tag}_{name}")))
+            for name, fmu in fmus.items()}
 
 
 def started(model: Model, **values):

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import pytest
 
-from .raw_fmi import DIALECTS, Model, unpack
+from .calls import loaded
+from .raw_fmi import DIALECTS, Model
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,22 @@ def face(request) -> Face:
 
 
 @pytest.fixture(scope="session")
+def native_face(face):
+    """The face, if it is C only (skipped before its FMUs are built otherwise)."""
+    face.needs_native("C sources and no binary that runs without Python")
+    return face
+
+
+@pytest.fixture(scope="session")
+def windows_face(face):
+    """The face, if it ships a Windows binary (skipped before its FMUs are built otherwise)."""
+    if face.windows is None:
+        pytest.skip("the pythonfmu face ships no Windows binary (why: "
+                    "tests/fmu/test_windows_binary.py)")
+    return face
+
+
+@pytest.fixture(scope="session")
 def face_fmus(request, face) -> dict:
     """{'GearMeshRattle': path, 'Driveline': path}: the face's FMUs, built for this session."""
     return request.getfixturevalue(face.fixture)
@@ -73,8 +90,7 @@ def face_fmus(request, face) -> dict:
 @pytest.fixture(scope="module")
 def models(face, face_fmus, tmp_path_factory) -> dict:
     """The face's FMUs unpacked and loaded in the raw driver, by model."""
-    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"{face.name}_{name}")))
-            for name, fmu in face_fmus.items()}
+    return loaded(face_fmus, tmp_path_factory, face.name)
 
 
 @pytest.fixture

@@ -66,9 +66,8 @@ def unpacked(fmu: Path, folder: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
-def linux_host(face, tmp_path_factory) -> Path:
-    face.needs_native("C host run without Python")
-    return compile_host(tmp_path_factory.mktemp("fmu_host") / "fmu_host", face.standard)
+def linux_host(native_face, tmp_path_factory) -> Path:
+    return compile_host(tmp_path_factory.mktemp("fmu_host") / "fmu_host", native_face.standard)
 
 
 def run_linux_host(face, host: Path, fmu: Path, root: Path, work: Path,
@@ -83,7 +82,9 @@ def run_linux_host(face, host: Path, fmu: Path, root: Path, work: Path,
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_linux_host_without_python_is_the_library(face, linux_host, face_fmus, model, tmp_path):
+def test_linux_host_without_python_is_the_library(native_face, linux_host, face_fmus, model,
+                                                  tmp_path):
+    face = native_face
     fmu = face_fmus[model]
     root = unpacked(fmu, tmp_path / "unpacked ä%20")  # a URI percent-encodes both
     _, _, names, outputs = interface(fmu)
@@ -111,9 +112,11 @@ def listed_sources(face, fmu: Path, root: Path) -> list[Path]:
 
 
 @pytest.mark.parametrize("model", MODELS)
-def test_sources_alone_compile_into_a_working_fmu(face, linux_host, face_fmus, model, tmp_path):
+def test_sources_alone_compile_into_a_working_fmu(native_face, linux_host, face_fmus, model,
+                                                  tmp_path):
     """The FMU's sources/ compile alone, warning-free, into a binary that gives the shipped
     binary's outputs bit for bit."""
+    face = native_face
     fmu = face_fmus[model]
     root = unpacked(fmu, tmp_path / "unpacked")
     own = tmp_path / f"{model}.so"
@@ -134,10 +137,8 @@ def test_sources_alone_compile_into_a_working_fmu(face, linux_host, face_fmus, m
 
 # ------------------------------------------------------------------ win64 under wine
 @pytest.fixture(scope="module")
-def win64_host(face, tmp_path_factory) -> Path:
-    if face.windows is None:
-        pytest.skip("the pythonfmu face ships no Windows binary (why: "
-                    "tests/fmu/test_windows_binary.py)")
+def win64_host(windows_face, tmp_path_factory) -> Path:
+    face = windows_face
     wine()
     exe = tmp_path_factory.mktemp("fmu_host_win64") / "fmu_host.exe"
     return compile_host(exe, face.standard, zig_cc("x86_64-windows-gnu"), libs=(),
@@ -146,7 +147,8 @@ def win64_host(face, tmp_path_factory) -> Path:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model", MODELS)
-def test_win64_binary_under_wine(face, win64_host, wine_env, face_fmus, model, tmp_path):
+def test_win64_binary_under_wine(windows_face, win64_host, wine_env, face_fmus, model, tmp_path):
+    face = windows_face
     fmu = face_fmus[model]
     root = unpacked(fmu, tmp_path / "unpacked")
     folder = windows_path(root / "resources")

@@ -18,16 +18,15 @@ import pytest
 
 from drive_rattle.parameters import MeshParameters, specs
 
-from ..faces.calls import last, started
-from ..faces.raw_fmi import ERROR, FMI3, OK, WARNING, Model, unpack
+from ..faces.calls import last, loaded, started
+from ..faces.raw_fmi import ERROR, FMI3, OK, WARNING
 
 CTYPES = FMI3.types
 
 
 @pytest.fixture(scope="module")
 def models(fmi3_fmus, tmp_path_factory):
-    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"glue3_{name}")))
-            for name, fmu in fmi3_fmus.items()}
+    return loaded(fmi3_fmus, tmp_path_factory, "glue3")
 
 
 @pytest.fixture

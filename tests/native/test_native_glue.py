@@ -13,14 +13,13 @@ from ctypes import c_double, c_uint
 
 import pytest
 
-from ..faces.calls import last, started
-from ..faces.raw_fmi import ERROR, LAST_SUCCESSFUL_TIME, OK, TERMINATED, WARNING, Model, unpack
+from ..faces.calls import last, loaded, started
+from ..faces.raw_fmi import ERROR, LAST_SUCCESSFUL_TIME, OK, TERMINATED, WARNING
 
 
 @pytest.fixture(scope="module")
 def models(native_fmus, tmp_path_factory):
-    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"glue_{name}")))
-            for name, fmu in native_fmus.items()}
+    return loaded(native_fmus, tmp_path_factory, "glue")
 
 
 @pytest.fixture
