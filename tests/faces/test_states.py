@@ -82,6 +82,9 @@ def test_states_of_other_fmus_and_damaged_states_refused(face, models, request, 
     assert twin_inst.step(0.0, 1e-4) == OK
     twin_blob = twin_inst.serialized()
     assert twin_blob[HEADER:] == blob[HEADER:]  # the same record: one model
+    assert blob[:8] == twin_blob[:8] == b"RTLSTSER"  # the same envelope,
+    assert blob[32:HEADER] != twin_blob[32:HEADER]  # each face's token in it
+    assert int.from_bytes(blob[16:24], "little") == len(blob) - HEADER  # the record's size
     deserialize = f"{face.dialect.name('DeserializeFMUState')}: "
     cases = [
         (other.serialized(), "belongs to the FMU with GUID"),

@@ -1,13 +1,8 @@
-"""The native FMUs are the model library under an FMI face: bit for bit the in-process twin
-(``drive_rattle_cosim.system.simulate`` and the library's units, which run the same C), the
-library's statuses and messages verbatim (the FMU states: tests/faces/test_states.py).  Every
-float is compared as its hexadecimal text, never with a tolerance: rattle is chaotic, and one
-ulp of difference would grow into another impact sequence.
-
-* the coupled system under the fmpy harness against ``system.simulate``, with other contact
-  laws, friction forms, dissipation, a free start and a measured speed table;
-* the committed regression references, packed in the FMU and in the repository.
-"""
+"""The native FMI 2.0 FMUs are the model library under an FMI face (every face alone and
+coupled: tests/faces/test_equivalence.py; their states: tests/faces/test_states.py): coupled
+with a measured speed table, bit for bit the in-process twin (``drive_rattle_cosim.system.
+simulate``, which runs the same C); the committed regression references pass, packed in the FMU
+and in the repository."""
 
 from __future__ import annotations
 
@@ -24,22 +19,6 @@ from drive_rattle_cosim.regression import REFERENCE_ROOT, check
 from drive_rattle_cosim.system import SIGNALS, simulate
 
 from .twin import bits
-
-#: (mesh parameters, driveline parameters) by public name
-VARIANTS = {
-    "defaults": ({}, {}),
-    "the regression scenario: strong order 2": ({}, {"engine.amplitude[1]": 2000.0}),
-    "sphere law, apparent-area friction on sliding speed": (
-        {"contact.hertz_law": 1, "friction.form": 1, "friction.shear_speed": 1},
-        {"engine.amplitude[1]": 2000.0}),
-    "spur gears, damping factor, printed friction": (
-        {"gear.beta": 0.0, "contact.dissipation": 2, "contact.damping": 300.0,
-         "friction.form": 2}, {}),
-    "free start, no friction, stiff shaft": (
-        {"init.in_contact": False, "wheel.w_start": 40.0, "friction.enabled": False},
-        {"shaft.k": 50.0, "pinion.a_over_step": False}),
-}
-STOP = 0.05  # s: 500 communication steps
 
 
 def harness_and_twin(native_fmus, mesh: dict, driveline: dict, stop: float):
@@ -66,15 +45,6 @@ def assert_same(result, record) -> None:
     assert compared >= 30
 
 
-@pytest.mark.parametrize("variant", list(VARIANTS))
-def test_coupled_system_is_the_twin(native_fmus, variant):
-    mesh, driveline = VARIANTS[variant]
-    result, record = harness_and_twin(native_fmus, mesh, driveline, STOP)
-    assert_same(result, record)
-    assert result[f"{MESH}.mesh.impacts_drive"][-1] > 0
-    assert math.isfinite(result[f"{MESH}.mesh.W_peak"][-1])
-
-
 def test_coupled_with_a_speed_table_is_the_twin(native_fmus, tmp_path):
     table = tmp_path / "speed run-up.csv"
     rows = [(k * 0.01, 80.0 + 15.0 * math.sin(40.0 * k * 0.01)) for k in range(11)]
@@ -82,9 +52,6 @@ def test_coupled_with_a_speed_table_is_the_twin(native_fmus, tmp_path):
                      encoding="utf-8")
     result, record = harness_and_twin(native_fmus, {}, {"engine.speed_table": str(table)}, 0.08)
     assert_same(result, record)
-
-
-# ------------------------------------------------------------------ FMU states
 
 
 # ------------------------------------------------------------------ regression references
