@@ -1,6 +1,7 @@
 """Every face is the model library under an FMI face, bit for bit: alone in fmpy on the
 committed regression inputs (the harness's unit, and fmpy's simulate_fmu) and coupled under the
-harness (with other contact laws, friction forms, dissipation, free starts, a stiff shaft),
+harness (with other contact laws, friction forms, dissipation, free starts, a stiff shaft, a
+measured speed table),
 every output at every point equals the library's (its unit driven by the same calls;
 ``drive_rattle_cosim.system.simulate``, the in-process coupled system) and the native FMI 2.0
 face's.  Every float is compared as its hexadecimal text, never with a tolerance: rattle is
@@ -67,33 +68,30 @@ STOP = 0.05  # s: 500 communication steps
 STOPS = {"paper scenario (defaults)": 0.5}
 
 
-def coupled(fmus, variant: str):
-    """The pair of ``fmus`` coupled under the harness in ``variant``: the result, and every
-    message the units logged."""
-    mesh, driveline = VARIANTS[variant]
+def coupled(fmus, mesh: dict, driveline: dict, stop: float):
+    """The pair of ``fmus`` coupled under the harness with these parameters: the result, and
+    every message the units logged."""
     params = {**{f"{MESH}.{k}": v for k, v in mesh.items()},
               **{f"{DRIVELINE}.{k}": v for k, v in driveline.items()}}
     with CoSimulation(fmus[MESH], fmus[DRIVELINE], params) as pair:
-        result = pair.run(STOPS.get(variant, STOP))
+        result = pair.run(stop)
         return result, [m for u in pair.units.values() for m in u.messages]
 
 
-@functools.cache
-def library(variant: str):
-    """The in-process coupled system in ``variant`` (the same C as every face)."""
-    mesh, driveline = VARIANTS[variant]
+def library(mesh: dict, driveline: dict, stop: float):
+    """The in-process coupled system (the same C as every face)."""
     return simulate(MeshParameters.from_public(mesh), DrivelineParameters.from_public(driveline),
-                    stop_time=STOPS.get(variant, STOP))
+                    stop_time=stop)
 
 
-@pytest.mark.parametrize("variant", list(VARIANTS))
-def test_coupled_pair_is_the_library(face, face_fmus, native_fmus, variant):
-    stop = STOPS.get(variant, STOP)
-    result, messages = coupled(face_fmus, variant)
-    assert not messages, messages
-    record = library(variant)
+@functools.cache
+def library_variant(variant: str):
+    return library(*VARIANTS[variant], STOPS.get(variant, STOP))
+
+
+def assert_is_the_library(result, record) -> None:
+    """Every signal the library records, at every point, bit for bit."""
     assert [t.hex() for t in result.time] == [t.hex() for t in record.time]
-    assert len(result.time) == round(stop / 1e-4) + 1
     compared = 0
     for qualified, column in result.columns.items():
         name = qualified.partition(".")[2]
@@ -103,10 +101,30 @@ def test_coupled_pair_is_the_library(face, face_fmus, native_fmus, variant):
             assert bits([column]) == bits([record.signals[name]]), qualified
             compared += 1
     assert compared >= 30
+
+
+@pytest.mark.parametrize("variant", list(VARIANTS))
+def test_coupled_pair_is_the_library(face, face_fmus, native_fmus, variant):
+    stop = STOPS.get(variant, STOP)
+    result, messages = coupled(face_fmus, *VARIANTS[variant], stop)
+    assert not messages, messages
+    assert_is_the_library(result, library_variant(variant))
+    assert len(result.time) == round(stop / 1e-4) + 1
     if face.name != "native":  # every column, also those the library does not record
-        reference, _ = coupled(native_fmus, variant)
+        reference, _ = coupled(native_fmus, *VARIANTS[variant], stop)
         assert set(result.columns) == set(reference.columns) and len(result.columns) >= 35
         for name, column in reference.columns.items():
             assert bits([result[name]]) == bits([column]), name
     assert result[f"{MESH}.mesh.impacts_drive"][-1] > 0
     assert math.isfinite(result[f"{MESH}.mesh.W_peak"][-1])
+
+
+def test_coupled_with_a_speed_table_is_the_library(face, face_fmus, tmp_path):
+    """The engine's speed from a measured table (a file named by a String parameter)."""
+    table = tmp_path / "speed run-up.csv"
+    rows = [(k * 0.01, 80.0 + 15.0 * math.sin(40.0 * k * 0.01)) for k in range(11)]
+    table.write_text("time [s],speed [rad/s]\n" + "".join(f"{t!r},{w!r}\n" for t, w in rows),
+                     encoding="utf-8")
+    driveline = {"engine.speed_table": str(table)}
+    result, _ = coupled(face_fmus, {}, driveline, 0.08)
+    assert_is_the_library(result, library({}, driveline, 0.08))
