@@ -7,8 +7,9 @@ Every test carries the marker of its layer, from its folder (registered in pypro
   equations of tests/oracle and the monolithic reference; the package structure;
 * ``analysis``: tests/analysis -- the statistics and spectral lines of the studies;
 * ``fmi``: tests/fmi -- the slave classes instantiated directly and the native shim;
-* ``fmu``: tests/fmu, tests/cosim, tests/adversarial, tests/native, tests/fmi3 -- the built
-  FMUs (both flavours, and the FMI 3.0 FMUs) in fmpy, the other masters and native hosts;
+* ``fmu``: tests/faces, tests/fmu, tests/cosim, tests/adversarial, tests/native, tests/fmi3 --
+  the built FMUs (both flavours, and the FMI 3.0 FMUs) in fmpy, the other masters and native
+  hosts;
 * ``sanitize``: tests/sanitize -- the C built and run under AddressSanitizer and
   UndefinedBehaviorSanitizer;
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
@@ -40,7 +41,8 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 TESTS = Path(__file__).resolve().parent
 #: Layer marker of each test folder (tests directly in tests/: "examples").
 LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", "cosim": "fmu",
-          "adversarial": "fmu", "native": "fmu", "fmi3": "fmu", "sanitize": "sanitize"}
+          "adversarial": "fmu", "faces": "fmu", "native": "fmu", "fmi3": "fmu",
+          "sanitize": "sanitize"}
 
 
 def pytest_configure(config):
@@ -87,6 +89,15 @@ def fmi3_fmus(tmp_path_factory):
 
     out = tmp_path_factory.mktemp("dist_fmi3")
     return {p.stem: p for p in build_fmi3(out)}
+
+
+@pytest.fixture(scope="session")
+def wine_env(tmp_path_factory) -> dict:
+    """The environment of every program run under wine this session: one wine prefix, made by
+    the first run (a new prefix takes about a minute)."""
+    prefix = tmp_path_factory.mktemp("wineprefix")
+    return {**os.environ, "WINEPREFIX": str(prefix), "WINEDEBUG": "-all",
+            "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no .NET/Gecko installers in a new prefix
 
 
 FLAVOURS = ("pythonfmu", "native")

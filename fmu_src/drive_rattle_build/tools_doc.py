@@ -317,7 +317,7 @@ def _get_integer_as_real(unit: Unit, name: str) -> str:
 
 
 def native_host_command() -> str:
-    """The command block that runs the native GearMeshRattle in tests/native/fmu_host.c on the
+    """The command block that runs the native GearMeshRattle in tests/faces/fmu_host.c on the
     regression inputs (value references from the model library's tables)."""
     from drive_rattle.units import table
 
@@ -331,7 +331,7 @@ def native_host_command() -> str:
 ```sh
 work=$(mktemp -d)
 unzip -q dist/native/GearMeshRattle.fmu -d "$work/GearMeshRattle"
-gcc -std=c99 -O2 -I "$work/GearMeshRattle/sources" -o "$work/fmu_host" tests/native/fmu_host.c -ldl
+gcc -std=c99 -O2 -I "$work/GearMeshRattle/sources" -o "$work/fmu_host" tests/faces/fmu_host.c -ldl
 guid=$(grep -o 'guid="[^"]*"' "$work/GearMeshRattle/modelDescription.xml" | cut -d'"' -f2)
 env -i "$work/fmu_host" "$work/GearMeshRattle/binaries/linux64/GearMeshRattle.so" \\
     "file://$work/GearMeshRattle/resources" "$guid" \\

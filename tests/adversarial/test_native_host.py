@@ -1,6 +1,6 @@
-"""A native host: tests/native/fmu_host.c, compiled here with gcc, loads the built pythonfmu
-GearMeshRattle (libpython preloaded, FMU_HOST_ALLOW_PYTHON set) with dlopen as
-system-simulation tools do, runs the paper scenario for 0.1 s with kinematic inputs and must
+"""A native host: tests/faces/fmu_host.c (its FMI 2.0 adapter), compiled here with gcc, loads
+the built pythonfmu GearMeshRattle (libpython preloaded, FMU_HOST_ALLOW_PYTHON set) with dlopen
+as system-simulation tools do, runs the paper scenario for 0.1 s with kinematic inputs and must
 match the fmpy run of the same inputs bit for bit (docs/native_host.md)."""
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from drive_rattle_cosim.system import communication_points
 
 from ..fmu.closed_forms import engine_orders
 
-HOST_SOURCE = Path(__file__).resolve().parents[1] / "native" / "fmu_host.c"
+HOST_SOURCE = Path(__file__).resolve().parents[1] / "faces" / "fmu_host.c"
 STOP, STEP = 0.1, 1e-4
 INPUTS = ("pinion.phi", "pinion.w", "pinion.a", "wheel.tau_load")
 OUTPUTS = {  # recorded output -> FMI type

@@ -1,47 +1,33 @@
-"""The FMI 3.0 FMUs as the build makes them: the model library and its FMI 3.0 face compiled
-together (x86_64-linux, x86_64-windows, aarch64-linux; no macOS binary, which nothing here
-can run) with their C sources, buildDescription.xml and terminalsAndIcons/, an
-interface rendered from the same specs as the FMI 2.0 FMUs' (the same variables at the same
-value references, the same causality, variability, units, limits and starts; the integer codes
-as Enumerations with named items; the independent variable time), held against the committed
-templates, a token from the GUID scheme, validation by fmpy and fmu-manipulation-toolbox, and
-only (and all) the fmi3 functions exported."""
+"""The FMI 3.0 FMUs as the build makes them: an interface rendered from the same specs as the
+FMI 2.0 FMUs' (the same variables at the same value references, the same causality,
+variability, units, limits and starts; the integer codes as Enumerations with named items; the
+independent variable time), held against the committed templates, and a token from the GUID
+scheme (what every face's FMUs ship, their validation and their binaries' exports:
+tests/faces)."""
 
 from __future__ import annotations
 
 import re
-import shutil
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 from xml.etree import ElementTree
 
 import pytest
-from fmpy.validation import validate_fmu
 
 from drive_rattle.catalog import UNITS
 from drive_rattle.interface import MODELS
 from drive_rattle.parameters import specs
 from drive_rattle_build import model_description
 from drive_rattle_build.fmi3 import (
-    FMI_HEADERS,
     fmi3_headers,
     fmi3_token,
     normalised_xml,
-    source_files,
     template_path,
 )
 from drive_rattle_build.native import (
-    CONFIG_HEADER,
-    RESOURCE_MARKER,
-    model_sources,
     native_guid,
-    render_config,
 )
-from drive_rattle_build.paths import TEST_ONLY_SOURCES
 from drive_rattle_build.templates import template_body
-from drive_rattle_cosim.regression import reference_files
 
 
 def description(fmu: Path) -> ElementTree.Element:
@@ -53,37 +39,6 @@ def header_functions() -> list[str]:
     """The functions fmi3Functions.h declares (every one an FMU binary must export)."""
     text = (fmi3_headers() / "fmi3Functions.h").read_text(encoding="utf-8")
     return re.findall(r"^FMI3_Export\s+\w+TYPE\s+(fmi3\w+);", text, re.M)
-
-
-@pytest.mark.parametrize("model", MODELS)
-def test_contents(fmi3_fmus, model):
-    with zipfile.ZipFile(fmi3_fmus[model]) as z:
-        names = set(z.namelist())
-        md = ElementTree.fromstring(z.read("modelDescription.xml"))
-        assert z.read(f"resources/{RESOURCE_MARKER}").decode() == f"{model}\n"
-        for ref in reference_files(model):
-            assert z.read(f"resources/regression/{ref.name}") == ref.read_bytes()
-        page = z.read("documentation/index.html").decode()
-        assert "FMI 3.0 co-simulation" in page and "fmi2" not in page
-        for path in model_sources():  # the one model: the library's sources as they are
-            assert z.read(f"sources/{path.name}") == path.read_bytes(), path.name
-        # the probes of the laws are the tests' (rm_probe.h): not in the FMU's sources
-        assert not {f"sources/{name}" for name in TEST_ONLY_SOURCES} & names
-        for name in FMI_HEADERS:  # the standard's headers as fmpy ships them
-            assert z.read(f"sources/{name}") == (fmi3_headers() / name).read_bytes()
-        config = z.read(f"sources/{CONFIG_HEADER}").decode()
-    binaries = {n for n in names if n.startswith("binaries/")}
-    assert binaries == {f"binaries/x86_64-linux/{model}.so",
-                        f"binaries/x86_64-windows/{model}.dll",
-                        f"binaries/aarch64-linux/{model}.so"}  # no untested macOS binary
-    assert {"sources/buildDescription.xml", "terminalsAndIcons/terminalsAndIcons.xml",
-            "terminalsAndIcons/icon.png"} <= names
-    assert not any(n.endswith((".py", ".pyc")) or "pythonfmu" in n or "linux64" in n
-                   for n in names), names
-    assert md.find("CoSimulation").find("SourceFiles") is None  # FMI 3.0: buildDescription
-    for name in source_files():
-        assert f"sources/{name}" in names
-    assert config == render_config(model, md.get("instantiationToken"), "fmi3_functions.c")
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -156,72 +111,3 @@ def test_token_from_the_sources(fmi3_fmus):
     assert len(set(tokens.values())) == len(MODELS)
     assert all(re.fullmatch(r"\{[0-9a-f-]{36}\}", t) for t in tokens.values())
     assert not set(tokens.values()) & {native_guid(m) for m in MODELS}
-
-
-@pytest.mark.parametrize("model", MODELS)
-def test_validated_by_fmpy_and_fmutool(fmi3_fmus, model):
-    assert validate_fmu(str(fmi3_fmus[model])) == []
-    tool = shutil.which("fmutool") or Path(sys.executable).with_name("fmutool")
-    if not Path(tool).exists():
-        pytest.skip("fmu-manipulation-toolbox (fmutool) is not installed")
-    run = subprocess.run([str(tool), "-input", str(fmi3_fmus[model]), "-check"],
-                         capture_output=True, text=True, timeout=300)
-    report = run.stdout + run.stderr
-    assert run.returncode == 0 and "ERROR" not in report, report
-    assert "compliant with FMI-3.0" in report
-
-
-def _tool(name: str) -> str:
-    path = shutil.which(name)
-    if path is None:
-        pytest.skip(f"{name} (binutils) is not installed")
-    return path
-
-
-@pytest.mark.parametrize("platform, machine", [("x86_64-linux", "Advanced Micro Devices X86-64"),
-                                               ("aarch64-linux", "AArch64")])
-@pytest.mark.parametrize("model", MODELS)
-def test_linux_binary_exports_every_fmi3_function_and_needs_only_libc(fmi3_fmus, model,
-                                                                      platform, machine,
-                                                                      tmp_path):
-    with zipfile.ZipFile(fmi3_fmus[model]) as z:
-        binary = tmp_path / f"{model}.so"
-        binary.write_bytes(z.read(f"binaries/{platform}/{model}.so"))
-    header = subprocess.run([_tool("readelf"), "-h", str(binary)], capture_output=True,
-                            text=True, check=True).stdout
-    assert re.search(rf"Machine:\s+{machine}\n", header), header
-    dynamic = subprocess.run([_tool("readelf"), "-d", "-W", str(binary)], capture_output=True,
-                             text=True, check=True).stdout
-    needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
-    assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
-    if platform == "aarch64-linux":  # docs/fmi3.md: glibc 2.29 or later (ziglang's default)
-        versions = subprocess.run([_tool("readelf"), "-V", "-W", str(binary)],
-                                  capture_output=True, text=True, check=True).stdout
-        assert max(tuple(map(int, v.split("."))) for v in re.findall(
-            r"Name: GLIBC_([0-9.]+)", versions)) == (2, 29)
-    symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
-                             capture_output=True, text=True, check=True).stdout
-    exported = {line.split()[-1] for line in symbols.splitlines() if line.strip()}
-    functions = header_functions()
-    assert len(functions) == 75  # FMI 3.0's API
-    assert exported == set(functions), sorted(exported ^ set(functions))
-
-
-@pytest.mark.parametrize("model", MODELS)
-def test_windows_binary_exports_every_fmi3_function_and_imports_only_the_c_runtime(
-        fmi3_fmus, model, tmp_path):
-    with zipfile.ZipFile(fmi3_fmus[model]) as z:
-        binary = tmp_path / f"{model}.dll"
-        binary.write_bytes(z.read(f"binaries/x86_64-windows/{model}.dll"))
-    headers = subprocess.run([_tool("objdump"), "-p", str(binary)], capture_output=True,
-                             text=True)
-    if headers.returncode != 0:
-        pytest.skip(f"objdump cannot read PE files here: {headers.stderr.strip()}")
-    assert "pei-x86-64" in headers.stdout
-    imported = {d.lower() for d in re.findall(r"DLL Name: (\S+)", headers.stdout)}
-    assert imported and all(d.startswith("api-ms-win-crt-") or d in ("kernel32.dll",
-                                                                    "msvcrt.dll")
-                            for d in imported), imported
-    table = headers.stdout.split("[Ordinal/Name Pointer] Table")[1].split("\n\n")[0]
-    exported = set(re.findall(r"\]\s+(\w+)", table))
-    assert exported == set(header_functions())

@@ -4,8 +4,8 @@ network, so fmusim is not fetched here: they run when ``RATTLE_FMUSIM`` names an
 executable (docs/fmi3.md says how it was built) and are skipped otherwise.
 
 * On the regression inputs with their times put on fmusim's grid (``t_k = start + k h``,
-  where fmusim interpolates nothing), fmusim's outputs equal fmu3_host.c's run of the same
-  inputs at every point to the 16 significant digits fmusim writes (``%.16g``);
+  where fmusim interpolates nothing), fmusim's outputs equal tests/faces/fmu_host.c's run of
+  the same inputs at every point to the 16 significant digits fmusim writes (``%.16g``);
 * on the committed inputs as they are (fmusim interpolates them linearly at its own points,
   an ulp away from theirs), its outputs pass the regression references' tolerances;
 * an Enumeration is set by name with ``--start-value``, and a code that is not one of its
@@ -29,7 +29,7 @@ import pytest
 from drive_rattle.interface import MESH, MODELS
 from drive_rattle_cosim.regression import read_opt, reference_files
 
-from .test_fmi3_hosts import compile_host, host_arguments
+from ..faces.hosts import compile_host, host_arguments
 
 STOP, INTERVAL = 0.05, 1e-4  # the references' horizon and step
 
@@ -51,7 +51,7 @@ def fmusim() -> str:
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory) -> Path:
-    return compile_host(tmp_path_factory.mktemp("fmu3_host_fmusim") / "fmu3_host")
+    return compile_host(tmp_path_factory.mktemp("fmu_host_fmusim") / "fmu_host", "3.0")
 
 
 def run_fmusim(fmusim: str, fmu: Path, inputs: Path, out: Path, *options: str):

@@ -5,14 +5,12 @@ intermediate variables, the resources folder), the types (Float64, Int32, Enumer
 Int64, Boolean, String; the independent variable time), NULL pointers and nValues, logging
 categories, FMU states, fmi3DoStep's outputs and the functions these units do not provide.  A
 refused call changes nothing and the host survives (every call here runs in this process).
-The cases are the FMI 2.0 face's (tests/native/test_native_glue.py) where they apply."""
+What every face is asked alike (instantiation, values, states) is in tests/faces."""
 
 from __future__ import annotations
 
 import ctypes
 import itertools
-import os
-import subprocess
 import sys
 import zipfile
 from ctypes import c_double, c_uint
@@ -23,16 +21,17 @@ import pytest
 
 from drive_rattle.parameters import MeshParameters, specs
 
-from ..native.test_native_glue import twin_error
-from .raw_fmi3 import CTYPES, ERROR, OK, WARNING, Model, unpack
+from ..faces.calls import last, loaded, started
+from ..faces.raw_fmi import ERROR, FMI3, OK, WARNING, Model, unpack
 
 ROOT = Path(__file__).resolve().parents[2]
+
+CTYPES = FMI3.types
 
 
 @pytest.fixture(scope="module")
 def models(fmi3_fmus, tmp_path_factory):
-    return {name: Model(unpack(fmu, tmp_path_factory.mktemp(f"glue3_{name}")))
-            for name, fmu in fmi3_fmus.items()}
+    return loaded(fmi3_fmus, tmp_path_factory, "glue3")
 
 
 @pytest.fixture
@@ -40,32 +39,7 @@ def mesh(models):
     return models["GearMeshRattle"]
 
 
-def started(model: Model, **values):
-    inst = model.instantiate(b"glue")
-    assert inst is not None, model.pending_log
-    assert inst.set_named(values) == OK
-    assert inst.enter(0.0) == OK
-    assert inst.exit() == OK, inst.log
-    return inst
-
-
-def last(inst) -> tuple[int, str, str]:
-    return inst.log[-1]
-
-
 # ------------------------------------------------------------------ the library's messages
-def test_invalid_parameter_refused_with_the_library_message(mesh):
-    inst = mesh.instantiate(b"glue")
-    assert inst.enter(0.0) == OK
-    assert inst.set_named({"gear.backlash": -1e-3}) == OK  # checked at the end of initialization
-    assert inst.exit() == ERROR
-    expected = twin_error("GearMeshRattle", ("set", {"gear.backlash": -1e-3}),
-                          ("rm_setup", 0.0), ("rm_enter_initialization",),
-                          ("rm_exit_initialization",))
-    assert expected.startswith("exitInitializationMode: parameter 'gear.backlash' = ")
-    assert last(inst) == (ERROR, "logStatusError", expected)
-    assert inst.set_named({"gear.backlash": 1e-4}) == OK and inst.exit() == OK
-    inst.free()
 
 
 def test_errors_always_logged_warnings_when_their_category_is_on(mesh):
@@ -106,20 +80,6 @@ def test_debug_logging_categories(mesh, fmi3_fmus):
                                     "this FMU's; allowed: logStatusWarning, ")
     assert inst.logging(True, [b"logAll", None]) == ERROR
     assert mesh.lib.fmi3SetDebugLogging(inst.c, True, 2, None) == ERROR
-    inst.free()
-
-
-def test_parameters_fixed_after_initialization_inputs_not(mesh):
-    inst = started(mesh)
-    assert inst.set_named({"gear.backlash": 2e-4}) == ERROR
-    assert last(inst)[2] == twin_error(
-        "GearMeshRattle", ("initialize", 0.0), ("set", {"gear.backlash": 2e-4}))
-    assert inst.set_named({"contact.dissipation": 1}) == ERROR  # an Enumeration: the same
-    assert "is fixed" in last(inst)[2] or "fixed" in last(inst)[2]
-    assert inst.set_named({"pinion.w": 80.0}) == OK
-    assert inst.terminate() == OK
-    assert inst.set_named({"pinion.w": 80.0}) == ERROR
-    assert "mode is 'terminated'" in last(inst)[2]
     inst.free()
 
 
@@ -245,28 +205,6 @@ def test_arrays_and_types_the_units_lack(mesh):
     inst.free()
 
 
-def test_strings_checked_by_the_library(models, tmp_path):
-    driveline = models["Driveline"]
-    inst = driveline.instantiate(b"glue")
-    vr = driveline.vr("engine.speed_table")
-    assert inst.set("String", [vr], [b"\xff.csv"]) == ERROR
-    assert last(inst)[2].startswith("setString: value 0 ('engine.speed_table') is not valid "
-                                    "UTF-8")
-    assert inst.set("String", [vr], ["no such table.csv"]) == OK
-    assert inst.get("String", [vr]) == (OK, ["no such table.csv"])
-    assert inst.enter(0.0) == OK and inst.exit() == ERROR
-    assert last(inst)[2].startswith("exitInitializationMode: parameter 'engine.speed_table' "
-                                    "= 'no such table.csv' cannot be read")
-    inst.free()
-    # a relative name resolves against this FMU's resources folder
-    (driveline.root / "resources" / "run-up.csv").write_text("0,80\n1,90\n", encoding="utf-8")
-    inst = driveline.instantiate(b"glue")
-    assert inst.set("String", [vr], ["run-up.csv"]) == OK
-    assert inst.enter(0.0) == OK and inst.exit() == OK, inst.log
-    assert inst.get_named("pinion.w") == 80.0
-    inst.free()
-
-
 def test_a_null_string_refused_in_every_mode(models):
     """fmi3SetString with a NULL value: refused with a message naming it, in every mode --
     after initialization the fixed parameter's refusal names the value it was given."""
@@ -329,163 +267,6 @@ def test_what_the_units_do_not_provide(mesh):
         assert last(inst)[2].startswith(f"{call}: ") and fragment in last(inst)[2], last(inst)
     assert inst.step(0.0, 1e-4) == OK  # nothing changed
     inst.free()
-
-
-def test_reset_is_a_fresh_instance(mesh):
-    fresh = started(mesh)
-    inst = started(mesh, **{"gear.backlash": 2e-4, "contact.dissipation": 2})
-    for k in range(5):
-        assert inst.step(k * 1e-4, 1e-4) == OK
-    assert inst.reset() == OK
-    assert inst.enter(0.0) == OK and inst.exit() == OK
-    assert inst.snapshot() == fresh.snapshot()
-    fresh.free()
-    inst.free()
-
-
-# ------------------------------------------------------------------ instantiation
-def test_instantiate_refusals(models, tmp_path):
-    mesh, driveline = models["GearMeshRattle"], models["Driveline"]
-    cases = [
-        (dict(name=b"  "), "instanceName is blank; allowed: a non-empty string (FMI 3.0"),
-        (dict(name=None), "instanceName is NULL"),
-        (dict(name=b"\xff"), "is not valid UTF-8"),
-        (dict(token=b"{not-this-one}"), "instantiationToken {not-this-one} does not match "
-                                        "this FMU's {"),
-        (dict(event_mode=True), "eventModeUsed = true, but this FMU has no Event Mode"),
-        (dict(required=[3]), "nRequiredIntermediateVariables = 1, but no variable"),
-        (dict(path=b""), "resourcePath '' is empty"),
-        (dict(path=b"resources/"), "resourcePath 'resources/' is a relative path"),
-        (dict(path=b"http://example.org/r"), "has the URI scheme 'http'"),
-        (dict(path=str(mesh.root).encode()), "the folder the FMU was unpacked to"),
-        (dict(path=str(tmp_path).encode()), "which has no model_identifier.txt"),
-        (dict(path=str(tmp_path / "missing").encode()), "no such file or directory"),
-        (dict(path=driveline.resources_path()), "the resources of FMU 'Driveline', not of "
-                                                "GearMeshRattle"),
-    ]
-    for kwargs, fragment in cases:
-        assert mesh.instantiate(**kwargs) is None, kwargs
-        (status, category, message), = mesh.pending_log
-        assert (status, category) == (ERROR, "logStatusError")
-        assert message.startswith("rattle native FMU: fmi3InstantiateCoSimulation: ")
-        assert fragment in message, (kwargs, message)
-    # no logger: refused all the same, silently
-    assert mesh.instantiate(token=b"x", log=False) is None
-    # accepted: the path without its trailing separator, a file:// URI, and NULL (FMI 3.0:
-    # the importer has no path to give; relative speed tables then resolve against the
-    # working directory)
-    for path in (str(mesh.root / "resources").encode(),
-                 (mesh.root / "resources").as_uri().encode()):
-        inst = mesh.instantiate(path=path)
-        assert inst is not None, mesh.pending_log
-        inst.free()
-    inst = mesh.instantiate(path=None, default_path=False)
-    assert inst is not None and inst.enter(0.0) == OK and inst.exit() == OK
-    inst.free()
-    logged = []
-    log = type(mesh._logger)(lambda env, s, c, m: logged.append(m.decode()))
-    assert not mesh.lib.fmi3InstantiateModelExchange(b"x", mesh.token.encode(), None, False,
-                                                     False, None, log)
-    assert logged == ["rattle native FMU: fmi3InstantiateModelExchange: this FMU is for "
-                      "co-simulation only (its modelDescription has no <ModelExchange> or "
-                      "<ScheduledExecution>); allowed: fmi3InstantiateCoSimulation"]
-
-
-FIFO_PROBE = """
-import sys
-sys.path[:0] = sys.argv[3:]
-from tests.fmi3.raw_fmi3 import Model
-m = Model(sys.argv[1])
-assert m.instantiate(path=sys.argv[2].encode()) is None
-print(m.pending_log[0][2])
-"""
-
-
-@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs here")
-def test_a_fifo_as_the_marker_does_not_block(mesh, tmp_path):
-    folder = tmp_path / "resources"
-    folder.mkdir()
-    os.mkfifo(folder / "model_identifier.txt")
-    run = subprocess.run([sys.executable, "-c", FIFO_PROBE, str(mesh.root), str(folder),
-                          str(ROOT), *sys.path], capture_output=True, text=True, timeout=60)
-    assert run.returncode == 0, run.stderr
-    assert "whose model_identifier.txt is a FIFO, not a regular file" in run.stdout
-
-
-# ------------------------------------------------------------------ FMU states
-def test_states_of_other_fmus_and_damaged_states_refused(models, native_fmus, tmp_path):
-    from ..adversarial.raw_fmi import Model as Model2
-    from ..adversarial.raw_fmi import unpack as unpack2
-    from ..adversarial.raw_fmi import with_payload
-
-    mesh, driveline = models["GearMeshRattle"], models["Driveline"]
-    inst = started(mesh)
-    assert inst.step(0.0, 1e-4) == OK
-    blob = inst.serialized()
-    before = inst.snapshot()
-    other = started(driveline)
-    fmi2 = Model2(unpack2(native_fmus["GearMeshRattle"], tmp_path / "fmi2"))
-    fmi2_inst = fmi2.instantiate(b"fmi2")
-    assert fmi2_inst.setup(0.0) == OK and fmi2_inst.enter() == OK and fmi2_inst.exit() == OK
-    assert fmi2_inst.step(0.0, 1e-4) == OK
-    fmi2_blob = fmi2_inst.serialized()
-    assert fmi2_blob[96:] == blob[96:]  # the same record: one model
-    cases = [
-        (other.serialized(), "belongs to the FMU with GUID"),
-        (fmi2_blob, "belongs to the FMU with GUID"),  # the FMI 2.0 FMU's token differs
-        (blob[:95], "are not a serialized state of a drive-rattle FMU"),
-        (blob[:-1], "the serialized state is truncated"),
-        (blob[:-1] + bytes([blob[-1] ^ 1]), "corrupt (checksum mismatch)"),
-    ]
-    for data, fragment in cases:
-        status, _ = inst.deserialize(data)
-        assert status == ERROR and fragment in last(inst)[2], (fragment, last(inst))
-        assert last(inst)[2].startswith("fmi3DeserializeFMUState: ")
-    status, state = inst.deserialize(with_payload(blob, blob[96:156]))
-    assert status == OK and inst.set_state(state) == ERROR
-    assert last(inst)[2].startswith("setFMUstate: the FMU state is invalid: ")
-    assert inst.free_state(state) == OK
-    assert inst.snapshot() == before
-    # a larger buffer than needed: the state, then zeros; it reads back
-    st, state = inst.get_state()
-    assert st == OK
-    st, big = inst.serialize(state, extra=100)
-    assert st == OK and big[-100:] == bytes(100) and inst.deserialize(big)[0] == OK
-    assert inst.serialize(state, extra=-1)[0] == ERROR
-    assert "(fmi3SerializedFMUStateSize); nothing written" in last(inst)[2]
-    for i in (inst, other, fmi2_inst):
-        i.free()
-
-
-def test_state_handles_reused_and_foreign_pointers_refused(mesh):
-    inst = started(mesh)
-    st, state = inst.get_state()
-    assert st == OK
-    assert inst.step(0.0, 1e-4) == OK
-    assert inst.get_state(state)[0] == OK  # reused: the state now holds t = 1e-4
-    assert inst.set_state(state) == OK
-    assert inst.get_named("time") == 1e-4
-    junk = ctypes.create_string_buffer(b"x" * 200)
-    assert mesh.lib.fmi3SetFMUState(inst.c, ctypes.cast(junk, ctypes.c_void_p)) == ERROR
-    assert last(inst)[2] == ("fmi3SetFMUState: not an FMU state of this FMU (made by "
-                             f"fmi3GetFMUState or fmi3DeserializeFMUState of {mesh.token}); "
-                             "nothing changed")
-    assert mesh.lib.fmi3GetFMUState(inst.c, None) == ERROR
-    assert last(inst)[2] == "fmi3GetFMUState: the FMUState pointer is NULL"
-    assert mesh.lib.fmi3SetFMUState(inst.c, None) == ERROR
-    # the state passed where its address belongs (fmusim 0.0.39 frees its state files' states
-    # so): refused with a message, not dereferenced
-    wrong = ctypes.cast(state, ctypes.POINTER(ctypes.c_void_p))
-    for call in ("fmi3FreeFMUState", "fmi3GetFMUState"):
-        assert getattr(mesh.lib, call)(inst.c, wrong) == ERROR
-        assert last(inst)[2].startswith(f"{call}: FMUState points to an FMU state, not to the "
-                                        "host's variable that holds one (FMI asks for its "
-                                        "address, &state); nothing ")
-    assert inst.set_state(state) == OK  # nothing freed
-    assert inst.free_state(state) == OK and not state
-    assert mesh.lib.fmi3FreeFMUState(inst.c, ctypes.POINTER(ctypes.c_void_p)()) == OK
-    _, _other = inst.get_state()
-    inst.free()  # frees its states too
 
 
 def test_types_map_onto_the_library_tables(mesh):

@@ -28,17 +28,9 @@ from drive_rattle_build.platforms import (
 )
 from drive_rattle_cosim.regression import reference_files
 
+from ..faces.hosts import compile_host, host_arguments, qemu_aarch64, read_table
 from ..fmi3.test_fmi3_build import header_functions
-from ..native.test_native_hosts import qemu_aarch64
-from ..native.twin import (
-    bits,
-    compile_host,
-    host_arguments,
-    input_rows,
-    interface,
-    read_table,
-    twin_run,
-)
+from ..native.twin import bits, input_rows, interface, twin_run
 
 #: FMI 3.0.2, 2.5.1.4.1 "Platform Tuple Definition": <arch>-<sys>.
 FMI3_ARCHITECTURES = {"aarch32", "aarch64", "x86", "x86_64"}
@@ -147,7 +139,7 @@ def test_an_aarch64_binary_built_into_an_fmi2_fmu_runs_under_qemu(native_fmus, t
     assert [n for n in members(fmu) if n.startswith("binaries/")] == [
         "binaries/linux64/GearMeshRattle.so", "binaries/win64/GearMeshRattle.dll",
         "binaries/aarch64-linux/GearMeshRattle.so"]
-    host = compile_host(tmp_path / "fmu_host", zig_cc("aarch64-linux-gnu"))
+    host = compile_host(tmp_path / "fmu_host", "2.0", zig_cc("aarch64-linux-gnu"))
     unpacked = tmp_path / "unpacked"
     with zipfile.ZipFile(fmu) as z:
         z.extractall(unpacked)

@@ -3,7 +3,6 @@ win64 DLL, which its builder adds to every FMU, imports ``python3.dll`` and the 
 runtime, and without them Windows refuses to load it (error 126, ERROR_MOD_NOT_FOUND), where
 the native FMU's DLL loads.  Measured under wine, which has neither; skipped without wine."""
 
-import os
 import subprocess
 import zipfile
 from pathlib import Path
@@ -12,7 +11,7 @@ import pytest
 
 from drive_rattle_build.compiler import zig_cc
 
-from ..native.test_native_hosts import windows_path, wine
+from ..faces.hosts import windows_path, wine
 
 LOADER = r"""
 #include <windows.h>
@@ -40,7 +39,8 @@ def test_pythonfmus_win64_dll_needs_python_and_the_vc_runtime():
 
 
 @pytest.mark.slow
-def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, tmp_path):
+def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, wine_env,
+                                                                 tmp_path):
     exe = tmp_path / "load.exe"
     source = tmp_path / "load.c"
     source.write_text(LOADER)
@@ -48,11 +48,9 @@ def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, tm
                    capture_output=True)
     with zipfile.ZipFile(native_fmus["GearMeshRattle"]) as z:
         native = Path(z.extract("binaries/win64/GearMeshRattle.dll", tmp_path))
-    env = {**os.environ, "WINEPREFIX": str(tmp_path / "prefix"), "WINEDEBUG": "-all",
-           "WINEDLLOVERRIDES": "mscoree,mshtml="}
 
     def load(dll: Path) -> str:
-        run = subprocess.run([wine(), str(exe), windows_path(dll)], env=env, cwd=tmp_path,
+        run = subprocess.run([wine(), str(exe), windows_path(dll)], env=wine_env, cwd=tmp_path,
                              capture_output=True, text=True, timeout=600)
         return run.stdout.strip()
 

@@ -1,13 +1,12 @@
 """The in-process twin of one native FMU: a unit of the model library (``drive_rattle.units``,
-the library the FMU compiles) driven through the calls a host makes of the FMU, and the C host
-``fmu_host.c`` (built here) that makes them of the FMU's binary.  Tables are compared as the
-hexadecimal text of every float: bit for bit, never with a tolerance (rattle is chaotic)."""
+the library the FMU compiles) driven through the calls a host makes of the FMU (the C host
+that makes them of the FMU's binary: tests/faces/fmu_host.c, tests/faces/hosts.py).  Tables
+are compared as the hexadecimal text of every float: bit for bit, never with a tolerance
+(rattle is chaotic)."""
 
 from __future__ import annotations
 
 import itertools
-import shutil
-import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -16,12 +15,8 @@ from fmpy import read_model_description
 
 from drive_rattle.library import DRIVELINE, MESH
 from drive_rattle.units import Unit
-from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.regression import read_opt, reference_files
 
-HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
-#: The host compiles warning-free under these.
-STRICT = ("-std=c99", "-O2", "-Wall", "-Wextra", "-pedantic", "-Werror")
 KINDS = {"GearMeshRattle": MESH, "Driveline": DRIVELINE}
 
 
@@ -63,36 +58,12 @@ def twin_run(model: str, rows: Sequence[Sequence[float]], names: Sequence[str]) 
         return table
 
 
-def compile_host(exe: Path, cc: Sequence[str] = ("gcc",), flags: Sequence[str] = STRICT,
-                 libs: Sequence[str] = ("-ldl",)) -> Path:
-    """fmu_host.c compiled into ``exe``; AssertionError with the compiler's output."""
-    cmd = [*cc, *flags, "-I", str(fmi2_headers()), "-o", str(exe), str(HOST_SOURCE), *libs]
-    run = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=Path(exe).parent)
-    assert run.returncode == 0, f"{' '.join(cmd)}\n{run.stderr}"
-    return Path(exe)
 
 
-def host_arguments(fmu: Path, binary: str, resources: str, inputs: str,
-                   outputs: str) -> list[str]:
-    """fmu_host's command line for ``fmu``'s binary on an inputs file."""
-    md = read_model_description(str(fmu))
-    by_name = {v.name: v for v in md.modelVariables}
-    _, guid, input_names, outs = interface(fmu)
-    return [binary, resources, guid, inputs, outputs,
-            ",".join(str(by_name[n].valueReference) for n in input_names),
-            *(f"{kind[0]}:{vr}:{name}" for name, kind, vr in outs)]
 
 
-def read_table(path: Path, outputs) -> list[list]:
-    """fmu_host's output CSV: [time, outputs...] per row (Integers as int)."""
-    lines = Path(path).read_text(encoding="utf-8").splitlines()
-    assert lines[0] == ",".join(["time", *(n for n, _, _ in outputs)])
-    return [[float(x) if k == 0 or outputs[k - 1][1] == "Real" else int(x)
-             for k, x in enumerate(line.split(","))] for line in lines[1:]]
 
 
-def gcc() -> str | None:
-    return shutil.which("gcc")
 
 
 def assert_passes_references(model: str, table, columns: Sequence[str]) -> None:

@@ -1,8 +1,8 @@
 """The FMI 3.0 face (fmu_src/fmi3/fmi3_functions.c) with the model library under
 AddressSanitizer and UndefinedBehaviorSanitizer: each unit's binary compiled from the sources
-the FMI 3.0 FMU ships, driven by the C host tests/fmi3/fmu3_host.c over the regression inputs
-(with and without a resources folder) and by fmi3_abuse.c's bad calls.  A report, a leak or a
-crash fails the test."""
+the FMI 3.0 FMU ships, driven by the C host tests/faces/fmu_host.c (its FMI 3.0 adapter) over
+the regression inputs (with and without a resources folder) and by fmi3_abuse.c's bad calls.
+A report, a leak or a crash fails the test."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from drive_rattle_build.model_description_fmi3 import is_enumeration, time_value
 from drive_rattle_build.native import RESOURCE_MARKER
 from drive_rattle_cosim.regression import reference_files
 
-from ..fmi3.test_fmi3_hosts import HOST_SOURCE
+from ..faces.hosts import ADAPTER, HOST_SOURCE
 from ..native.twin import bits, input_rows, twin_run
 from .sanitizers import ASAN_FLAGS, IEEE, SANITIZE, reports
 
@@ -42,10 +42,10 @@ def build(model: str, folder: Path) -> tuple[Path, Path]:
     return binary, resources
 
 
-def program(exe: Path, source: Path) -> Path:
+def program(exe: Path, source: Path, defines=()) -> Path:
     from drive_rattle_build.fmi3 import fmi3_headers
 
-    cmd = ["gcc", "-std=c99", *ASAN_FLAGS, "-I", str(fmi3_headers()), "-o", str(exe),
+    cmd = ["gcc", "-std=c99", *ASAN_FLAGS, *defines, "-I", str(fmi3_headers()), "-o", str(exe),
            str(source), "-ldl", "-lm"]
     run = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, f"{' '.join(cmd)}\n{run.stderr}"
@@ -56,7 +56,7 @@ def program(exe: Path, source: Path) -> Path:
 def asan(tmp_path_factory):
     root = tmp_path_factory.mktemp("asan3")
     units = {model: build(model, root / model) for model in MODELS}
-    host = program(root / "fmu3_host", HOST_SOURCE)
+    host = program(root / "fmu_host", HOST_SOURCE, ADAPTER["3.0"])
     abuse = program(root / "fmi3_abuse", Path(__file__).with_name("fmi3_abuse.c"))
     return units, host, abuse
 

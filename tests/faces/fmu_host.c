@@ -1,41 +1,52 @@
 /*
- * fmu_host.c - a minimal native FMI 2.0 co-simulation host, as system-simulation tools are, for
- * Linux and Windows: it loads an FMU's binary (dlopen / LoadLibraryW), drives it with inputs
- * read from a CSV file and writes its outputs to another CSV file.  C99 with the FMI 2.0
- * headers (fmi2FunctionTypes.h, shipped with fmpy and inside every native FMU's sources/).
+ * fmu_host.c - a minimal native co-simulation host, as system-simulation tools are, for Linux
+ * and Windows, for FMI 2.0 and FMI 3.0: it loads an FMU's binary (dlopen / LoadLibraryW),
+ * drives it with inputs read from a CSV file and writes its outputs to another CSV file.  C99
+ * with the standard's headers (fmi2FunctionTypes.h or fmi3FunctionTypes.h, shipped with fmpy
+ * and inside every native FMU's sources/).  The standard is chosen when it is compiled:
+ * FMU_HOST_FMI3 defined, FMI 3.0 (the headers of FMI 3.0 on the include path); otherwise FMI
+ * 2.0.  What differs between the standards is the adapter below (the calls and their
+ * arguments); the files, the call sequence and the checks are the same.
+ *
  * No Python anywhere: on Linux it fails (exit code 3) if a libpython is mapped into the
  * process at the end of the run, unless the environment variable FMU_HOST_ALLOW_PYTHON is set
  * (a pythonfmu FMU, which needs libpython preloaded: docs/native_host.md).  Used by
- * tests/native (docs/tools.md, "Native (C/C++) hosts"), tests/adversarial/test_native_host.py and,
- * built with the sanitizers, tests/sanitize (it frees what it allocates: a leak reported there
- * is the FMU's).
+ * tests/faces/test_hosts.py (docs/tools.md, "Native (C/C++) hosts"),
+ * tests/adversarial/test_native_host.py, tests/fmu/test_platforms.py and, built with the
+ * sanitizers, tests/sanitize (it frees what it allocates: a leak reported there is the FMU's).
  *
  * The FMU library is never unloaded: pythonfmu keeps the embedded interpreter in process-wide
  * state of its library and tears it down from library destructors, which has been seen to
  * corrupt the heap at an unload (docs/fmi.md, "How it is built"); the process exit releases it.
  *
  * Usage:
- *   fmu_host BINARY RESOURCES GUID INPUTS_CSV OUTPUTS_CSV INPUT_VRS OUTPUT...
+ *   fmu_host BINARY RESOURCES TOKEN INPUTS_CSV OUTPUTS_CSV INPUT_VRS OUTPUT...
  *
- *   BINARY      the FMU binary, e.g. <unpacked>/binaries/linux64/GearMeshRattle.so or
+ *   BINARY      the FMU binary, e.g. <unpacked>/binaries/linux64/GearMeshRattle.so,
+ *               <unpacked>/binaries/x86_64-linux/GearMeshRattle.so or
  *               <unpacked>\binaries\win64\GearMeshRattle.dll (UTF-8)
- *   RESOURCES   fmuResourceLocation: a file:// URI of <unpacked>/resources (percent-encoded)
- *               or its absolute path
- *   GUID        the guid attribute of modelDescription.xml
+ *   RESOURCES   FMI 2.0's fmuResourceLocation: a file:// URI of <unpacked>/resources
+ *               (percent-encoded) or its absolute path; FMI 3.0's resourcePath: the absolute
+ *               path of <unpacked>/resources with a trailing separator; "-" for NULL
+ *   TOKEN       the guid (FMI 2.0) or instantiationToken (FMI 3.0) of modelDescription.xml
  *   INPUTS_CSV  "time,<input names...>", then one row per communication point t_0 < ... <
  *               t_N: the time and the input values to hold over the step from t_k to t_{k+1}
  *               (full-precision decimals, e.g. Python repr()); the last row only defines t_N
  *   OUTPUTS_CSV written: "time,<output names...>", one row per communication point t_0 (after
- *               initialization) to t_N; Reals "%.17g" (exact round trip), Integers "%d"
- *   INPUT_VRS   comma-separated value references of the Real inputs, in column order
- *   OUTPUT      R:<vr>:<name> (fmi2GetReal) or I:<vr>:<name> (fmi2GetInteger), per column
+ *               initialization) to t_N; reals "%.17g" (exact round trip), integers "%d"
+ *   INPUT_VRS   comma-separated value references of the real inputs, in column order
+ *   OUTPUT      R:<vr>:<name> or F:<vr>:<name> (a real: fmi2GetReal, fmi3GetFloat64) or
+ *               I:<vr>:<name> (an integer: fmi2GetInteger, fmi3GetInt32), per column
  *
- * Call sequence: fmi2Instantiate(fmi2CoSimulation, visible = false, loggingOn = false),
- * fmi2SetupExperiment(start t_0), fmi2EnterInitializationMode, fmi2SetReal(row 0),
- * fmi2ExitInitializationMode, record t_0; for k = 0 .. N-1: fmi2SetReal(row k),
- * fmi2DoStep(t_k, t_{k+1} - t_k, true), record t_{k+1}; fmi2Terminate, fmi2FreeInstance.
- * Anything but fmi2OK ends the run with a message on stderr and exit code 1 (2 for a usage or
- * input-file error).  The FMU's log messages go to stderr as "[<status>] <category>: <text>".
+ * Call sequence: instantiate (co-simulation; visible, loggingOn and FMI 3.0's eventModeUsed
+ * and earlyReturnAllowed false, no intermediate variables), enter initialization at t_0 (FMI
+ * 2.0: fmi2SetupExperiment, then fmi2EnterInitializationMode), set the reals of row 0, exit
+ * initialization, record t_0; for k = 0 .. N-1: set the reals of row k, do a step from t_k to
+ * t_{k+1} (noSetFMUStatePriorToCurrentPoint true), record t_{k+1}; terminate, free.  Anything
+ * but OK, or (FMI 3.0) a step that reports an event, a request to terminate, an early return
+ * or a last successful time other than t_{k+1}, ends the run with a message on stderr and exit
+ * code 1 (2 for a usage or input-file error).  The FMU's log messages go to stderr as
+ * "[<status>] <category>: <text>".
  */
 #if !defined(_WIN32)
 #define _POSIX_C_SOURCE 200809L
@@ -58,25 +69,125 @@
 #include <dlfcn.h>
 #endif
 
+#if defined(FMU_HOST_FMI3)
+#include "fmi3FunctionTypes.h"
+typedef fmi3ValueReference ValueReference;
+typedef fmi3Int32 Integer;
+#else
 #include "fmi2FunctionTypes.h"
-
-#define API(X)                                                                                 \
-    X(fmi2GetVersion) X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment)            \
-    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate)              \
-    X(fmi2GetReal) X(fmi2GetInteger) X(fmi2SetReal) X(fmi2DoStep)
-
-typedef struct {
-#define MEMBER(name) name##TYPE* name;
-    API(MEMBER)
-#undef MEMBER
-} Api;
+typedef fmi2ValueReference ValueReference;
+typedef fmi2Integer Integer;
+#endif
 
 static const char* status_name(int status)
 {
+    /* fmi2Status and fmi3Status share their first five values; Pending is FMI 2.0's */
     static const char* names[] = {"OK", "Warning", "Discard", "Error", "Fatal", "Pending"};
     return status >= 0 && status <= 5 ? names[status] : "unknown status";
 }
 
+static int failed(int status, const char* call, double t)
+{
+    if (status == 0) return 0; /* fmi2OK, fmi3OK */
+    if (isnan(t))
+        fprintf(stderr, "fmu_host: %s returned %s\n", call, status_name(status));
+    else
+        fprintf(stderr, "fmu_host: %s at t = %.17g s returned %s\n", call, t, status_name(status));
+    return 1;
+}
+
+/* ------------------------------------------------------------------ the adapters
+ * One standard's calls behind the host's: load its functions, instantiate, enter
+ * initialization at t0, set and get values, step, terminate, free.  Each returns 0 on OK
+ * and 1 after a message on stderr. */
+typedef void* Instance;
+
+#if defined(FMU_HOST_FMI3)
+#define STANDARD "3.0"
+#define API(X)                                                                                 \
+    X(fmi3GetVersion) X(fmi3InstantiateCoSimulation) X(fmi3FreeInstance)                       \
+    X(fmi3EnterInitializationMode) X(fmi3ExitInitializationMode) X(fmi3Terminate)              \
+    X(fmi3GetFloat64) X(fmi3GetInt32) X(fmi3SetFloat64) X(fmi3DoStep)
+#define GET_VERSION fmi3GetVersion
+#define INSTANTIATE "fmi3InstantiateCoSimulation"
+#else
+#define STANDARD "2.0"
+#define API(X)                                                                                 \
+    X(fmi2GetVersion) X(fmi2Instantiate) X(fmi2FreeInstance) X(fmi2SetupExperiment)            \
+    X(fmi2EnterInitializationMode) X(fmi2ExitInitializationMode) X(fmi2Terminate)              \
+    X(fmi2GetReal) X(fmi2GetInteger) X(fmi2SetReal) X(fmi2DoStep)
+#define GET_VERSION fmi2GetVersion
+#define INSTANTIATE "fmi2Instantiate"
+#endif
+
+static struct {
+#define MEMBER(name) name##TYPE* name;
+    API(MEMBER)
+#undef MEMBER
+} api;
+
+#if defined(FMU_HOST_FMI3)
+static void log_message(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                        fmi3String message)
+{
+    (void)env;
+    fprintf(stderr, "[%s] %s: %s\n", status_name(status), category ? category : "",
+            message ? message : "");
+    fflush(stderr);
+}
+
+static Instance instantiate(const char* token, const char* resources)
+{
+    return api.fmi3InstantiateCoSimulation("fmu_host", token, resources, fmi3False, fmi3False,
+                                           fmi3False, fmi3False, NULL, 0, NULL, log_message,
+                                           NULL);
+}
+
+static int enter(Instance c, double t0)
+{
+    return failed(api.fmi3EnterInitializationMode(c, fmi3False, 0.0, t0, fmi3False, 0.0),
+                  "fmi3EnterInitializationMode", NAN);
+}
+
+static int set_reals(Instance c, const ValueReference* vr, size_t n, const double* v, double t)
+{
+    return failed(api.fmi3SetFloat64(c, vr, n, v, n), "fmi3SetFloat64", t);
+}
+
+static int get_reals(Instance c, const ValueReference* vr, size_t n, double* v, double t)
+{
+    return failed(api.fmi3GetFloat64(c, vr, n, v, n), "fmi3GetFloat64", t);
+}
+
+static int get_integers(Instance c, const ValueReference* vr, size_t n, Integer* v, double t)
+{
+    return failed(api.fmi3GetInt32(c, vr, n, v, n), "fmi3GetInt32", t);
+}
+
+static int do_step(Instance c, double t, double h)
+{
+    double last = NAN;
+    fmi3Boolean event = fmi3True, terminate = fmi3True, early = fmi3True;
+    if (failed(api.fmi3DoStep(c, t, h, fmi3True, &event, &terminate, &early, &last),
+               "fmi3DoStep", t))
+        return 1;
+    if (event || terminate || early || last != t + h) {
+        fprintf(stderr, "fmu_host: fmi3DoStep at t = %.17g s reported event %d, terminate %d, "
+                "early return %d, last successful time %.17g\n", t, (int)event, (int)terminate,
+                (int)early, last);
+        return 1;
+    }
+    return 0;
+}
+
+static int exit_initialization(Instance c)
+{
+    return failed(api.fmi3ExitInitializationMode(c), "fmi3ExitInitializationMode", NAN);
+}
+
+static int terminate(Instance c) { return failed(api.fmi3Terminate(c), "fmi3Terminate", NAN); }
+static void free_instance(Instance c) { api.fmi3FreeInstance(c); }
+#else
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                    fmi2String category, fmi2String message, ...)
 {
@@ -90,6 +201,49 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     fputc('\n', stderr);
     fflush(stderr);
 }
+
+static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+
+static Instance instantiate(const char* token, const char* resources)
+{
+    return api.fmi2Instantiate("fmu_host", fmi2CoSimulation, token, resources, &callbacks,
+                               fmi2False, fmi2False);
+}
+
+static int enter(Instance c, double t0)
+{
+    return failed(api.fmi2SetupExperiment(c, 0, 0.0, t0, 0, 0.0), "fmi2SetupExperiment", NAN)
+           || failed(api.fmi2EnterInitializationMode(c), "fmi2EnterInitializationMode", NAN);
+}
+
+static int set_reals(Instance c, const ValueReference* vr, size_t n, const double* v, double t)
+{
+    return failed(api.fmi2SetReal(c, vr, n, v), "fmi2SetReal", t);
+}
+
+static int get_reals(Instance c, const ValueReference* vr, size_t n, double* v, double t)
+{
+    return failed(api.fmi2GetReal(c, vr, n, v), "fmi2GetReal", t);
+}
+
+static int get_integers(Instance c, const ValueReference* vr, size_t n, Integer* v, double t)
+{
+    return failed(api.fmi2GetInteger(c, vr, n, v), "fmi2GetInteger", t);
+}
+
+static int do_step(Instance c, double t, double h)
+{
+    return failed(api.fmi2DoStep(c, t, h, fmi2True), "fmi2DoStep", t);
+}
+
+static int exit_initialization(Instance c)
+{
+    return failed(api.fmi2ExitInitializationMode(c), "fmi2ExitInitializationMode", NAN);
+}
+
+static int terminate(Instance c) { return failed(api.fmi2Terminate(c), "fmi2Terminate", NAN); }
+static void free_instance(Instance c) { api.fmi2FreeInstance(c); }
+#endif
 
 static void* xrealloc(void* p, size_t size)
 {
@@ -109,14 +263,14 @@ static int parse_double(const char* text, double* out)
     return end == text || *end != '\0' || (errno == ERANGE && isinf(*out));
 }
 
-static int parse_vr(const char* text, char** end, fmi2ValueReference* out)
+static int parse_vr(const char* text, char** end, ValueReference* out)
 {
     unsigned long v;
     if (*text < '0' || *text > '9') return 1;
     errno = 0;
     v = strtoul(text, end, 10);
     if (errno != 0 || v > 0xFFFFFFFFUL) return 1;
-    *out = (fmi2ValueReference)v;
+    *out = (ValueReference)v;
     return 0;
 }
 
@@ -223,9 +377,9 @@ typedef struct {
     size_t n, n_real, n_int;
     char* kind;
     const char** name;
-    fmi2ValueReference *real_vr, *int_vr;
+    ValueReference *real_vr, *int_vr;
     double* real;
-    fmi2Integer* integer;
+    Integer* integer;
 } Outputs;
 
 static int parse_outputs(int argc, char** argv, Outputs* out)
@@ -241,15 +395,17 @@ static int parse_outputs(int argc, char** argv, Outputs* out)
     for (int i = 0; i < argc; i++) {
         const char* a = argv[i];
         char* end;
-        fmi2ValueReference vr;
-        if ((a[0] != 'R' && a[0] != 'I') || a[1] != ':' || parse_vr(a + 2, &end, &vr)
-            || *end != ':' || end[1] == '\0') {
-            fprintf(stderr, "fmu_host: output '%s' must be R:<vr>:<name> or I:<vr>:<name>\n", a);
+        ValueReference vr;
+        int real = a[0] == 'R' || a[0] == 'F';
+        if ((!real && a[0] != 'I') || a[1] != ':' || parse_vr(a + 2, &end, &vr) || *end != ':'
+            || end[1] == '\0') {
+            fprintf(stderr, "fmu_host: output '%s' must be R:<vr>:<name>, F:<vr>:<name> or "
+                            "I:<vr>:<name>\n", a);
             return 1;
         }
-        out->kind[i] = a[0];
+        out->kind[i] = real ? 'R' : 'I';
         out->name[i] = end + 1;
-        if (a[0] == 'R')
+        if (real)
             out->real_vr[out->n_real++] = vr;
         else
             out->int_vr[out->n_int++] = vr;
@@ -258,32 +414,17 @@ static int parse_outputs(int argc, char** argv, Outputs* out)
 }
 
 typedef struct {
-    const Api* api;
-    fmi2Component c;
+    Instance c;
     const Outputs* out;
     FILE* csv;
 } Run;
-
-static int failed(fmi2Status status, const char* call, double t)
-{
-    if (status == fmi2OK) return 0;
-    if (isnan(t))
-        fprintf(stderr, "fmu_host: %s returned %s\n", call, status_name(status));
-    else
-        fprintf(stderr, "fmu_host: %s at t = %.17g s returned %s\n", call, t, status_name(status));
-    return 1;
-}
 
 static int record(Run* r, double t)
 {
     const Outputs* o = r->out;
     size_t ir = 0, ii = 0;
-    if (o->n_real
-        && failed(r->api->fmi2GetReal(r->c, o->real_vr, o->n_real, o->real), "fmi2GetReal", t))
-        return 1;
-    if (o->n_int
-        && failed(r->api->fmi2GetInteger(r->c, o->int_vr, o->n_int, o->integer),
-                  "fmi2GetInteger", t))
+    if ((o->n_real && get_reals(r->c, o->real_vr, o->n_real, o->real, t))
+        || (o->n_int && get_integers(r->c, o->int_vr, o->n_int, o->integer, t)))
         return 1;
     fprintf(r->csv, "%.17g", t);
     for (size_t i = 0; i < o->n; i++) {
@@ -296,25 +437,20 @@ static int record(Run* r, double t)
     return ferror(r->csv) != 0;
 }
 
-static int simulate(Run* r, const Inputs* in, const fmi2ValueReference* input_vr)
+static int simulate(Run* r, const Inputs* in, const ValueReference* input_vr)
 {
-    const Api* api = r->api;
     size_t m = in->n_inputs;
     double t0 = in->time[0];
-    if (failed(api->fmi2SetupExperiment(r->c, 0, 0.0, t0, 0, 0.0), "fmi2SetupExperiment", NAN)
-        || failed(api->fmi2EnterInitializationMode(r->c), "fmi2EnterInitializationMode", NAN)
-        || failed(api->fmi2SetReal(r->c, input_vr, m, in->values), "fmi2SetReal", t0)
-        || failed(api->fmi2ExitInitializationMode(r->c), "fmi2ExitInitializationMode", NAN)
-        || record(r, t0))
+    if (enter(r->c, t0) || set_reals(r->c, input_vr, m, in->values, t0)
+        || exit_initialization(r->c) || record(r, t0))
         return 1;
     for (size_t k = 0; k + 1 < in->n_rows; k++) {
         double t = in->time[k], h = in->time[k + 1] - in->time[k];
-        if (failed(api->fmi2SetReal(r->c, input_vr, m, in->values + k * m), "fmi2SetReal", t)
-            || failed(api->fmi2DoStep(r->c, t, h, 1), "fmi2DoStep", t)
+        if (set_reals(r->c, input_vr, m, in->values + k * m, t) || do_step(r->c, t, h)
             || record(r, in->time[k + 1]))
             return 1;
     }
-    return failed(api->fmi2Terminate(r->c), "fmi2Terminate", NAN);
+    return terminate(r->c);
 }
 
 /* ------------------------------------------------------------------ the library */
@@ -366,20 +502,19 @@ static int python_loaded(void)
 
 int main(int argc, char** argv)
 {
-    Api api;
     Inputs in;
     Outputs out;
     Run run;
-    fmi2ValueReference* input_vr;
+    ValueReference* input_vr;
     size_t n_inputs = 0;
     const char* p;
     char* end;
     Library lib;
-    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     int rc;
     if (argc < 8) {
-        fprintf(stderr, "usage: %s BINARY RESOURCES GUID INPUTS_CSV OUTPUTS_CSV INPUT_VRS "
-                        "OUTPUT...\n  OUTPUT: R:<vr>:<name> | I:<vr>:<name>\n", argv[0]);
+        fprintf(stderr, "usage: %s BINARY RESOURCES TOKEN INPUTS_CSV OUTPUTS_CSV INPUT_VRS "
+                        "OUTPUT...\n  OUTPUT: R:<vr>:<name> | F:<vr>:<name> | I:<vr>:<name>\n",
+                argv[0]);
         return 2;
     }
     input_vr = xrealloc(NULL, (strlen(argv[6]) / 2 + 1) * sizeof *input_vr);
@@ -409,16 +544,15 @@ int main(int argc, char** argv)
     }
     API(LOAD)
 #undef LOAD
-    if (strcmp(api.fmi2GetVersion(), "2.0") != 0) {
-        fprintf(stderr, "fmu_host: fmi2GetVersion() = '%s', not 2.0\n", api.fmi2GetVersion());
+    if (strcmp(api.GET_VERSION(), STANDARD) != 0) {
+        fprintf(stderr, "fmu_host: the FMU's version is '%s', not " STANDARD "\n",
+                api.GET_VERSION());
         return 1;
     }
-    run.api = &api;
     run.out = &out;
-    run.c = api.fmi2Instantiate("fmu_host", fmi2CoSimulation, argv[3], argv[2], &callbacks,
-                                fmi2False, fmi2False);
+    run.c = instantiate(argv[3], strcmp(argv[2], "-") == 0 ? NULL : argv[2]);
     if (run.c == NULL) {
-        fprintf(stderr, "fmu_host: fmi2Instantiate returned NULL\n");
+        fprintf(stderr, "fmu_host: " INSTANTIATE " returned NULL\n");
         return 1;
     }
     run.csv = fopen(argv[5], "w");
@@ -430,7 +564,7 @@ int main(int argc, char** argv)
     for (size_t i = 0; i < out.n; i++) fprintf(run.csv, ",%s", out.name[i]);
     fputc('\n', run.csv);
     rc = simulate(&run, &in, input_vr);
-    api.fmi2FreeInstance(run.c);
+    free_instance(run.c);
     if (fclose(run.csv) != 0) rc = 1;
     /* everything the host allocated, freed: a leak in a sanitized run is the FMU's */
     free(input_vr);
