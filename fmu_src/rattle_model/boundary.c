@@ -43,19 +43,18 @@ int rm_first_step_differs(const RmBoundary* b, int settle, const double* values,
 void rm_settled_warning(const RmUnit* u, const RmBoundary* b, const double* given,
                         const char* what, RmText* t)
 {
-    rm_puts(t, "doStep at the first step: the inputs (");
+    RmText now, before; /* the two lists of the inputs, each comma-separated */
+    rm_text_init(&now);
+    rm_text_init(&before);
     for (int k = 0; k < u->cls->n_start; k++) {
         const RmVariable* v = &u->variables[u->cls->start_vr[k]];
-        if (k) rm_puts(t, ", ");
-        rm_printf(t, "%s = ", v->name);
-        rm_put_number(t, given[k]);
-        rm_printf(t, " %s", v->unit);
+        rm_printf(&now, "%s%s = %r %s", k ? ", " : "", v->name, given[k], v->unit);
+        rm_printf(&before, "%s%r", k ? ", " : "", b->initial_inputs[k]);
     }
-    rm_puts(t, ") differ from those at the end of initialization (");
-    for (int k = 0; k < u->cls->n_start; k++) {
-        if (k) rm_puts(t, ", ");
-        rm_put_number(t, b->initial_inputs[k]);
-    }
-    rm_printf(t, "): %s (init.settle_first_step; a master that exchanges no values during "
-                 "initialization)", what);
+    rm_printf(t, "doStep at the first step: the inputs (%s) differ from those at the end of "
+                 "initialization (%s): %s (init.settle_first_step; a master that exchanges no "
+                 "values during initialization)", rm_text_str(&now), rm_text_str(&before), what);
+    if (now.failed || before.failed) t->failed = 1; /* a list is incomplete */
+    rm_text_free(&now);
+    rm_text_free(&before);
 }

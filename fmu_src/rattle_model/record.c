@@ -111,9 +111,7 @@ int rm_read_finite(RmReader* r, const char* what, int nonnegative, double* out, 
     double x = rm_read_f64(r);
     if (rm_read_ended(r, what, err)) return 0;
     if (!isfinite(x) || (nonnegative && !(x >= 0.0))) {
-        rm_printf(err, "%s = ", what);
-        rm_put_number(err, x);
-        rm_puts(err, nonnegative ? ": expected a finite number >= 0" : ": expected a finite number");
+        rm_printf(err, "%s = %r: expected a finite number%s", what, x, nonnegative ? " >= 0" : "");
         return 0;
     }
     *out = x;
@@ -125,13 +123,8 @@ int rm_read_within(RmReader* r, const char* what, double bound, const char* unit
 {
     if (!rm_read_finite(r, what, 0, out, err)) return 0;
     if (fabs(*out) <= bound) return 1;
-    rm_printf(err, "%s = ", what);
-    rm_put_number(err, *out);
-    rm_printf(err, " %s: expected within [", unit);
-    rm_put_number(err, -bound);
-    rm_puts(err, ", ");
-    rm_put_number(err, bound);
-    rm_printf(err, "] %s (%s)", unit, why);
+    rm_printf(err, "%s = %r %s: expected within [%r, %r] %s (%s)",
+                   what, *out, unit, -bound, bound, unit, why);
     return 0;
 }
 
@@ -143,9 +136,8 @@ static int read_input(RmReader* r, const RmVariable* v, const char* what, int ch
     double x = rm_read_f64(r);
     if (rm_read_ended(r, what, err)) return 0;
     if (check && !(isfinite(x) && (!v->has_min || x >= v->min) && (!v->has_max || x <= v->max))) {
-        rm_printf(err, "input '%s' %s = ", v->name, what);
-        rm_put_number(err, x);
-        rm_printf(err, ": expected within %s (a value the unit accepted)", v->allowed);
+        rm_printf(err, "input '%s' %s = %r: expected within %s (a value the unit accepted)",
+                       v->name, what, x, v->allowed);
         return 0;
     }
     *out = x;
@@ -173,7 +165,7 @@ int rm_boundary_restore(const RmUnitClass* cls, RmBoundary* b, RmReader* r, RmTe
     uint32_t first = rm_read_u32(r), has_last = rm_read_u32(r);
     if (rm_read_ended(r, "the first-step flags", err)) return 0;
     if (first > 1 || has_last > 1) {
-        rm_puts(err, "the record's first-step flags are not 0 or 1");
+        rm_printf(err, "the record's first-step flags are not 0 or 1");
         return 0;
     }
     b->first_step = (int)first;
@@ -220,13 +212,13 @@ int rm_record_read_header(RmReader* r, RmRecordHeader* h, RmText* err)
 {
     size_t size = r->len;
     if (size == 0) {
-        rm_puts(err, "it is not a state of this model (the record is empty)");
+        rm_printf(err, "it is not a state of this model (the record is empty)");
         return 0;
     }
     /* a record cut inside its magic is a truncated record; other bytes are no record */
     const unsigned char* magic = rm_read_bytes(r, 8);
     if (memcmp(r->data, RECORD_MAGIC, size < 8 ? size : 8) != 0) {
-        rm_puts(err, "it is not a state of this model (no record header)");
+        rm_printf(err, "it is not a state of this model (no record header)");
         return 0;
     }
     h->version = rm_read_u32(r);
@@ -258,7 +250,7 @@ static int read_string(RmReader* r, const RmVariable* v, RmValue* x, RmText* err
     if (s == NULL) return 1;
     x->s = malloc((size_t)len + 1);
     if (x->s == NULL) {
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return 0;
     }
     memcpy(x->s, s, len);

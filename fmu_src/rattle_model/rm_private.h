@@ -89,8 +89,8 @@ RM_INTERNAL void rm_putn(RmText* t, const char* s, size_t n);
  *   %.Nr  a double with N significant digits, in C's %g form;
  *   %q    a string in single quotes, bytes that are not printable as \xNN: two arguments, the
  *         const char* and its length (size_t).
- * %g is read as C's %g in the "C" locale (= %.6r) for call sites written for printf; printf's
- * %f, %e and %a are not among them: a conversion it does not know ends the text there, visibly.  A message is one call at its check:
+ * printf's %f, %e, %g and %a are not among them: a conversion it does not know ends the text
+ * there, visibly.  A message is one call at its check:
  *     rm_printf(err, "parameter 'gear.b' = %r gives ... eps_gamma = %.4r", b, eps_gamma);
  * rm_printf appends to t; rm_format writes at most size bytes with the NUL into buf and returns
  * the length of the whole text.  No compiler checks these formats' arguments: a %r takes a
@@ -98,10 +98,6 @@ RM_INTERNAL void rm_putn(RmText* t, const char* s, size_t n);
 RM_INTERNAL void rm_printf(RmText* t, const char* fmt, ...);
 RM_INTERNAL void rm_vprintf(RmText* t, const char* fmt, va_list ap);
 RM_INTERNAL size_t rm_format(char* buf, size_t size, const char* fmt, ...);
-/* %r, %.Nr and %q of one value. */
-RM_INTERNAL void rm_put_number(RmText* t, double x);
-RM_INTERNAL void rm_put_g(RmText* t, double x, int digits);
-RM_INTERNAL void rm_put_quoted(RmText* t, const char* s, size_t n);
 /* Locale-independent strtod of a whole string (surrounding blanks allowed); 1 on success. */
 RM_INTERNAL int rm_parse_number(const char* text, size_t n, double* out);
 

@@ -166,21 +166,21 @@ static void format_shortest(char* out, double x)
     }
 }
 
-void rm_put_number(RmText* t, double x)
+static void rm_put_number(RmText* t, double x)
 {
     char buf[48];
     format_shortest(buf, x);
     rm_puts(t, buf);
 }
 
-void rm_put_g(RmText* t, double x, int digits)
+static void rm_put_g(RmText* t, double x, int digits)
 {
     char buf[48];
     format_general(buf, x, digits);
     rm_puts(t, buf);
 }
 
-void rm_put_quoted(RmText* t, const char* s, size_t n)
+static void rm_put_quoted(RmText* t, const char* s, size_t n)
 {
     rm_puts(t, "'");
     for (size_t i = 0; i < n; i++) {
@@ -292,10 +292,6 @@ void rm_vprintf(RmText* t, const char* fmt, va_list ap)
                 rm_put_g(t, x, precision);
             break;
         }
-        case 'g': /* C's %g (6 digits by default) in its "C" locale text: what call sites written
-                     for printf still ask for; new ones write %r or %.Nr */
-            rm_put_g(t, va_arg(ap, double), precision < 0 ? 6 : precision);
-            break;
         case 'q': {
             const char* s = va_arg(ap, const char*);
             size_t n = va_arg(ap, size_t);
@@ -339,7 +335,7 @@ void rm_vprintf(RmText* t, const char* fmt, va_list ap)
                 PUT_ONE(t, spec, v);
             }
             break;
-        default: /* not a conversion of this formatter (printf's %f, %e, %a): the spec as it
+        default: /* not a conversion of this formatter (printf's %f, %e, %g, %a): the spec as it
                     is, so that the mistake shows in the message */
             rm_putn(t, pct, (size_t)(p - pct));
             return;

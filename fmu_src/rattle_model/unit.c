@@ -69,14 +69,19 @@ static void begin(RmUnit* u)
     rm_text_clear(&u->message);
 }
 
-/* "<action>: <reason>" as the call's Error. */
-static void refuse(RmUnit* u, const char* action, const RmText* reason)
+/* "<action>: <reason><tail>" as the call's Error. */
+static void refuse_with(RmUnit* u, const char* action, const RmText* reason, const char* tail)
 {
     RmText t;
     rm_text_init(&t);
-    rm_printf(&t, "%s: %s", action, rm_text_str(reason));
+    rm_printf(&t, "%s: %s%s", action, rm_text_str(reason), tail);
     rm_report(u, RM_ERROR, t.failed ? "out of memory" : rm_text_str(&t));
     rm_text_free(&t);
+}
+
+static void refuse(RmUnit* u, const char* action, const RmText* reason)
+{
+    refuse_with(u, action, reason, "");
 }
 
 static int refuse_text(RmUnit* u, const char* action, const char* reason)
@@ -163,12 +168,12 @@ static int check_parameter_values(const RmUnit* u, const RmValue* values, RmText
         if (why == NULL && v->has_max && (x > v->max || (v->max_exclusive && x == v->max)))
             why = "is out of range";
         if (why != NULL) {
-            rm_printf(err, "parameter '%s' = ", v->name);
             if (v->type == RM_INTEGER)
-                rm_printf(err, "%lld", (long long)values[k].i);
+                rm_printf(err, "parameter '%s' = %lld %s; allowed: %s", v->name,
+                          (long long)values[k].i, why, v->allowed);
             else
-                rm_put_number(err, values[k].r);
-            rm_printf(err, " %s; allowed: %s", why, v->allowed);
+                rm_printf(err, "parameter '%s' = %r %s; allowed: %s", v->name, values[k].r, why,
+                          v->allowed);
             return 0;
         }
     }
@@ -182,15 +187,11 @@ static int check_inputs(const RmUnit* u, const RmValue* values, RmText* err)
         const RmVariable* v = &u->variables[k];
         double x = values[k].r;
         if (!isfinite(x)) {
-            rm_printf(err, "input '%s' = ", v->name);
-            rm_put_number(err, x);
-            rm_puts(err, " is not finite; allowed: finite numbers");
+            rm_printf(err, "input '%s' = %r is not finite; allowed: finite numbers", v->name, x);
             return 0;
         }
         if ((v->has_min && x < v->min) || (v->has_max && x > v->max)) {
-            rm_printf(err, "input '%s' = ", v->name);
-            rm_put_number(err, x);
-            rm_printf(err, " is out of range; allowed: %s", v->allowed);
+            rm_printf(err, "input '%s' = %r is out of range; allowed: %s", v->name, x, v->allowed);
             return 0;
         }
     }
@@ -219,10 +220,8 @@ static int outputs_finite(const RmUnit* u, const RmValue* values, RmText* err)
     for (size_t k = u->first_output; k < u->n_variables; k++) {
         const RmVariable* v = &u->variables[k];
         if (v->type == RM_REAL && !isfinite(values[k].r)) {
-            rm_printf(err, "output '%s' = ", v->name);
-            rm_put_number(err, values[k].r);
-            rm_puts(err, " is not finite: the inputs or parameters are beyond what the model "
-                         "resolves");
+            rm_printf(err, "output '%s' = %r is not finite: the inputs or parameters are beyond "
+                           "what the model resolves", v->name, values[k].r);
             return 0;
         }
     }
@@ -346,22 +345,27 @@ int rm_get_string(RmUnit* u, const unsigned* vr, size_t n, const char** values)
     return get_values(u, RM_STRING, vr, n, (void*)values);
 }
 
-static void put_given(RmText* t, int type, const void* values, size_t i)
+/* The text of value i of a set call, into buf: a refusal names what it was given, a NULL string
+ * included (FMI lets a host pass one; the check that refuses it comes after the mode's). A string
+ * shows its first 80 bytes quoted, at most 4 bytes each (\xhh), within GIVEN_TEXT. */
+#define GIVEN_TEXT 400
+static const char* given_text(char* buf, int type, const void* values, size_t i)
 {
     switch (type) {
-    case RM_REAL: rm_put_number(t, ((const double*)values)[i]); break;
-    case RM_INTEGER: rm_printf(t, "%d", (int)((const int32_t*)values)[i]); break;
-    case RM_BOOLEAN: rm_puts(t, ((const int32_t*)values)[i] ? "true" : "false"); break;
+    case RM_REAL: rm_format(buf, GIVEN_TEXT, "%r", ((const double*)values)[i]); break;
+    case RM_INTEGER: rm_format(buf, GIVEN_TEXT, "%d", (int)((const int32_t*)values)[i]); break;
+    case RM_BOOLEAN:
+        rm_format(buf, GIVEN_TEXT, "%s", ((const int32_t*)values)[i] ? "true" : "false");
+        break;
     default: {
-        /* a refusal names what it was given, a NULL string included (FMI lets a host pass
-         * one; the check that refuses it comes after the mode's) */
         const char* s = ((const char* const*)values)[i];
         if (s == NULL)
-            rm_puts(t, "NULL");
+            rm_format(buf, GIVEN_TEXT, "NULL");
         else
-            rm_put_quoted(t, s, strlen(s) > 80 ? 80 : strlen(s));
+            rm_format(buf, GIVEN_TEXT, "%q", s, strlen(s) > 80 ? (size_t)80 : strlen(s));
     }
     }
+    return buf;
 }
 
 /* Every entry checked before any is stored: a refused call (one bad entry) stores nothing. */
@@ -393,11 +397,10 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
         }
         else if (v->causality == RM_PARAMETER && u->phase != RM_INSTANTIATED
                  && u->phase != RM_INITIALIZATION) {
+            char given[GIVEN_TEXT];
             rm_printf(&err, "parameter '%s' is fixed: it can only be set before the end of "
-                            "initialization (mode is '%s'); value ",
-                      v->name, PHASE_NAMES[u->phase]);
-            put_given(&err, type, values, i);
-            rm_puts(&err, " rejected");
+                            "initialization (mode is '%s'); value %s rejected",
+                      v->name, PHASE_NAMES[u->phase], given_text(given, type, values, i));
             refused = 1;
         }
         else if (type == RM_STRING) {
@@ -415,8 +418,7 @@ static int set_values(RmUnit* u, int type, const unsigned* vr, size_t n, const v
         }
     }
     if (refused) {
-        rm_puts(&err, "; nothing of this call was stored");
-        refuse(u, action, &err);
+        refuse_with(u, action, &err, "; nothing of this call was stored");
     }
     else {
         /* strings first: the only allocations, so that a failure stores nothing */
@@ -585,9 +587,8 @@ int rm_setup(RmUnit* u, double start_time)
     if (!(isfinite(start_time) && fabs(start_time) <= MAX_START_TIME)) {
         RmText t;
         rm_text_init(&t);
-        rm_puts(&t, "start time ");
-        rm_put_number(&t, start_time);
-        rm_printf(&t, " s is invalid; allowed: finite, within +-%g s", MAX_START_TIME);
+        rm_printf(&t, "start time %r s is invalid; allowed: finite, within +-%r s",
+                      start_time, MAX_START_TIME);
         refuse(u, action, &t);
         rm_text_free(&t);
         return u->status;
@@ -617,7 +618,7 @@ int rm_exit_initialization(RmUnit* u)
     rm_text_init(&err);
     RmValue* outputs = malloc(u->n_variables * sizeof *outputs);
     void* model = outputs != NULL ? build_model(u, &err) : NULL;
-    if (outputs == NULL) rm_puts(&err, "out of memory");
+    if (outputs == NULL) rm_printf(&err, "out of memory");
     if (model != NULL) {
         memcpy(outputs, u->values, u->n_variables * sizeof *outputs);
         if (u->cls->outputs(u, model, u->cls->all_groups, outputs, &err)
@@ -663,42 +664,26 @@ int rm_do_step(RmUnit* u, double t, double h)
                   PHASE_NAMES[u->phase]);
     }
     else if (!(isfinite(h) && h > 0.0)) {
-        rm_puts(&err, "communication step size ");
-        rm_put_number(&err, h);
-        rm_puts(&err, " s is invalid; allowed: finite, > 0");
+        rm_printf(&err, "communication step size %r s is invalid; allowed: finite, > 0", h);
     }
     else if (!isfinite(t)) {
-        rm_puts(&err, "communication point ");
-        rm_put_number(&err, t);
-        rm_puts(&err, " s is not finite; allowed: the end of the last step, ");
-        rm_put_number(&err, u->time);
-        rm_puts(&err, " s");
+        rm_printf(&err, "communication point %r s is not finite; allowed: the end of the last "
+                        "step, %r s", t, u->time);
     }
     else {
         double tol = COMMUNICATION_POINT_TOLERANCE * h + 16.0 * ulp(rm_max(fabs(t), fabs(u->time)));
         if (!(fabs(t - u->time) <= tol)) {
-            rm_puts(&err, "communication point ");
-            rm_put_number(&err, t);
-            rm_puts(&err, " s does not continue the last step, which ended at ");
-            rm_put_number(&err, u->time);
-            rm_puts(&err, " s (tolerance ");
-            rm_put_g(&err, tol, 3);
-            rm_puts(&err, " s)");
+            rm_printf(&err, "communication point %r s does not continue the last step, which "
+                            "ended at %r s (tolerance %.3r s)", t, u->time, tol);
         }
         else if (!(t + h > t)) {
-            rm_puts(&err, "communication step size ");
-            rm_put_number(&err, h);
-            rm_puts(&err, " s does not advance the time ");
-            rm_put_number(&err, t);
-            rm_puts(&err, " s (it is below its rounding); allowed: a step that moves the time");
+            rm_printf(&err, "communication step size %r s does not advance the time %r s (it is "
+                            "below its rounding); allowed: a step that moves the time", h, t);
         }
         else if (!(t + h - u->start_time <= MAX_RUN_LENGTH)) {
-            rm_puts(&err, "communication step to ");
-            rm_put_number(&err, t + h);
-            rm_puts(&err, " s ends beyond the longest run the unit supports; allowed: up to "
-                          "the start time ");
-            rm_put_number(&err, u->start_time);
-            rm_printf(&err, " s + %g s", MAX_RUN_LENGTH);
+            rm_printf(&err, "communication step to %r s ends beyond the longest run the unit "
+                            "supports; allowed: up to the start time %r s + %r s",
+                            t + h, u->start_time, MAX_RUN_LENGTH);
         }
         else {
             RmText warning;
@@ -818,13 +803,9 @@ static int header_fits(const RmUnit* u, const RmRecordHeader* h, RmText* err)
     double t0 = h->start_time, t = h->time;
     if (!(isfinite(t0) && fabs(t0) <= MAX_START_TIME && isfinite(t) && t >= t0
           && t - t0 <= MAX_RUN_LENGTH && (h->phase >= RM_STEPPING || t == t0))) {
-        rm_puts(err, "its start time ");
-        rm_put_number(err, t0);
-        rm_puts(err, " s and time ");
-        rm_put_number(err, t);
-        rm_printf(err, " s do not go together; allowed: finite, |start time| <= %g s, start "
-                       "time <= time <= start time + %g s, time = start time before the "
-                       "first step", MAX_START_TIME, MAX_RUN_LENGTH);
+        rm_printf(err, "its start time %r s and time %r s do not go together; allowed: finite, "
+                       "|start time| <= %r s, start time <= time <= start time + %r s, time = "
+                       "start time before the first step", t0, t, MAX_START_TIME, MAX_RUN_LENGTH);
         return 0;
     }
     return 1;
@@ -901,7 +882,7 @@ int rm_restore(RmUnit* u, const unsigned char* buf, size_t size)
     void* model = NULL;
     int ok = 0;
     if (values == NULL)
-        rm_puts(&err, "out of memory");
+        rm_printf(&err, "out of memory");
     else if (rm_record_read_header(&r, &h, &err) && header_fits(u, &h, &err)
              && rm_record_read_values(&r, u->variables, u->n_variables, values, &err)
              && read_model(u, &r, &h, values, &model, &err)) {
@@ -970,11 +951,8 @@ static int coupled_start(RmUnit* mesh, RmUnit* drive, double start_time, double*
         wheel[1] = w;
     }
     rm_printf(err, "the start values of the coupled inputs do not settle within %d exchanges "
-                   "(last wheel state ", START_EXCHANGE_ROUNDS);
-    rm_put_number(err, wheel[0]);
-    rm_puts(err, " rad, ");
-    rm_put_number(err, wheel[1]);
-    rm_puts(err, " rad/s); check the parameters");
+                   "(last wheel state %r rad, %r rad/s); check the parameters",
+                   START_EXCHANGE_ROUNDS, wheel[0], wheel[1]);
     return 0;
 }
 

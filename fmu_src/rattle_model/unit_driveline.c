@@ -128,7 +128,7 @@ static int read_table(RmUnit* u, const TableCache** out, RmText* err)
         free(c);
         free(times);
         free(speeds);
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return 0;
     }
     strcpy(c->name, name);
@@ -158,7 +158,7 @@ static DrivelineModel* started(RmUnit* u, double t_start, double phi_w, double w
     DrivelineModel* m = new_model(u, t_start);
     if (m == NULL || (table != NULL && !rm_use_table(&m->d, table->n, table->times, table->speeds))) {
         free_model(m);
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return NULL;
     }
     rm_shaft_start(&m->d, phi_w, w_w);
@@ -312,7 +312,7 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
 {
     DrivelineModel* m = new_model(u, u->start_time);
     if (m == NULL) {
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return NULL;
     }
     RmDriveline* d = &m->d;
@@ -346,10 +346,9 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
         ok = 0;
     }
     if (ok && uses_table != (n > 0)) {
-        rm_puts(err, uses_table ? "the saved driveline state lacks the speed table that "
-                                  "parameter 'engine.speed_table' names"
-                                : "the saved driveline state has a speed table, but parameter "
-                                  "'engine.speed_table' names none");
+        rm_printf(err, "the saved driveline state %s",
+                  uses_table ? "lacks the speed table that parameter 'engine.speed_table' names"
+                             : "has a speed table, but parameter 'engine.speed_table' names none");
         ok = 0;
     }
     if (ok && n > 0) {
@@ -357,12 +356,12 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
         double* t = malloc(rows * sizeof *t);
         double* w = malloc(rows * sizeof *w);
         ok = t != NULL && w != NULL;
-        if (!ok) rm_puts(err, "out of memory");
+        if (!ok) rm_printf(err, "out of memory");
         for (size_t i = 0; ok && i < rows; i++) t[i] = rm_read_f64(r);
         for (size_t i = 0; ok && i < rows; i++) w[i] = rm_read_f64(r);
         ok = ok && rm_check_speed_table(rows, t, w, d->phi_0, "the saved speed table", err);
         if (ok && !rm_use_table(d, rows, t, w)) {
-            rm_puts(err, "out of memory");
+            rm_printf(err, "out of memory");
             ok = 0;
         }
         free(t);

@@ -111,7 +111,7 @@ static const RmMesh* configure(RmUnit* u, RmText* err)
     if (c == NULL) {
         c = u->cache = calloc(1, sizeof *c);
         if (c == NULL) {
-            rm_puts(err, "out of memory");
+            rm_printf(err, "out of memory");
             return NULL;
         }
     }
@@ -148,7 +148,7 @@ static void* build(RmUnit* u, RmText* err)
     if (mesh == NULL) return NULL;
     MeshModel* m = calloc(1, sizeof *m);
     if (m == NULL) {
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return NULL;
     }
     m->mesh = *mesh;
@@ -405,7 +405,7 @@ static void* restore(RmUnit* u, RmReader* r, RmText* err)
     if (mesh == NULL) return NULL;
     MeshModel* m = calloc(1, sizeof *m);
     if (m == NULL) {
-        rm_puts(err, "out of memory");
+        rm_printf(err, "out of memory");
         return NULL;
     }
     m->mesh = *mesh;

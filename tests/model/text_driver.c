@@ -6,8 +6,8 @@
  *   g N BITS     %.Nr of it
  *   f N BITS     rm_format into a buffer of N bytes: "x=%r;" of it, then the returned length
  *   m            a line of every other conversion (strings, integers, %%, %q)
- *   G BITS       %g of it (C's %g whatever the locale)
  *   p            a conversion the formatter does not have (%f), then more text
+ *   P            the same with printf's %g
  * The doubles travel as bits so that no locale reads them.
  */
 #include <locale.h>
@@ -49,10 +49,10 @@ int main(int argc, char** argv)
         else if (line[0] == 'm')
             rm_printf(&t, "[%s|%5d|%-3u|%zu|%lld|%02x|%c|%%|%q|%.2s|%*d]", "ab", -42, 7u,
                       (size_t)12, -5LL, 255u, 'z', "a'b\x01\xc3\xa9", (size_t)6, "xyz", 4, 9);
-        else if (line[0] == 'G' && sscanf(line + 1, "%63s", bits) == 1)
-            rm_printf(&t, "%g", from_bits(bits));
         else if (line[0] == 'p')
             rm_printf(&t, "before %f after", 1.5);
+        else if (line[0] == 'P')
+            rm_printf(&t, "before %g after", 1.5);
         puts(rm_text_str(&t));
         rm_text_free(&t);
     }
