@@ -9,8 +9,9 @@ from __future__ import annotations
 MUTANTS = {
     "refuse-every-step": (
         [("unit.c",
-          "        else if (check_inputs(u, u->values, &err) && u->cls->step(u, t, h, &err)) {",
-          "        else if (rm_puts(&err, \"every step refused (a mutant)\"), 0) {")],
+          "            int ok = check_inputs(u, u->values, &err) && u->cls->step(u, t, h, "
+          "&warning, &err);",
+          "            int ok = (rm_puts(&err, \"every step refused (a mutant)\"), 0);")],
         "doStep refuses every step, valid ones included (with a message)"),
     "nan-output-ok": (
         [("unit.c",

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from .mutants import MUTANTS
+from .mutants import MUTANTS, SANITIZER_MUTANTS
 from .variants import rebuild
 
 HERE = Path(__file__).resolve().parent
@@ -41,6 +41,16 @@ def mutant_fmus(request, tmp_path_factory) -> dict:
         name: {model: rebuild(built[model], root / name, patches=patches)
                for model in ("GearMeshRattle", "Driveline")}
         for name, (patches, _) in MUTANTS.items()}}
+
+
+def test_every_mutant_finds_the_text_it_patches_once():
+    """Each defect's patch (and the sanitizer's) names text that is in today's sources exactly
+    once: checked here in the fast layer, since the mutants are built only in the slow one."""
+    source = Path(__file__).resolve().parents[2] / "fmu_src" / "rattle_model"
+    counts = {(name, file, old[:60]): (source / file).read_text(encoding="utf-8").count(old)
+              for name, (patches, _) in {**MUTANTS, **SANITIZER_MUTANTS}.items()
+              for file, old, _new in patches}
+    assert {key: n for key, n in counts.items() if n != 1} == {}
 
 
 def _first_failure(stderr: str) -> str:
