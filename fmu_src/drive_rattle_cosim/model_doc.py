@@ -19,7 +19,7 @@ from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 
-from . import band, contact_laws, mesh_stiffness, paper_models
+from . import band, contact_laws, mesh_stiffness, paper_models, squeeze_impacts
 from .analysis import PAPER_FIGURES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
@@ -325,6 +325,7 @@ def coupled_memory(seconds: float = MEMORY_SECONDS) -> str:
 
 #: name -> function giving the block's text.
 BLOCKS: dict[str, Callable[[], str]] = {
+    "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
     "contact options": contact_options,
     "contact findings": contact_findings,
@@ -401,6 +402,8 @@ def main(argv=None) -> int:
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--update", action="store_true",
                     help="rewrite the documents' blocks (else: name the stale ones)")
+    ap.add_argument("--only", action="append", metavar="NAME",
+                    help="with --update: rewrite only this block (repeatable; the others kept)")
     ap.add_argument("--doc", type=Path, action="append",
                     help="a document (docs/model.md or docs/analysis.md; default both)")
     args = ap.parse_args(argv)
@@ -410,7 +413,11 @@ def main(argv=None) -> int:
         try:
             text = doc.read_text(encoding="utf-8")
             if args.update:
-                doc.write_text(update(text, blocks=blocks), encoding="utf-8")
+                computed = None
+                if args.only:
+                    computed = blocks_in(text)
+                    computed.update(compute([n for n in args.only if n in blocks], blocks))
+                doc.write_text(update(text, computed, blocks=blocks), encoding="utf-8")
                 print(f"updated {doc}")
                 continue
         except (OSError, ValueError) as err:

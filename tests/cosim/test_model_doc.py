@@ -28,6 +28,12 @@ def test_the_contact_options_are_a_fresh_runs():
         "--update` and review the diff")
 
 
+def test_the_single_impacts_table_is_a_fresh_runs():
+    assert model_doc.stale(TEXT, ["single impacts"]) == [], (
+        "docs/model.md section 3.3's single impacts are stale: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'single impacts'`")
+
+
 @pytest.mark.slow
 def test_every_block_of_the_document_is_current():
     assert model_doc.stale(TEXT) == [], (
