@@ -34,6 +34,16 @@ def test_the_single_impacts_table_is_a_fresh_runs():
         "drive_rattle_cosim.model_doc --update --only 'single impacts'`")
 
 
+def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
+    text = model_doc.mixed_regime(SHORT)
+    rows = [r for r in text.splitlines() if r.startswith("| 0.")]
+    assert [r.split(" |")[0] for r in rows] == [f"| {s * 1e6:g}" for s in model_doc.SIGMAS]
+    assert not re.search(r"\b(nan|inf)\b", text, re.IGNORECASE)
+    # the EHL film of a smooth flank (0.02 um) is thicker than sigma wherever it is built:
+    # every in-contact sample mixed or full, in every window
+    assert rows[-1].endswith("| 100 ± 0 % |")
+
+
 @pytest.mark.slow
 def test_every_block_of_the_document_is_current():
     assert model_doc.stale(TEXT) == [], (
