@@ -318,6 +318,60 @@ def separation_loads() -> str:
     return text
 
 
+# --- section 6.2: the compliant teeth's two states -----------------------------------------
+
+#: The operating point of section 6.2's two states: load [M*], backlash [m], and the starts.
+TWO_STATES = (0.4, 1e-4, ("smooth", "kick+1"))
+
+
+@lru_cache(maxsize=1)
+def two_states_point():
+    """The multistability study at 0.4 M* and 0.1 mm from the smooth start and the kick of
+    +1 rad/s (today's default physics; tests/analysis/test_multistability.py's point)."""
+    from drive_rattle import MeshParameters
+
+    from . import multistability as ms
+
+    load, backlash, starts = TWO_STATES
+    return ms.study_point(load, backlash, MeshParameters(),
+                          starts=[ms.STARTS_BY_KEY[k] for k in starts], workers=2)
+
+
+def two_states() -> str:
+    """Each attractor of ``two_states_point``: its onsets per second and per forcing period,
+    median drive onset speed, δmax and pairs, each with its window scatter."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    point = two_states_point()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        # a periodic orbit's windows differ by rounding only: no scatter, said as 0
+        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
+        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| start | drive / coast onsets [1/s] | per forcing period | median drive onset "
+            "[mm/s] | δmax [µm] | pairs loaded | windows |",
+            "|---|---|---|---|---|---|---|"]
+    for a in point.attractors:
+        rows.append(
+            f"| {', '.join(a.starts)} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+            f"{a.mean['drive_rate'] * period:.3g} / {a.mean['coast_rate'] * period:.3g} | "
+            f"{c(a, 'drive_p50', 1e3)} | {c(a, 'delta_max', 1e6)} | {c(a, 'pairs')} | "
+            f"{a.windows} |")
+    if point.unsettled:
+        rows.append(f"| unsettled: {', '.join(point.unsettled)} | | | | | | |")
+    load, backlash, _ = TWO_STATES
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"({load:g} M*, backlash {backlash * 1e3:g} mm, verdict {point.verdict}; "
+            f"`multistability.study_point({load:g}, {backlash:g}, MeshParameters(), "
+            "starts=[smooth, kick+1], workers=2)`, each start until its windows are "
+            "stationary; mean ± scatter over the windows; the forcing period "
+            f"{period * 1e3:.4g} ms.)\n")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
 
 #: The coupled default's long run [s] (about four periods of the vehicle mode).
@@ -369,6 +423,7 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "band findings": band_findings,
     "coupled memory": coupled_memory,
     "separation loads": separation_loads,
+    "two states": two_states,
 }
 
 
