@@ -44,6 +44,16 @@ def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
     assert rows[-1].endswith("| 100 ± 0 % |")
 
 
+def test_the_kicked_coupled_start_is_measured_on_a_short_run():
+    text = model_doc.kicked_coupled(6.0)
+    # the kick winds the soft shaft up: the load falls from the drag (0.0833 N.m) to minus
+    # several drags, and the wheel, held on one flank, stops impacting for seconds
+    low, high = (float(x.replace("−", "-")) for x in
+                 re.search(r"between (\S+) and (\S+) N·m", text).groups())
+    assert low < -0.0833 and high < 0.1
+    assert re.search(r"no onset from [\d.]+ to 6 s", text), text
+
+
 @pytest.mark.slow
 def test_every_block_of_the_document_is_current():
     assert model_doc.stale(TEXT) == [], (
