@@ -13,6 +13,7 @@ the same text on every machine with the same library.
 from __future__ import annotations
 
 import argparse
+import itertools
 import re
 import sys
 from collections.abc import Callable
@@ -431,11 +432,12 @@ def kicked_coupled(seconds: float = KICK_SECONDS) -> str:
     rec = simulate(mesh, drive, stop_time=seconds, step=1e-4, signals=["wheel.tau_load"])
     tau = np.asarray(rec.signals["wheel.tau_load"])
     edges = np.concatenate([[0.0], np.asarray(rec.onset_times), [seconds]])
-    quiet = [(a, b) for a, b in zip(edges[:-1], edges[1:], strict=True) if b - a > QUIET]
+    quiet = [(a, b) for a, b in itertools.pairwise(edges) if b - a > QUIET]
     spans = (("with no onset " + " and ".join(f"from {a:.3g} to {b:.3g} s" for a, b in quiet))
              if quiet else f"with no interval of more than {QUIET:g} s without an onset")
     low, high = (f"{x:+.2f}".replace("-", "−") for x in (tau.min(), tau.max()))
-    return (f"measured over {seconds:g} s: the load swings between {low} and {high} N·m ({abs(tau.min()) / drive.drag:.3g} and "
+    return (f"measured over {seconds:g} s: the load swings between {low} and {high} N·m "
+            f"({abs(tau.min()) / drive.drag:.3g} and "
             f"{tau.max() / drive.drag:.3g} times the drag), {spans} "
             f"(`model_doc.kicked_coupled`, the compiled loop at 1e-4 s)")
 
