@@ -1,7 +1,8 @@
 """The numbers of docs/model.md (and of docs/analysis.md's runs), computed: every ``<!-- BEGIN
 name -->...<!-- END name -->`` block of docs/model.md is the output of ``BLOCKS[name]``, of
 docs/analysis.md of ``ANALYSIS_BLOCKS[name]``, written by ``python -m
-drive_rattle_cosim.model_doc --update`` (``update``) and held against a fresh computation by
+drive_rattle_cosim.model_doc --update`` (``update``; ``--only NAME`` rewrites one block and
+keeps the others) and held against a fresh computation by
 tests/cosim/test_model_doc.py (``stale``).  After a change of the default physics,
 run that command and review the diff: the findings written around the tables are generated
 from the same runs, so a sentence that no longer holds changes with its numbers.
