@@ -1,7 +1,8 @@
 """The numbers of docs/model.md (and of docs/analysis.md's runs), computed: every ``<!-- BEGIN
 name -->...<!-- END name -->`` block of docs/model.md is the output of ``BLOCKS[name]``, of
 docs/analysis.md of ``ANALYSIS_BLOCKS[name]``, written by ``python -m
-drive_rattle_cosim.model_doc --update`` (``update``) and held against a fresh computation by
+drive_rattle_cosim.model_doc --update`` (``update``; ``--only NAME`` rewrites one block and
+keeps the others) and held against a fresh computation by
 tests/cosim/test_model_doc.py (``stale``).  After a change of the default physics,
 run that command and review the diff: the findings written around the tables are generated
 from the same runs, so a sentence that no longer holds changes with its numbers.
@@ -13,13 +14,14 @@ the same text on every machine with the same library.
 from __future__ import annotations
 
 import argparse
+import itertools
 import re
 import sys
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 
-from . import band, contact_laws, mesh_stiffness, paper_models
+from . import band, contact_laws, mesh_stiffness, paper_models, squeeze_impacts
 from .analysis import PAPER_FIGURES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
@@ -100,6 +102,39 @@ def contact_findings(horizon: dict | None = None) -> str:
         "* Peak approach δmax " + ", ".join(f"{n} {_g(delta[n])} µm" for n in runs)
         + "; drive-flank onsets per second " + ", ".join(f"{n} {_g(onsets[n])}" for n in runs)
         + ".\n")
+
+
+# --- section 4: where the mixed regime is reached ----------------------------------------
+
+#: The surface roughnesses [m] and the films of section 4's table: (heading, mesh parameters).
+SIGMAS = (0.4e-6, 0.2e-6, 0.1e-6, 0.05e-6, 0.02e-6)
+FILMS = (("eq. 11 film, isoviscous", {}),
+         ("eq. 11 film, Barus", {"viscous_law": 1, "shear_speed": 1}),
+         ("EHL film, Barus", {"viscous_law": 1, "shear_speed": 1, "film": 1}))
+
+
+@lru_cache(maxsize=4)
+def _film_runs(horizon: tuple) -> dict:
+    return {(sigma, name): band.run_case(band.BandCase(name, name, {"sigma": sigma, **mesh}),
+                                         **dict(horizon))
+            for sigma in SIGMAS for name, mesh in FILMS}
+
+
+def mixed_regime(horizon: dict | None = None) -> str:
+    """The fraction of the in-contact samples whose most loaded pair has psi < 1 in the
+    paper's setup (today's defaults) over the roughness and the film."""
+    h = horizon or HORIZON
+    runs = _film_runs(_h(horizon))
+    rows = ["| σ [µm] | " + " | ".join(name for name, _ in FILMS) + " |",
+            "|---|" + "---|" * len(FILMS)]
+    for sigma in SIGMAS:
+        cells = [band.cell(runs[sigma, name].values["psi"], 100.0, 3) for name, _ in FILMS]
+        rows.append(f"| {sigma * 1e6:g} | " + " | ".join(f"{c} %" for c in cells) + " |")
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"(The paper's setup at the defaults but σ and the film, one {h['stop_time']:g} s "
+            f"run each from the smooth start, mean ± scatter over its {h['window']:g} s windows "
+            f"after {h['transient']:g} s, in % of the samples with a pair in contact; "
+            "`band.run_case` with those parameters.)\n")
 
 
 # --- sections 6.3: the paper comparison ---------------------------------------------------
@@ -285,6 +320,60 @@ def separation_loads() -> str:
     return text
 
 
+# --- section 6.2: the compliant teeth's two states -----------------------------------------
+
+#: The operating point of section 6.2's two states: load [M*], backlash [m], and the starts.
+TWO_STATES = (0.4, 1e-4, ("smooth", "kick+1"))
+
+
+@lru_cache(maxsize=1)
+def two_states_point():
+    """The multistability study at 0.4 M* and 0.1 mm from the smooth start and the kick of
+    +1 rad/s (today's default physics; tests/analysis/test_multistability.py's point)."""
+    from drive_rattle import MeshParameters
+
+    from . import multistability as ms
+
+    load, backlash, starts = TWO_STATES
+    return ms.study_point(load, backlash, MeshParameters(),
+                          starts=[ms.STARTS_BY_KEY[k] for k in starts], workers=2)
+
+
+def two_states() -> str:
+    """Each attractor of ``two_states_point``: its onsets per second and per forcing period,
+    median drive onset speed, δmax and pairs, each with its window scatter."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    point = two_states_point()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        # a periodic orbit's windows differ by rounding only: no scatter, said as 0
+        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
+        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| start | drive / coast onsets [1/s] | per forcing period | median drive onset "
+            "[mm/s] | δmax [µm] | pairs loaded | windows |",
+            "|---|---|---|---|---|---|---|"]
+    for a in point.attractors:
+        rows.append(
+            f"| {', '.join(a.starts)} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+            f"{a.mean['drive_rate'] * period:.3g} / {a.mean['coast_rate'] * period:.3g} | "
+            f"{c(a, 'drive_p50', 1e3)} | {c(a, 'delta_max', 1e6)} | {c(a, 'pairs')} | "
+            f"{a.windows} |")
+    if point.unsettled:
+        rows.append(f"| unsettled: {', '.join(point.unsettled)} | | | | | | |")
+    load, backlash, _ = TWO_STATES
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"({load:g} M*, backlash {backlash * 1e3:g} mm, verdict {point.verdict}; "
+            f"`multistability.study_point({load:g}, {backlash:g}, MeshParameters(), "
+            "starts=[smooth, kick+1], workers=2)`, each start until its windows are "
+            "stationary; mean ± scatter over the windows; the forcing period "
+            f"{period * 1e3:.4g} ms.)\n")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
 
 #: The coupled default's long run [s] (about four periods of the vehicle mode).
@@ -323,8 +412,41 @@ def coupled_memory(seconds: float = MEMORY_SECONDS) -> str:
             f"(`vehicle.w` within ± {vdev:.2g} rad/s of its mean)")
 
 
+#: The kicked coupled start's run [s] and the shortest quiet interval it reports [s].
+KICK_SECONDS = 30.0
+QUIET = 2.0
+
+
+def kicked_coupled(seconds: float = KICK_SECONDS) -> str:
+    """The coupled default started with the wheel 1 rad/s faster than the rigid speed (the
+    multistability study's kick +1, its shaft in steady state behind it): the load's range
+    and the intervals longer than QUIET without an onset, over ``seconds``."""
+    import numpy as np
+
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+    from .system import simulate
+
+    mesh, drive = ms.start_parameters(MeshParameters(), DrivelineParameters(),
+                                      ms.STARTS_BY_KEY["kick+1"])
+    rec = simulate(mesh, drive, stop_time=seconds, step=1e-4, signals=["wheel.tau_load"])
+    tau = np.asarray(rec.signals["wheel.tau_load"])
+    edges = np.concatenate([[0.0], np.asarray(rec.onset_times), [seconds]])
+    quiet = [(a, b) for a, b in itertools.pairwise(edges) if b - a > QUIET]
+    spans = (("with no onset " + " and ".join(f"from {a:.3g} to {b:.3g} s" for a, b in quiet))
+             if quiet else f"with no interval of more than {QUIET:g} s without an onset")
+    low, high = (f"{x:+.2f}".replace("-", "−") for x in (tau.min(), tau.max()))
+    return (f"measured over {seconds:g} s: the load swings between {low} and {high} N·m "
+            f"({abs(tau.min()) / drive.drag:.3g} and "
+            f"{tau.max() / drive.drag:.3g} times the drag), {spans} "
+            f"(`model_doc.kicked_coupled`, the compiled loop at 1e-4 s)")
+
+
 #: name -> function giving the block's text.
 BLOCKS: dict[str, Callable[[], str]] = {
+    "mixed regime": mixed_regime,
+    "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
     "contact options": contact_options,
     "contact findings": contact_findings,
@@ -334,6 +456,8 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "band findings": band_findings,
     "coupled memory": coupled_memory,
     "separation loads": separation_loads,
+    "two states": two_states,
+    "kicked coupled": kicked_coupled,
 }
 
 
@@ -401,6 +525,8 @@ def main(argv=None) -> int:
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--update", action="store_true",
                     help="rewrite the documents' blocks (else: name the stale ones)")
+    ap.add_argument("--only", action="append", metavar="NAME",
+                    help="with --update: rewrite only this block (repeatable; the others kept)")
     ap.add_argument("--doc", type=Path, action="append",
                     help="a document (docs/model.md or docs/analysis.md; default both)")
     args = ap.parse_args(argv)
@@ -410,7 +536,11 @@ def main(argv=None) -> int:
         try:
             text = doc.read_text(encoding="utf-8")
             if args.update:
-                doc.write_text(update(text, blocks=blocks), encoding="utf-8")
+                computed = None
+                if args.only:
+                    computed = blocks_in(text)
+                    computed.update(compute([n for n in args.only if n in blocks], blocks))
+                doc.write_text(update(text, computed, blocks=blocks), encoding="utf-8")
                 print(f"updated {doc}")
                 continue
         except (OSError, ValueError) as err:

@@ -28,6 +28,32 @@ def test_the_contact_options_are_a_fresh_runs():
         "--update` and review the diff")
 
 
+def test_the_single_impacts_table_is_a_fresh_runs():
+    assert model_doc.stale(TEXT, ["single impacts"]) == [], (
+        "docs/model.md section 3.3's single impacts are stale: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'single impacts'`")
+
+
+def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
+    text = model_doc.mixed_regime(SHORT)
+    rows = [r for r in text.splitlines() if r.startswith("| 0.")]
+    assert [r.split(" |")[0] for r in rows] == [f"| {s * 1e6:g}" for s in model_doc.SIGMAS]
+    assert not re.search(r"\b(nan|inf)\b", text, re.IGNORECASE)
+    # the EHL film of a smooth flank (0.02 um) is thicker than sigma wherever it is built:
+    # every in-contact sample mixed or full, in every window
+    assert rows[-1].endswith("| 100 ± 0 % |")
+
+
+def test_the_kicked_coupled_start_is_measured_on_a_short_run():
+    text = model_doc.kicked_coupled(6.0)
+    # the kick winds the soft shaft up: the load falls from the drag (0.0833 N.m) to minus
+    # several drags, and the wheel, held on one flank, stops impacting for seconds
+    low, high = (float(x.replace("−", "-")) for x in
+                 re.search(r"between (\S+) and (\S+) N·m", text).groups())
+    assert low < -0.0833 and high < 0.1
+    assert re.search(r"no onset from [\d.]+ to 6 s", text), text
+
+
 @pytest.mark.slow
 def test_every_block_of_the_document_is_current():
     assert model_doc.stale(TEXT) == [], (
