@@ -81,3 +81,19 @@ class _Timed:
             finally:
                 clock.record(name, args, time.perf_counter() - t0)
         return timed
+
+
+#: The factor by which a call may exceed its bound (docs/fmi.md, "How long a call can take")
+#: on a loaded machine: the bound is met on an idle one with room (a budget's step is some
+#: 14 ms of CPU); 2 cores shared by several test runs stretch its wall time about 2.5 times.
+LOADED = 4.0
+
+
+def slowest_line(label: str, summary: dict) -> str:
+    """The summary's slowest call and the call nearest its bound, in one line (printed by the
+    tests for the closing notes)."""
+    slowest, nearest = summary["slowest call"], summary["nearest the bound"]
+    return (f"slowest call {label}: {slowest['seconds'] * 1e3:.1f} ms ({slowest['function']}, "
+            f"bound {slowest['bound'] * 1e3:.0f} ms); nearest its bound: "
+            f"{nearest['fraction']:.2f} of it ({nearest['function']}, "
+            f"{nearest['seconds'] * 1e3:.1f} ms), {summary['calls timed']} calls")

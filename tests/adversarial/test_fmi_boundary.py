@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..seeds import fuzz_seed
+from .call_clock import LOADED, slowest_line
 
 HERE = Path(__file__).resolve().parent
 ROWS_SCRIPT = HERE / "boundary_rows.py"
@@ -42,10 +43,6 @@ ROWS = {
 }
 #: Examples per FMU and run: about 6000 calls per FMU, 5 to 20 s on the CI machine.
 FUZZ_EXAMPLES = 250
-#: The factor by which a call may exceed its bound (docs/fmi.md, "How long a call can take")
-#: on a loaded machine: the bound is met on an idle one with room (a budget's step is some
-#: 14 ms of CPU); 2 cores shared by several test runs stretch its wall time about 2.5 times.
-LOADED = 4.0
 
 
 def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
@@ -94,12 +91,8 @@ def test_boundary_fuzzer(name, flavour_fmus, tmp_path):
     # No call ran longer than its bound (docs/fmi.md: 50 ms per 1e-4 s of step), with a
     # margin of LOADED for a machine shared with other jobs (the fuzzer's own shadow runs
     # beside it).
-    slowest, nearest = summary["slowest call"], summary["nearest the bound"]
-    print(f"slowest call {name}: {slowest['seconds'] * 1e3:.1f} ms ({slowest['function']}, "
-          f"bound {slowest['bound'] * 1e3:.0f} ms); nearest its bound: "
-          f"{nearest['fraction']:.2f} of it ({nearest['function']}, "
-          f"{nearest['seconds'] * 1e3:.1f} ms)")
-    assert nearest["fraction"] <= LOADED, nearest
+    print(slowest_line(name, summary))
+    assert summary["nearest the bound"]["fraction"] <= LOADED, summary["nearest the bound"]
 
 
 @pytest.mark.parametrize("kind", ["GearMeshRattle", "Driveline"])
