@@ -55,18 +55,18 @@ def law(v: float, params: MeshParameters | None = None) -> tuple[float, float]:
         unit.close()
 
 
-def critical_speed() -> float:
+def library_critical_speed() -> float:
     """The default pair's critical speed v_c [m/s] at phi_p = 0."""
     return law(1e-3)[1]
 
 
 def speeds(v_c: float | None = None) -> list[float]:
     """The table's approach speeds [m/s], ascending."""
-    v_c = critical_speed() if v_c is None else v_c
+    v_c = library_critical_speed() if v_c is None else v_c
     return [m * v_c for m in CRITICAL_MULTIPLES] + list(FIXED_SPEEDS)
 
 
-def restitution(v: float) -> float:
+def measured_restitution(v: float) -> float:
     """Release speed over approach speed of one impact at normal speed ``v`` [m/s]: stepped
     by STEP until the impact has happened and the flanks have parted (load and approach 0;
     the wheel then flies at a constant speed)."""
@@ -82,8 +82,8 @@ def restitution(v: float) -> float:
 
 def results() -> tuple[float, list[tuple[float, float, float]]]:
     """(v_c, [(v, the law's e, the measured e)] over ``speeds()``)."""
-    v_c = critical_speed()
-    return v_c, [(v, law(v)[0], restitution(v)) for v in speeds(v_c)]
+    v_c = library_critical_speed()
+    return v_c, [(v, law(v)[0], measured_restitution(v)) for v in speeds(v_c)]
 
 
 def _v(v: float) -> str:
