@@ -114,6 +114,14 @@ int rm_probe_damping_factor(RmUnit* u, double e, double v, double* d)
     return probe_text(u, rm_hunt_crossley_factor(e, v, d, &err), &err);
 }
 
+/* The pairs in the zone of action on `flank` at pinion angle phi_p (what rm_probe_pairs and
+ * rm_probe_pair_laws report). */
+static void flank_pairs(const RmMesh* M, RmFail* f, int flank, double phi_p, RmPairSet* ps)
+{
+    double u_roll = rm_flank_roll(&M->g, flank, phi_p);
+    rm_pair_set_build(&M->g, f, u_roll, u_roll, ps);
+}
+
 int rm_probe_pairs(RmUnit* u, int flank, double phi_p, double* out, size_t capacity,
                    size_t* count)
 {
@@ -122,8 +130,7 @@ int rm_probe_pairs(RmUnit* u, int flank, double phi_p, double* out, size_t capac
     RmFail f;
     RmPairSet ps;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
-    double u_roll = rm_flank_roll(&M->g, flank, phi_p);
-    rm_pair_set_build(&M->g, &f, u_roll, u_roll, &ps);
+    flank_pairs(M, &f, flank, phi_p, &ps);
     *count = (size_t)ps.n;
     for (int i = 0; i < ps.n && (size_t)i < capacity; i++) {
         out[4 * i] = (double)ps.slot[i];
@@ -167,8 +174,7 @@ int rm_probe_pair_laws(RmUnit* u, int flank, double phi_p, double* out, size_t c
     RmFail f;
     RmPairSet ps;
     if (setjmp(f.jb) != 0) return probe_failed(u, &f);
-    double u_roll = rm_flank_roll(&M->g, flank, phi_p);
-    rm_pair_set_build(&M->g, &f, u_roll, u_roll, &ps);
+    flank_pairs(M, &f, flank, phi_p, &ps);
     *count = (size_t)ps.n;
     for (int i = 0; i < ps.n && (size_t)i < capacity; i++) {
         rm_pair_coefficients(M, &f, &ps, i);
