@@ -64,6 +64,75 @@ def _in(x: float, lo: float, hi: float) -> str:
     return "inside" if lo <= x <= hi else "outside"
 
 
+# --- section 3.3: the dissipation laws' constants ----------------------------------------
+
+#: The mesh damping ratios of section 3.3 and the speed [m/s] and substep [s] of their single
+#: impacts (a rigid spur pair: the Hertz law, whose restitution is then speed-independent).
+ZETAS = (0.03, 0.05, 0.1)
+ZETA_IMPACT = {"v": 4e-3, "h_max": 5e-7}
+#: The speeds [m/s] at which the Hunt-Crossley restitution of the defaults' factor is given.
+HUNT_CROSSLEY_SPEEDS = (1e-3, 20e-3, 100e-3)
+#: The pinion angles over a base pitch at which the flooded critical speed is taken.
+PITCH_SAMPLES = 201
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _sci(x: float, digits: int = 3) -> str:
+    mantissa, exponent = f"{x:.{digits - 1}e}".split("e")
+    return f"{mantissa}·10{str(int(exponent)).translate(_SUPERSCRIPT)}"
+
+
+def dissipation_constants() -> str:
+    """The squeeze-film law's area, critical speeds and film damping at the defaults, the
+    Hunt-Crossley factor of the defaults' restitution, and the mesh damping ratio's
+    restitutions: the model library's probes and single impacts (section 3.3)."""
+    import math
+
+    from drive_rattle import MeshParameters
+
+    p = MeshParameters()
+    pitch = 2.0 * math.pi / p.z_pinion
+    angles = [k * pitch / (PITCH_SAMPLES - 1) for k in range(PITCH_SAMPLES)]
+    (v_c,) = squeeze_impacts.critical_speeds({})
+    (low,) = squeeze_impacts.critical_speeds(band.SQUEEZE_LOW)
+    (high,) = squeeze_impacts.critical_speeds(band.SQUEEZE_HIGH)
+    flooded = squeeze_impacts.critical_speeds({"squeeze_fraction": 1.0}, angles)
+    d, hc = squeeze_impacts.hunt_crossley(p.restitution, p.restitution_speed,
+                                          HUNT_CROSSLEY_SPEEDS)
+    ratio = [squeeze_impacts.measured_restitution(
+        ZETA_IMPACT["v"], dissipation=4, damping_ratio=z, beta=0.0, tooth_compliance=0,
+        h_max=ZETA_IMPACT["h_max"]) for z in ZETAS]
+
+    def band_case(c):
+        return f"St_c {c['stokes_critical']:g}, φ {c['squeeze_fraction']:g}"
+
+    return (
+        "\n* squeeze-film area of the default flank at φp = 0: A = "
+        f"{_sci(squeeze_impacts.squeeze_area())} m²;\n"
+        f"* critical speed at φp = 0: v_c = {v_c * 1e3:.3g} mm/s at the defaults (St_c "
+        f"{p.stokes_critical:g}, φ {p.squeeze_fraction:g}); over section 6.4's band from "
+        f"{low * 1e3:.2g} mm/s ({band_case(band.SQUEEZE_LOW)}) to {high * 1e3:.2g} mm/s "
+        f"({band_case(band.SQUEEZE_HIGH)}); flooded (φ = 1) {flooded[0] * 1e3:.3g} mm/s, "
+        f"{min(flooded) * 1e3:.3g}–{max(flooded) * 1e3:.3g} mm/s over a base pitch of the "
+        f"pinion's angle ({PITCH_SAMPLES} angles);\n"
+        "* film damping of a sticking contact on the pair at the pitch point: "
+        f"{squeeze_impacts.pitch_point_damper():.3g} N·s/m;\n"
+        f"* Hunt–Crossley from e = {p.restitution:g} at {p.restitution_speed * 1e3:g} mm/s "
+        f"(`contact.restitution`, `contact.restitution_speed`): d = {d:.3g} s/m, whose "
+        "restitution is " + ", ".join(f"{e:.2g} at {v * 1e3:g} mm/s"
+                                       for v, e in zip(HUNT_CROSSLEY_SPEEDS, hc, strict=True))
+        + ";\n"
+        "* mesh damping ratio, one impact of a rigid spur pair on the pinion at rest at "
+        f"{ZETA_IMPACT['v'] * 1e3:g} mm/s (`solver.h_max` = {ZETA_IMPACT['h_max'] * 1e6:g} "
+        "µs): e = " + ", ".join(f"{e:.3f}" for e in ratio) + " for ζ = "
+        + ", ".join(f"{z:g}" for z in ZETAS) + ".\n\n"
+        "(`model_doc.dissipation_constants`: the model library's `rm_probe_squeeze`, "
+        "`rm_probe_loads`, `rm_probe_damping_factor` and `rm_probe_restitution`, and single "
+        "impacts stepped through it.)\n")
+
+
 # --- section 3.6: the contact options -----------------------------------------------------
 
 def contact_options(horizon: dict | None = None) -> str:
@@ -447,6 +516,7 @@ def kicked_coupled(seconds: float = KICK_SECONDS) -> str:
 BLOCKS: dict[str, Callable[[], str]] = {
     "mixed regime": mixed_regime,
     "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
+    "dissipation constants": dissipation_constants,
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
     "contact options": contact_options,
     "contact findings": contact_findings,

@@ -34,6 +34,20 @@ def test_the_single_impacts_table_is_a_fresh_runs():
         "drive_rattle_cosim.model_doc --update --only 'single impacts'`")
 
 
+def test_the_dissipation_constants_are_the_librarys():
+    assert model_doc.stale(TEXT, ["dissipation constants"]) == [], (
+        "docs/model.md section 3.3's constants of the dissipation laws are stale: run `python "
+        "-m drive_rattle_cosim.model_doc --update --only 'dissipation constants'`")
+    text = model_doc.dissipation_constants()
+    # the defaults' critical speed sits where the band's low and high cases bracket it, the
+    # flooded film's far above it (phi enters v_c linearly: 1/0.03 times)
+    central, low, high, flooded = (float(x) for x in re.search(
+        r"v_c = (\S+) mm/s at the defaults.*? from (\S+) mm/s .*? to (\S+) mm/s .*?"
+        r"flooded \(φ = 1\) (\S+) mm/s", text).groups())
+    assert low < central < high < flooded
+    assert flooded / central == pytest.approx(1 / 0.03, rel=1e-2)
+
+
 def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
     text = model_doc.mixed_regime(SHORT)
     rows = [r for r in text.splitlines() if r.startswith("| 0.")]
