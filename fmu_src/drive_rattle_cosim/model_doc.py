@@ -443,6 +443,146 @@ def two_states() -> str:
             f"{period * 1e3:.4g} ms.)\n")
 
 
+# --- section 6.2: the compliant teeth's grid, a committed measurement --------------------
+
+#: The grid of section 6.2 (the multistability study's default grid with 24 phases): too long
+#: for a test (about ten minutes on two threads), so measured once into GRID_DATA by
+#: ``python -m drive_rattle_cosim.model_doc --measure-grid`` (or reduced from that
+#: command's JSON with ``--grid-from``) and rendered from there; the slow
+#: tests/analysis/test_multistability.py re-measures two of its points against it.
+GRID = {"loads": (0.3, 0.4, 0.5, 0.6, 0.8, 1.0), "backlash": (1e-4, 2e-4), "min_time": 20.0,
+        "max_time": 60.0, "phases": 24}
+GRID_COMMAND = ("python -m drive_rattle_cosim.multistability --loads "
+                + ",".join(f"{x:g}" for x in GRID["loads"]) + " --backlash "
+                + ",".join(f"{x:g}" for x in GRID["backlash"])
+                + f" --min-time {GRID['min_time']:g} --max-time {GRID['max_time']:g} "
+                f"--workers 2 --phases {GRID['phases']}")
+GRID_DATA = DOC.parent / "data" / "multistability_grid.json"
+
+
+def grid_starts() -> list:
+    """The grid's starts: the seven named ones and the phase starts of GRID."""
+    from . import multistability as ms
+
+    return ms.with_phase_starts(list(ms.STARTS), GRID["phases"])
+
+
+def grid_summary(points: list[dict], measured: str, commit: str) -> dict:
+    """The data of GRID_DATA from the points of the study's JSON (``multistability.to_json``):
+    per point its verdict, each attractor's starts, windows, mean and window-to-window
+    scatter of every statistic, and the starts that did not settle; the runs' count and the
+    sum of their times."""
+    runs = [r for p in points for r in p["runs"]]
+    return {
+        "command": GRID_COMMAND, "measured": measured, "commit": commit,
+        "runs": len(runs), "run_seconds": round(sum(r["wall"] for r in runs), 1),
+        "points": [{
+            "load_fraction": p["load_fraction"], "load": p["load"], "backlash": p["backlash"],
+            "verdict": p["verdict"],
+            "attractors": [{k: a[k] for k in ("starts", "windows", "mean", "scatter")}
+                           for a in p["attractors"]],
+            "unsettled": [{"start": r["start"], "seconds": r["seconds"]}
+                          for r in p["runs"] if not r["settled"]]}
+            for p in points]}
+
+
+def _commit() -> str:
+    import subprocess
+
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=DOC.parent,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def write_grid(points: list[dict], path: Path = GRID_DATA) -> Path:
+    """GRID_DATA from the study's JSON points, dated today, with the sources' commit."""
+    import datetime
+    import json
+
+    wanted = [(f, b) for b in GRID["backlash"] for f in GRID["loads"]]
+    found = [(p["load_fraction"], p["backlash"]) for p in points]
+    starts = sorted(s.name for s in grid_starts())
+    if found != wanted or any(sorted(r["start"] for r in p["runs"]) != starts
+                              for p in points):
+        raise ValueError(f"the study's points are {found} with their starts; allowed: those "
+                         f"of `{GRID_COMMAND}` ({wanted}, {len(starts)} starts each)")
+    data = grid_summary(points, datetime.date.today().isoformat(), _commit())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+def measure_grid(path: Path = GRID_DATA, workers: int = 2) -> Path:
+    """Run GRID (the study of GRID_COMMAND) and write its data to ``path``."""
+    from . import multistability as ms
+
+    results = ms.study(GRID["loads"], GRID["backlash"], starts=grid_starts(), workers=workers,
+                       min_time=GRID["min_time"], max_time=GRID["max_time"])
+    return write_grid(ms.to_json(results), path)
+
+
+def grid_data(path: Path = GRID_DATA) -> dict:
+    import json
+
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def compliant_grid(data: dict | None = None) -> str:
+    """The committed grid (GRID_DATA) as a table, one row per attractor, and what it shows."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    data = data or grid_data()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        m, sd = a["mean"][name], a["scatter"][name]
+        sd = sd if sd is not None and sd > 1e-9 * abs(m) else 0.0
+        return f"{m * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| load | backlash [mm] | verdict | starts | drive / coast onsets [1/s] | median "
+            "drive onset [mm/s] | δmax [µm] | pairs loaded |", "|---|---|---|---|---|---|---|---|"]
+    points = data["points"]
+    n_starts = max(sum(len(a["starts"]) for a in p["attractors"]) + len(p["unsettled"])
+                   for p in points)
+    for p in points:
+        head = f"| {p['load_fraction']:g} M* | {p['backlash'] * 1e3:g} | {p['verdict']} |"
+        for a in p["attractors"]:
+            k = len(a["starts"])
+            starts = (f"all {k}" if k == n_starts else f"{k}: " + ", ".join(a["starts"])
+                      if k <= 6 else f"{k}: {a['starts'][0]} and {k - 1} others")
+            rows.append(f"{head} {starts} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+                        f"{c(a, 'drive_p50', 1e3)} | {c(a, 'delta_max', 1e6)} | "
+                        f"{c(a, 'pairs')} |")
+        for u in p["unsettled"]:
+            rows.append(f"{head} unsettled: {u['start']} after {u['seconds']:.3g} s "
+                        "| | | | |")
+    single = [p for p in points if p["verdict"] == "single-valued"]
+    multi = [f"{p['load_fraction']:g} M* at {p['backlash'] * 1e3:g} mm" for p in points
+             if p["verdict"] == "multistable"]
+    # an orbit of one onset per flank and forcing period (the rigid teeth's, below)
+    one_each = [f"{p['load_fraction']:g} M* at {p['backlash'] * 1e3:g} mm" for p in points
+                for a in p["attractors"]
+                if all(abs(a["mean"][f] * period - 1.0) < 1e-3
+                       for f in ("drive_rate", "coast_rate"))]
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"(`{data['command']}`: {n_starts} starts per point, {data['runs']} runs of "
+            f"{GRID['min_time']:g}–{GRID['max_time']:g} s, measured on {data['measured']} at "
+            f"commit {data['commit']}, the runs' times summing to {data['run_seconds']:.0f} s; "
+            "each attractor's mean ± scatter over the windows of its first start; "
+            f"`{GRID_DATA.relative_to(DOC.parents[1])}`, rendered by "
+            "`model_doc.compliant_grid`.) "
+            f"{len(single)} of the {len(points)} points single-valued"
+            + (f"; multistable: {', '.join(multi)}" if multi else "")
+            + ". An orbit of one onset per flank and forcing period (the rigid teeth's, "
+            "below) is reached "
+            + (f"at {', '.join(one_each)}" if one_each else "from no start at any point")
+            + ".\n")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
 
 #: The coupled default's long run [s] (about four periods of the vehicle mode).
@@ -527,6 +667,7 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "coupled memory": coupled_memory,
     "separation loads": separation_loads,
     "two states": two_states,
+    "compliant grid": compliant_grid,
     "kicked coupled": kicked_coupled,
 }
 
@@ -599,7 +740,18 @@ def main(argv=None) -> int:
                     help="with --update: rewrite only this block (repeatable; the others kept)")
     ap.add_argument("--doc", type=Path, action="append",
                     help="a document (docs/model.md or docs/analysis.md; default both)")
+    ap.add_argument("--measure-grid", action="store_true",
+                    help=f"run section 6.2's grid (about ten minutes) into {GRID_DATA.name}")
+    ap.add_argument("--grid-from", type=Path, metavar="JSON",
+                    help=f"write {GRID_DATA.name} from the JSON of `{GRID_COMMAND} --out X`")
     args = ap.parse_args(argv)
+    if args.measure_grid or args.grid_from:
+        import json
+
+        path = (write_grid(json.loads(args.grid_from.read_text(encoding="utf-8")))
+                if args.grid_from else measure_grid())
+        print(f"wrote {path}")
+        return 0
     stale_names = []
     for doc in args.doc or [DOC, ANALYSIS_DOC]:
         blocks = DOCUMENTS.get(doc.name, BLOCKS)

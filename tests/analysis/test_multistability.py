@@ -312,6 +312,47 @@ def test_phase_starts_find_the_orbit_the_seven_starts_miss():
     assert orbits[0].mean["delta_max"] == pytest.approx(2.45e-6, rel=0.01)
 
 
+#: The grid's points measured again (the cheapest of docs/data/multistability_grid.json, about
+#: 15 s of runs each on two threads): the default drag and backlash, and the rigid teeth's
+#: orbit's point.
+GRID_POINTS = ((0.5, 1e-4), (0.4, 2e-4))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("load, backlash", GRID_POINTS)
+def test_two_points_of_the_grid_measure_as_committed(load, backlash):
+    """A point of docs/model.md section 6.2's committed grid, measured again from all its
+    starts: the same verdict, and the attractor each committed attractor's first start
+    reaches with its signature statistics within the study's own criterion of one attractor
+    (twice the root sum of squares of the two window scatters plus the floor) of the
+    committed ones -- the rattle is chaotic, so its statistics are compared, not which
+    start ends where.  A change of the default physics fails here until the grid is measured again
+    (``python -m drive_rattle_cosim.model_doc --measure-grid``)."""
+    data = model_doc.grid_data()
+    (committed,) = [p for p in data["points"]
+                    if (p["load_fraction"], p["backlash"]) == (load, backlash)]
+    point = ms.study_point(load, backlash, MeshParameters(), starts=model_doc.grid_starts(),
+                           workers=2, min_time=model_doc.GRID["min_time"],
+                           max_time=model_doc.GRID["max_time"])
+    assert point.verdict == committed["verdict"], ms.report([point], {})
+    window = point.runs[0].window
+    for old in committed["attractors"]:
+        # the attractor the committed one's first start reaches now
+        (new,) = [a for a in point.attractors if old["starts"][0] in a.starts]
+        for name in ms.SIGNATURE:
+            mean, scatter = old["mean"][name], _finite(old["scatter"][name])
+            allowed = (ms.SEPARATION * math.hypot(_finite(new.scatter[name]), scatter)
+                       + ms._floor(name, abs(mean), window))
+            assert abs(new.mean[name] - mean) <= allowed, (
+                f"{load} M*, {backlash * 1e3:g} mm, the attractor of {old['starts'][0]}: "
+                f"{name} {new.mean[name]:.6g}, committed {mean:.6g}; allowed a difference of "
+                f"{allowed:.3g}")
+
+
+def _finite(x) -> float:
+    return x if x is not None and math.isfinite(x) else 0.0
+
+
 # ------------------------------------------------------------------ the two engines
 def orbit_point() -> tuple[MeshParameters, DrivelineParameters]:
     """0.4 M* and backlash 0.2 mm on the paper's model, default physics with rigid teeth: the

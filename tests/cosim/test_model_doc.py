@@ -48,6 +48,25 @@ def test_the_dissipation_constants_are_the_librarys():
     assert flooded / central == pytest.approx(1 / 0.03, rel=1e-2)
 
 
+def test_the_compliant_grid_is_the_committed_measurement():
+    """Section 6.2's grid is rendered from docs/data/multistability_grid.json, the data of the
+    grid's command (every point of it, every start at each point); the slow
+    tests/analysis/test_multistability.py measures two of its points again."""
+    assert model_doc.stale(TEXT, ["compliant grid"]) == [], (
+        "docs/model.md section 6.2's grid is not the rendering of its data: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'compliant grid'`")
+    data = model_doc.grid_data()
+    assert data["command"] == model_doc.GRID_COMMAND, (
+        f"the grid's data was measured by {data['command']!r}; allowed: "
+        f"{model_doc.GRID_COMMAND!r} (run `python -m drive_rattle_cosim.model_doc "
+        "--measure-grid`)")
+    starts = sorted(s.name for s in model_doc.grid_starts())
+    for p in data["points"]:
+        found = sorted([*(s for a in p["attractors"] for s in a["starts"]),
+                        *(u["start"] for u in p["unsettled"])])
+        assert found == starts, (p["load_fraction"], p["backlash"], found)
+
+
 def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
     text = model_doc.mixed_regime(SHORT)
     rows = [r for r in text.splitlines() if r.startswith("| 0.")]
