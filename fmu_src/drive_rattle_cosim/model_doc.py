@@ -156,6 +156,11 @@ def contact_findings(horizon: dict | None = None) -> str:
            if contact_laws.sensitive([runs[n].scatter(f) for n in runs])]
     no = [label for label, f, _ in contact_laws.ROWS if label not in yes]
     delta = {n: sc[n]["max_penetration"].mean * 1e6 for n in runs}
+    # Johnson's roughness parameter of the peak approaches (section 3.5): sigma / delta_max
+    from drive_rattle import MeshParameters
+
+    sigma = MeshParameters().sigma * 1e6
+    ratios = [sigma / d for d in delta.values()]
     onsets = {n: sc[n]["impacts_per_second_drive"].mean for n in runs}
     return (
         "\n* **Pairs in contact**: the paper's ellipsoids load "
@@ -170,7 +175,10 @@ def contact_findings(horizon: dict | None = None) -> str:
         f"{'; '.join(no) or 'none'}.\n"
         "* Peak approach δmax " + ", ".join(f"{n} {_g(delta[n])} µm" for n in runs)
         + "; drive-flank onsets per second " + ", ".join(f"{n} {_g(onsets[n])}" for n in runs)
-        + ".\n")
+        + f". Johnson's roughness parameter of the peak approaches, σ/δmax (σ = {sigma:g} µm), "
+        f"is {_g(min(ratios), 2)}–{_g(max(ratios), 2)}: "
+        + ("above" if min(ratios) > 0.05 else "not everywhere above")
+        + " the 0.05 below which a smooth-surface law holds (section 3.5).\n")
 
 
 # --- section 4: where the mixed regime is reached ----------------------------------------
@@ -583,7 +591,181 @@ def compliant_grid(data: dict | None = None) -> str:
             + ".\n")
 
 
+# --- section 6.2: the rigid teeth's orbit and the former default's two states -------------
+
+#: The rigid teeth's orbit's point of section 6.2: load [M*], backlash [m], phase starts.
+RIGID_ORBIT = (0.4, 2e-4, 24)
+
+
+@lru_cache(maxsize=1)
+def rigid_orbit_point():
+    """The multistability study at 0.4 M* and 0.2 mm with rigid teeth (the default physics
+    otherwise) from the smooth start and the phase starts of ``--phases 24``
+    (tests/analysis/test_multistability.py's ``test_phase_starts_find_the_orbit_the_seven_
+    starts_miss``, shared within a session)."""
+    from drive_rattle import MeshParameters
+
+    from . import multistability as ms
+
+    load, backlash, phases = RIGID_ORBIT
+    return ms.study_point(load, backlash, MeshParameters(tooth_compliance=0),
+                          starts=[ms.STARTS_BY_KEY["smooth"], *ms.phase_starts(phases)],
+                          workers=2)
+
+
+def _is_orbit(a, period: float) -> bool:
+    """One onset per flank and forcing period."""
+    return all(abs(a.mean[f] * period - 1.0) < 1e-3 for f in ("drive_rate", "coast_rate"))
+
+
+def rigid_orbit() -> str:
+    """The attractors of ``rigid_orbit_point`` with their statistics, and which starts reach
+    the orbit of one onset per flank and forcing period."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    point = rigid_orbit_point()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
+        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| starts | drive / coast onsets [1/s] | per forcing period | median onset drive / "
+            "coast [mm/s] | δmax [µm] | pairs loaded | windows |",
+            "|---|---|---|---|---|---|---|"]
+    for a in point.attractors:
+        k = len(a.starts)
+        starts = ", ".join(a.starts) if k <= 6 else f"{k}: {a.starts[0]} and {k - 1} others"
+        rows.append(
+            f"| {starts} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+            f"{a.mean['drive_rate'] * period:.3g} / {a.mean['coast_rate'] * period:.3g} | "
+            f"{c(a, 'drive_p50', 1e3)} / {c(a, 'coast_p50', 1e3)} | "
+            f"{c(a, 'delta_max', 1e6)} | {c(a, 'pairs')} | {a.windows} |")
+    if point.unsettled:
+        rows.append(f"| unsettled: {', '.join(point.unsettled)} | | | | | | |")
+    load, backlash, phases = RIGID_ORBIT
+    orbit = [s for a in point.attractors if _is_orbit(a, period) for s in a.starts]
+    n_phase = len(point.runs) - 1
+    reach = (f"the orbit of one onset per flank and forcing period is reached from "
+             f"{len(orbit)} of the {n_phase} phase starts ({', '.join(orbit)})"
+             if orbit else "no start reaches an orbit of one onset per flank and period")
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"({load:g} M*, backlash {backlash * 1e3:g} mm, rigid teeth, verdict "
+            f"{point.verdict}; `python -m drive_rattle_cosim.multistability --loads {load:g} "
+            f"--backlash {backlash:g} --starts smooth --phases {phases} --set "
+            "GearMeshRattle.tooth.compliance=0`, `model_doc.rigid_orbit_point`; mean ± scatter "
+            f"over the windows of each attractor's first start.) {reach[0].upper()}{reach[1:]}"
+            + ("; the smooth start reaches the chaotic rattle" if "smooth" not in orbit
+               else "") + ".\n")
+
+
+#: The physics the former default's two states were measured with (Hunt-Crossley
+#: dissipation from e = 0.8 at 4 mm/s, 10 um crowning, the exact Hertz law, friction form 0
+#: on the entrainment speed, rigid teeth), pinned: the study's --set items.
+HUNT_CROSSLEY_PINNED = (
+    "GearMeshRattle.contact.dissipation=1", "GearMeshRattle.contact.restitution=0.8",
+    "GearMeshRattle.contact.restitution_speed=0.004", "GearMeshRattle.contact.crowning=1e-5",
+    "GearMeshRattle.contact.hertz_law=0", "GearMeshRattle.friction.enabled=true",
+    "GearMeshRattle.friction.form=0", "GearMeshRattle.friction.shear_speed=0",
+    "GearMeshRattle.gear.backlash=1e-4", "GearMeshRattle.tooth.compliance=0")
+#: Its two commands: (loads, starts; None: the seven named starts).
+HUNT_CROSSLEY_RUNS = (("0.4", "smooth,kick-1"), ("0.8", None))
+
+
+def hunt_crossley_arguments(loads: str, starts: str, out: Path) -> list[str]:
+    """The study command's arguments on the pinned physics at the default backlash."""
+    args = ["--loads", loads, "--backlash", "1e-4", "--starts", starts, "--min-time", "20",
+            "--max-time", "60", "--workers", "2", "--out", str(out)]
+    for item in HUNT_CROSSLEY_PINNED:
+        args += ["--set", item]
+    return args
+
+
+@lru_cache(maxsize=1)
+def hunt_crossley_points() -> tuple:
+    """The study command at 0.4 M* (smooth, kick -1) and 0.8 M* (the seven starts) on the
+    pinned physics: per command (its JSON points, its markdown report)
+    (tests/analysis/test_multistability.py's
+    ``test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8``, shared within a
+    session)."""
+    import contextlib
+    import io
+    import json
+    import tempfile
+
+    from . import multistability as ms
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (loads, starts) in enumerate(HUNT_CROSSLEY_RUNS):
+            path = Path(tmp) / f"run{k}.md"
+            with contextlib.redirect_stdout(io.StringIO()):
+                status = ms.main(hunt_crossley_arguments(
+                    loads, starts or ",".join(ms.STARTS_BY_KEY), path))
+            if status:
+                raise RuntimeError(f"the study command ended with status {status}")
+            out.append((json.loads(path.with_suffix(".json").read_text(encoding="utf-8")),
+                        path.read_text(encoding="utf-8")))
+    return tuple(out)
+
+
+def hunt_crossley_states() -> str:
+    """What the pinned former default's two commands find, attractor by attractor."""
+    parts = []
+    for points, _ in hunt_crossley_points():
+        for p in points:
+            found = []
+            for a in p["attractors"]:
+                m = a["mean"]
+                runs = sorted({f"{x:.3g}" for x in a["durations"].values()}, key=float)
+                found.append(
+                    f"{', '.join(a['starts'])}: {m['drive_rate']:.4g} / {m['coast_rate']:.3g} "
+                    f"drive / coast onsets per second, δmax {m['delta_max'] * 1e6:.4g} µm "
+                    f"(runs of {' or '.join(runs)} s, the longest transient "
+                    f"{max(a['transients'].values()):.2g} s)")
+            parts.append(f"{p['load_fraction']:g} M*, {p['backlash'] * 1e3:g} mm: "
+                         f"{p['verdict']} -- " + "; ".join(found))
+    return ("\n" + "\n".join(f"    * {x}" for x in parts) + "\n\n"
+            "    (`python -m drive_rattle_cosim.multistability --loads L --backlash 1e-4 "
+            "--starts S --min-time 20 --max-time 60 --workers 2 --set ...` with the settings "
+            "`model_doc.HUNT_CROSSLEY_PINNED`, `model_doc.hunt_crossley_points`.)\n")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
+
+def vehicle_mode() -> str:
+    """The default driveline's vehicle mode: frequency, damping ratio and decay time
+    (``DrivelineParameters().derived()``, the library's)."""
+    from drive_rattle import DrivelineParameters
+
+    d = DrivelineParameters().derived()
+    return (f"f = √(k/J_v)/2π = {d['vehicle_mode_frequency']:.3g} Hz with damping ratio "
+            f"ζ = (c + c_v)/(2√(k J_v)) = {d['vehicle_mode_damping_ratio'] * 100:.2g} %, so a "
+            "disturbance of the vehicle's steady state decays as exp(−t/τ) with **τ = 1/(ζ ω) "
+            f"= {d['vehicle_mode_decay_time']:.4g} s**")
+
+
+def start_offset() -> str:
+    """The wheel's mean line ahead of its coupled start angle, rho sum A_k/W_k^2 cos p_k (the
+    engine orders' mean angle offset at the defaults), and the shaft torque it adds."""
+    import math
+
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    mesh, drive = MeshParameters(), DrivelineParameters()
+    ratio = mesh.z_pinion / mesh.z_wheel
+    offset = ratio * sum(
+        getattr(drive, f"amplitude_{k}") / (getattr(drive, f"order_{k}") * drive.w_mean) ** 2
+        * math.cos(getattr(drive, f"phase_{k}")) for k in range(1, 5)
+        if getattr(drive, f"amplitude_{k}"))
+    torque = drive.k_shaft * offset
+    return (f"ρ Σ A_k/W_k² cos p_k = {offset * 1e3:.2g} mrad ahead of its start angle (the "
+            "orders' mean angle offset, ρ = z_p/z_w), so the shaft's mean torque after the "
+            f"start is the drag plus k × {offset * 1e3:.2g} mrad = {torque * 1e3:+.3g} mN·m "
+            f"({torque / drive.drag * 100:+.2g} %)")
+
 
 #: The coupled default's long run [s] (about four periods of the vehicle mode).
 MEMORY_SECONDS = 120.0
@@ -665,9 +847,13 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "band": band_table,
     "band findings": band_findings,
     "coupled memory": coupled_memory,
+    "vehicle mode": vehicle_mode,
+    "start offset": start_offset,
     "separation loads": separation_loads,
     "two states": two_states,
     "compliant grid": compliant_grid,
+    "rigid orbit": rigid_orbit,
+    "hunt-crossley states": hunt_crossley_states,
     "kicked coupled": kicked_coupled,
 }
 
