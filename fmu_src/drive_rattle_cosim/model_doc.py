@@ -64,6 +64,33 @@ def _in(x: float, lo: float, hi: float) -> str:
     return "inside" if lo <= x <= hi else "outside"
 
 
+# --- section 2: the reference pair ----------------------------------------------------
+
+def _derived() -> dict:
+    from drive_rattle import MeshParameters
+
+    return MeshParameters().derived()
+
+
+def reference_pair() -> str:
+    """The default (reference) pair's centre distance and contact ratios (the library's)."""
+    d = _derived()
+    return (f"a = {d['centre_distance'] * 1e3:.5g} mm, ε_α = {d['eps_alpha']:.4g}, "
+            f"ε_β = {d['eps_beta']:.4g}, ε_γ = {d['eps_gamma']:.4g}")
+
+
+def crown_radius() -> str:
+    """The default crowning's r_y of the reference pair."""
+    return f"{_derived()['r_y']:.3g} m for the reference pair"
+
+
+def eq6_radius() -> str:
+    """Eq. 6's r_y at the reference pair's pitch point, and its pitch radii."""
+    d = _derived()
+    return (f"r_y = **{d['r_y_eq6_pitch'] * 1e3:.4g} mm** at the pitch point (the pitch radii "
+            f"{d['r_pinion'] * 1e3:.4g} and {d['r_wheel'] * 1e3:.4g} mm)")
+
+
 # --- section 3.3: the dissipation laws' constants ----------------------------------------
 
 #: The mesh damping ratios of section 3.3 and the speed [m/s] and substep [s] of their single
@@ -837,6 +864,9 @@ def kicked_coupled(seconds: float = KICK_SECONDS) -> str:
 #: name -> function giving the block's text.
 BLOCKS: dict[str, Callable[[], str]] = {
     "mixed regime": mixed_regime,
+    "reference pair": reference_pair,
+    "crown radius": crown_radius,
+    "eq6 radius": eq6_radius,
     "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
     "dissipation constants": dissipation_constants,
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",

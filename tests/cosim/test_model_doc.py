@@ -48,6 +48,21 @@ def test_the_dissipation_constants_are_the_librarys():
     assert flooded / central == pytest.approx(1 / 0.03, rel=1e-2)
 
 
+def test_the_constants_of_the_defaults_are_the_librarys():
+    """The reference pair's geometry, the radii of its crown and of eq. 6, the vehicle mode and
+    the coupled start's offset: inline blocks of the defaults' derived values."""
+    names = ["reference pair", "crown radius", "eq6 radius", "vehicle mode", "start offset"]
+    assert model_doc.stale(TEXT, names) == [], (
+        "docs/model.md's constants of the defaults are stale: run `python -m "
+        "drive_rattle_cosim.model_doc --update` and review the diff")
+    # the offset's torque is the shaft stiffness times the offset angle, as the text says
+    mrad, mnm = (float(x) for x in re.search(
+        r"k × (\S+) mrad = (\S+) mN·m", model_doc.start_offset()).groups())
+    from drive_rattle import DrivelineParameters
+
+    assert mnm == pytest.approx(DrivelineParameters().k_shaft * mrad, rel=0.02)
+
+
 def test_the_compliant_grid_is_the_committed_measurement():
     """Section 6.2's grid is rendered from docs/data/multistability_grid.json, the data of the
     grid's command (every point of it, every start at each point); the slow
