@@ -760,6 +760,28 @@ def hunt_crossley_states() -> str:
             "`model_doc.HUNT_CROSSLEY_PINNED`, `model_doc.hunt_crossley_points`.)\n")
 
 
+# --- section 6.1: the separation load ---------------------------------------------------
+
+def separation_load() -> str:
+    """The default orders, the pinion's deepest deceleration, M* and the default drag over it
+    (``multistability.deepest_deceleration``, ``separation_load``)."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    mesh, drive = MeshParameters(), DrivelineParameters()
+    orders = [k for k in range(1, 5) if getattr(drive, f"amplitude_{k}")]
+    a = ms.deepest_deceleration(drive)
+    m_star = ms.separation_load(mesh, drive)
+    return ("With the default engine orders ("
+            + "/".join(f"{getattr(drive, f'order_{k}'):g}" for k in orders) + " at "
+            + "/".join(f"{getattr(drive, f'amplitude_{k}'):g}" for k in orders)
+            + f" rad/s²) the pinion's deepest deceleration is {a:.4g} rad/s² (tested), so a "
+            f"load below\n\n    M* = I_w (z_p/z_w) · {a:.4g} rad/s² = {m_star:.4g} N·m\n\n"
+            "lets the fluctuation separate the teeth quasi-statically (MODEL_NOTES §3). The "
+            f"default drag is **{drive.drag / m_star:.3g} M* = {drive.drag:.4g} N·m**")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
 
 def vehicle_mode() -> str:
@@ -877,6 +899,7 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "band": band_table,
     "band findings": band_findings,
     "coupled memory": coupled_memory,
+    "separation load": separation_load,
     "vehicle mode": vehicle_mode,
     "start offset": start_offset,
     "separation loads": separation_loads,

@@ -51,7 +51,8 @@ def test_the_dissipation_constants_are_the_librarys():
 def test_the_constants_of_the_defaults_are_the_librarys():
     """The reference pair's geometry, the radii of its crown and of eq. 6, the vehicle mode and
     the coupled start's offset: inline blocks of the defaults' derived values."""
-    names = ["reference pair", "crown radius", "eq6 radius", "vehicle mode", "start offset"]
+    names = ["reference pair", "crown radius", "eq6 radius", "vehicle mode", "start offset",
+             "separation load"]
     assert model_doc.stale(TEXT, names) == [], (
         "docs/model.md's constants of the defaults are stale: run `python -m "
         "drive_rattle_cosim.model_doc --update` and review the diff")
@@ -61,6 +62,45 @@ def test_the_constants_of_the_defaults_are_the_librarys():
     from drive_rattle import DrivelineParameters
 
     assert mnm == pytest.approx(DrivelineParameters().k_shaft * mrad, rel=0.02)
+
+
+def test_the_defaults_the_text_quotes_are_the_specs():
+    """The parameter defaults docs/model.md quotes in its prose, each as the specs give it
+    (drive_rattle.parameters): a changed default fails here until the text follows."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    p, d = MeshParameters(), DrivelineParameters()
+    text = " ".join(re.sub(r"<!-- BEGIN (.+?) -->.*?<!-- END \1 -->", "", TEXT,
+                           flags=re.S).split())
+    quoted = [
+        f"(default {p.crowning * 1e6:g} µm, a representative value",
+        f"St_c = {p.stokes_critical:g}: Gondret", f"e_dry = {p.restitution_dry:g}: Gondret",
+        f"η = {p.eta:g} Pa·s: a gear oil", f"σ = {p.sigma * 1e6:g} µm: MODEL_NOTES",
+        f"φ = {p.squeeze_fraction:g} has **no published value**",
+        f"Hunt–Crossley e = {p.restitution:g} at {p.restitution_speed * 1e3:g} mm/s, the "
+        "default before",
+        f"`contact.stokes_critical` (default {p.stokes_critical:g},",
+        f"`contact.restitution_dry` (default {p.restitution_dry:g},",
+        f"oil film develops (default {p.squeeze_fraction:g})",
+        f"with σ `surface.sigma` ({p.sigma * 1e6:g} µm, the paper)",
+        # (the powers of ten as the text writes them; another default: the plain number,
+        # which the text does not hold)
+        ("`surface.gamma` (the asperity tip radius, 10⁻⁴ m" if p.gamma == 1e-4
+         else f"`surface.gamma` (the asperity tip radius, {p.gamma:g} m"),
+        ("`surface.asperity_density` (default 10⁹ m⁻²" if p.asperity_density == 1e9
+         else f"`surface.asperity_density` (default {p.asperity_density:g} m⁻²"),
+        f"defaults {p.body_ratio_pinion:g} and {p.body_ratio_wheel:g}, the reference",
+        f"(`solver.h_max`, default {p.h_max * 1e6:g} µs)",
+        f"`rattle.time_constant` (default {p.rattle_time:g} s,",
+        f"**A soft shaft, k = {d.k_shaft:g} N·m/rad (default).**",
+        f"**Light shaft damping** c = {d.c_shaft:g} N·m·s/rad",
+        f"`lubricant.alpha` α = {p.alpha_pv * 1e8:g}·10⁻⁸ 1/Pa",
+        f"`lubricant.tau_limit_0` {p.tau_limit_0 / 1e6:g} MPa and "
+        f"`lubricant.tau_limit_slope` {p.tau_limit_slope:g}",
+    ]
+    missing = [q for q in quoted if q not in text]
+    assert not missing, (f"docs/model.md does not quote these defaults as the specs give "
+                         f"them: {missing}")
 
 
 def test_the_compliant_grid_is_the_committed_measurement():
