@@ -8,7 +8,11 @@ run that command and review the diff: the findings written around the tables are
 from the same runs, so a sentence that no longer holds changes with its numbers.
 
 The runs are the model library's compiled loop (the FMUs' numbers bit for bit), deterministic:
-the same text on every machine with the same library.
+the same text on every machine with the same library.  One block is not run on update: section
+6.2's grid of the compliant teeth with 24 phases (minutes of runs) is rendered from the data
+committed in docs/data/multistability_grid.json, which ``--measure-grid`` measures again (or
+``--grid-from`` reduces from the JSON of the study's command); the slow
+tests/analysis/test_multistability.py measures two of its points again against it.
 """
 
 from __future__ import annotations
@@ -89,6 +93,60 @@ def eq6_radius() -> str:
     d = _derived()
     return (f"r_y = **{d['r_y_eq6_pitch'] * 1e3:.4g} mm** at the pitch point (the pitch radii "
             f"{d['r_pinion'] * 1e3:.4g} and {d['r_wheel'] * 1e3:.4g} mm)")
+
+
+#: Pinion angles over a base pitch at which the pairs' laws are sampled.
+LAW_SAMPLES = 200
+
+
+@lru_cache(maxsize=4)
+def _pair_laws(geometry: int) -> list[tuple[float, float, float, float]]:
+    """(r_x, r_y, K of the exact law, K of eq. 2) of every pair in the zone on the drive flank
+    at LAW_SAMPLES pinion angles over a base pitch, for ``contact.geometry`` ``geometry``
+    (``rm_probe_pair_laws``: slot, s, length, r_x, r_y, K, ...)."""
+    import ctypes
+    import math
+
+    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    found = {}
+    for law in (0, 1):
+        p = MeshParameters(contact_geometry=geometry, hertz_law=law)
+        unit = Unit(MESH, p, initialize=False)
+        try:
+            out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
+            for k in range(LAW_SAMPLES):
+                phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
+                unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
+                for i in range(n.value):
+                    row = out[10 * i: 10 * i + 10]
+                    found.setdefault((k, int(row[0])), []).append(row[3:6])
+        finally:
+            unit.close()
+    return [(a[0], a[1], a[2], b[2]) for a, b in found.values()]
+
+
+def crowned_laws() -> str:
+    """The crowned default's r_y/r_x over a base pitch and how much softer eq. 2 is there."""
+    rows = _pair_laws(0)
+    rho = [ry / rx for rx, ry, _, _ in rows]
+    soft = [exact / sphere for _, _, exact, sphere in rows]
+    return (f"{min(soft):.2g}–{max(soft):.2g} times softer than the exact law (ρ = r_y/r_x = "
+            f"{min(rho):.0f}–{max(rho):.0f} over a base pitch)")
+
+
+def eq6_laws() -> str:
+    """Eq. 6's r_y over the path of contact, r_y/r_x, and the exact law against eq. 2."""
+    rows = _pair_laws(1)
+    ry = [r for _, r, _, _ in rows]
+    rho = [r / x for x, r, _, _ in rows]
+    stiff = [(exact / sphere - 1.0) * 100 for _, _, exact, sphere in rows]
+    return (f"{min(ry) * 1e3:.3g}–{max(ry) * 1e3:.3g} mm along the path of contact, r_y/r_x = "
+            f"{min(rho):.2g}–{max(rho):.3g}; there the exact elliptical law "
+            f"(`contact.hertz_law` = 0) is {min(stiff):.0f}–{max(stiff):.0f} % stiffer than "
+            "eq. 2 (= 1)")
 
 
 # --- section 3.3: the dissipation laws' constants ----------------------------------------
@@ -889,6 +947,8 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "reference pair": reference_pair,
     "crown radius": crown_radius,
     "eq6 radius": eq6_radius,
+    "eq6 laws": eq6_laws,
+    "crowned laws": crowned_laws,
     "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
     "dissipation constants": dissipation_constants,
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",

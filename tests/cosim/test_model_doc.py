@@ -49,10 +49,11 @@ def test_the_dissipation_constants_are_the_librarys():
 
 
 def test_the_constants_of_the_defaults_are_the_librarys():
-    """The reference pair's geometry, the radii of its crown and of eq. 6, the vehicle mode and
-    the coupled start's offset: inline blocks of the defaults' derived values."""
-    names = ["reference pair", "crown radius", "eq6 radius", "vehicle mode", "start offset",
-             "separation load"]
+    """The reference pair's geometry, the radii of its crown and of eq. 6 and the two Hertz
+    laws over the path, the vehicle mode, the coupled start's offset and the separation load:
+    inline blocks of the defaults' derived values and the library's pair laws."""
+    names = ["reference pair", "crown radius", "eq6 radius", "eq6 laws", "crowned laws",
+             "vehicle mode", "start offset", "separation load"]
     assert model_doc.stale(TEXT, names) == [], (
         "docs/model.md's constants of the defaults are stale: run `python -m "
         "drive_rattle_cosim.model_doc --update` and review the diff")
