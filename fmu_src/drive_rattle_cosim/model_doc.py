@@ -95,6 +95,44 @@ def eq6_radius() -> str:
             f"{d['r_pinion'] * 1e3:.4g} and {d['r_wheel'] * 1e3:.4g} mm)")
 
 
+def half_lines() -> str:
+    """Half the reference pair's longest contact line, b / (2 cos beta_b)."""
+    import math
+
+    from drive_rattle import MeshParameters
+
+    half = MeshParameters().b / (2 * math.cos(_derived()["beta_b"]))
+    return f"b/(2 cos β_b) = {half * 1e3:.3g} mm"
+
+
+def line_lengths() -> str:
+    """The mean total contact-line length b eps_alpha / cos(beta_b) of the reference pair and
+    the range of the engaged lines' sum over a base pitch (the library's line contact)."""
+    import ctypes
+    import math
+
+    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    p = MeshParameters(contact_geometry=2)
+    d = p.derived()
+    totals = []
+    unit = Unit(MESH, p, initialize=False)
+    try:
+        out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
+        for k in range(LAW_SAMPLES):
+            phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
+            unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
+            totals.append(sum(out[10 * i + 2] for i in range(n.value)))
+    finally:
+        unit.close()
+    mean = p.b * d["eps_alpha"] / math.cos(d["beta_b"])
+    return (f"{mean * 1e3:.4g} mm for the reference pair, the sum of the engaged lines "
+            f"{min(totals) * 1e3:.3g}–{max(totals) * 1e3:.3g} mm over a base pitch "
+            f"({LAW_SAMPLES} angles; the mean tested)")
+
+
 #: Pinion angles over a base pitch at which the pairs' laws are sampled.
 LAW_SAMPLES = 200
 
@@ -948,6 +986,8 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "crown radius": crown_radius,
     "eq6 radius": eq6_radius,
     "eq6 laws": eq6_laws,
+    "line lengths": line_lengths,
+    "half lines": half_lines,
     "crowned laws": crowned_laws,
     "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
     "dissipation constants": dissipation_constants,

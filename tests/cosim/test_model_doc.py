@@ -53,6 +53,7 @@ def test_the_constants_of_the_defaults_are_the_librarys():
     laws over the path, the vehicle mode, the coupled start's offset and the separation load:
     inline blocks of the defaults' derived values and the library's pair laws."""
     names = ["reference pair", "crown radius", "eq6 radius", "eq6 laws", "crowned laws",
+             "line lengths", "half lines",
              "vehicle mode", "start offset", "separation load"]
     assert model_doc.stale(TEXT, names) == [], (
         "docs/model.md's constants of the defaults are stale: run `python -m "
