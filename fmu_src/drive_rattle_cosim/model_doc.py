@@ -1087,8 +1087,12 @@ def main(argv=None) -> int:
     if args.measure_grid or args.grid_from:
         import json
 
-        path = (write_grid(json.loads(args.grid_from.read_text(encoding="utf-8")))
-                if args.grid_from else measure_grid())
+        try:
+            path = (write_grid(json.loads(args.grid_from.read_text(encoding="utf-8")))
+                    if args.grid_from else measure_grid())
+        except (OSError, ValueError) as err:
+            print(f"model_doc: {err}", file=sys.stderr)
+            return 1
         print(f"wrote {path}")
         return 0
     stale_names = []
