@@ -8,7 +8,11 @@ run that command and review the diff: the findings written around the tables are
 from the same runs, so a sentence that no longer holds changes with its numbers.
 
 The runs are the model library's compiled loop (the FMUs' numbers bit for bit), deterministic:
-the same text on every machine with the same library.
+the same text on every machine with the same library.  One block is not run on update: section
+6.2's grid of the compliant teeth with 24 phases (minutes of runs) is rendered from the data
+committed in docs/data/multistability_grid.json, which ``--measure-grid`` measures again (or
+``--grid-from`` reduces from the JSON of the study's command); the slow
+tests/analysis/test_multistability.py measures two of its points again against it.
 """
 
 from __future__ import annotations
@@ -64,6 +68,194 @@ def _in(x: float, lo: float, hi: float) -> str:
     return "inside" if lo <= x <= hi else "outside"
 
 
+# --- section 2: the reference pair ----------------------------------------------------
+
+def _derived() -> dict:
+    from drive_rattle import MeshParameters
+
+    return MeshParameters().derived()
+
+
+def reference_pair() -> str:
+    """The default (reference) pair's centre distance and contact ratios (the library's)."""
+    d = _derived()
+    return (f"a = {d['centre_distance'] * 1e3:.5g} mm, ε_α = {d['eps_alpha']:.4g}, "
+            f"ε_β = {d['eps_beta']:.4g}, ε_γ = {d['eps_gamma']:.4g}")
+
+
+def crown_radius() -> str:
+    """The default crowning's r_y of the reference pair."""
+    return f"{_derived()['r_y']:.3g} m for the reference pair"
+
+
+def eq6_radius() -> str:
+    """Eq. 6's r_y at the reference pair's pitch point, and its pitch radii."""
+    d = _derived()
+    return (f"r_y = **{d['r_y_eq6_pitch'] * 1e3:.4g} mm** at the pitch point (the pitch radii "
+            f"{d['r_pinion'] * 1e3:.4g} and {d['r_wheel'] * 1e3:.4g} mm)")
+
+
+def half_lines() -> str:
+    """Half the reference pair's longest contact line, b / (2 cos beta_b)."""
+    import math
+
+    from drive_rattle import MeshParameters
+
+    half = MeshParameters().b / (2 * math.cos(_derived()["beta_b"]))
+    return f"b/(2 cos β_b) = {half * 1e3:.3g} mm"
+
+
+def line_lengths() -> str:
+    """The mean total contact-line length b eps_alpha / cos(beta_b) of the reference pair and
+    the range of the engaged lines' sum over a base pitch (the library's line contact)."""
+    import ctypes
+    import math
+
+    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    p = MeshParameters(contact_geometry=2)
+    d = p.derived()
+    totals = []
+    unit = Unit(MESH, p, initialize=False)
+    try:
+        out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
+        for k in range(LAW_SAMPLES):
+            phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
+            unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
+            totals.append(sum(out[10 * i + 2] for i in range(n.value)))
+    finally:
+        unit.close()
+    mean = p.b * d["eps_alpha"] / math.cos(d["beta_b"])
+    return (f"{mean * 1e3:.4g} mm for the reference pair, the sum of the engaged lines "
+            f"{min(totals) * 1e3:.3g}–{max(totals) * 1e3:.3g} mm over a base pitch "
+            f"({LAW_SAMPLES} angles; the mean tested)")
+
+
+#: Pinion angles over a base pitch at which the pairs' laws are sampled.
+LAW_SAMPLES = 200
+
+
+@lru_cache(maxsize=4)
+def _pair_laws(geometry: int) -> list[tuple[float, float, float, float]]:
+    """(r_x, r_y, K of the exact law, K of eq. 2) of every pair in the zone on the drive flank
+    at LAW_SAMPLES pinion angles over a base pitch, for ``contact.geometry`` ``geometry``
+    (``rm_probe_pair_laws``: slot, s, length, r_x, r_y, K, ...)."""
+    import ctypes
+    import math
+
+    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    found = {}
+    for law in (0, 1):
+        p = MeshParameters(contact_geometry=geometry, hertz_law=law)
+        unit = Unit(MESH, p, initialize=False)
+        try:
+            out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
+            for k in range(LAW_SAMPLES):
+                phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
+                unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
+                for i in range(n.value):
+                    row = out[10 * i: 10 * i + 10]
+                    found.setdefault((k, int(row[0])), []).append(row[3:6])
+        finally:
+            unit.close()
+    return [(a[0], a[1], a[2], b[2]) for a, b in found.values()]
+
+
+def crowned_laws() -> str:
+    """The crowned default's r_y/r_x over a base pitch and how much softer eq. 2 is there."""
+    rows = _pair_laws(0)
+    rho = [ry / rx for rx, ry, _, _ in rows]
+    soft = [exact / sphere for _, _, exact, sphere in rows]
+    return (f"{min(soft):.2g}–{max(soft):.2g} times softer than the exact law (ρ = r_y/r_x = "
+            f"{min(rho):.0f}–{max(rho):.0f} over a base pitch)")
+
+
+def eq6_laws() -> str:
+    """Eq. 6's r_y over the path of contact, r_y/r_x, and the exact law against eq. 2."""
+    rows = _pair_laws(1)
+    ry = [r for _, r, _, _ in rows]
+    rho = [r / x for x, r, _, _ in rows]
+    stiff = [(exact / sphere - 1.0) * 100 for _, _, exact, sphere in rows]
+    return (f"{min(ry) * 1e3:.3g}–{max(ry) * 1e3:.3g} mm along the path of contact, r_y/r_x = "
+            f"{min(rho):.2g}–{max(rho):.3g}; there the exact elliptical law "
+            f"(`contact.hertz_law` = 0) is {min(stiff):.0f}–{max(stiff):.0f} % stiffer than "
+            "eq. 2 (= 1)")
+
+
+# --- section 3.3: the dissipation laws' constants ----------------------------------------
+
+#: The mesh damping ratios of section 3.3 and the speed [m/s] and substep [s] of their single
+#: impacts (a rigid spur pair: the Hertz law, whose restitution is then speed-independent).
+ZETAS = (0.03, 0.05, 0.1)
+ZETA_IMPACT = {"v": 4e-3, "h_max": 5e-7}
+#: The speeds [m/s] at which the Hunt-Crossley restitution of the defaults' factor is given.
+HUNT_CROSSLEY_SPEEDS = (1e-3, 20e-3, 100e-3)
+#: The pinion angles over a base pitch at which the flooded critical speed is taken.
+PITCH_SAMPLES = 201
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def _sci(x: float, digits: int = 3) -> str:
+    mantissa, exponent = f"{x:.{digits - 1}e}".split("e")
+    return f"{mantissa}·10{str(int(exponent)).translate(_SUPERSCRIPT)}"
+
+
+def dissipation_constants() -> str:
+    """The squeeze-film law's area, critical speeds and film damping at the defaults, the
+    Hunt-Crossley factor of the defaults' restitution, and the mesh damping ratio's
+    restitutions: the model library's probes and single impacts (section 3.3)."""
+    import math
+
+    from drive_rattle import MeshParameters
+
+    p = MeshParameters()
+    pitch = 2.0 * math.pi / p.z_pinion
+    angles = [k * pitch / (PITCH_SAMPLES - 1) for k in range(PITCH_SAMPLES)]
+    (v_c,) = squeeze_impacts.critical_speeds({})
+    (low,) = squeeze_impacts.critical_speeds(band.SQUEEZE_LOW)
+    (high,) = squeeze_impacts.critical_speeds(band.SQUEEZE_HIGH)
+    flooded = squeeze_impacts.critical_speeds({"squeeze_fraction": 1.0}, angles)
+    d, hc = squeeze_impacts.hunt_crossley(p.restitution, p.restitution_speed,
+                                          HUNT_CROSSLEY_SPEEDS)
+    ratio = [squeeze_impacts.measured_restitution(
+        ZETA_IMPACT["v"], dissipation=4, damping_ratio=z, beta=0.0, tooth_compliance=0,
+        h_max=ZETA_IMPACT["h_max"]) for z in ZETAS]
+
+    def band_case(c):
+        return f"St_c {c['stokes_critical']:g}, φ {c['squeeze_fraction']:g}"
+
+    return (
+        "\n* squeeze-film area of the default flank at φp = 0: A = "
+        f"{_sci(squeeze_impacts.squeeze_area())} m²;\n"
+        f"* critical speed at φp = 0: v_c = {v_c * 1e3:.3g} mm/s at the defaults (St_c "
+        f"{p.stokes_critical:g}, φ {p.squeeze_fraction:g}); over section 6.4's band from "
+        f"{low * 1e3:.2g} mm/s ({band_case(band.SQUEEZE_LOW)}) to {high * 1e3:.2g} mm/s "
+        f"({band_case(band.SQUEEZE_HIGH)}); flooded (φ = 1) {flooded[0] * 1e3:.3g} mm/s, "
+        f"{min(flooded) * 1e3:.3g}–{max(flooded) * 1e3:.3g} mm/s over a base pitch of the "
+        f"pinion's angle ({PITCH_SAMPLES} angles);\n"
+        "* film damping of a sticking contact on the pair at the pitch point: "
+        f"{squeeze_impacts.pitch_point_damper():.3g} N·s/m;\n"
+        f"* Hunt–Crossley from e = {p.restitution:g} at {p.restitution_speed * 1e3:g} mm/s "
+        f"(`contact.restitution`, `contact.restitution_speed`): d = {d:.3g} s/m, whose "
+        "restitution is " + ", ".join(f"{e:.2g} at {v * 1e3:g} mm/s"
+                                       for v, e in zip(HUNT_CROSSLEY_SPEEDS, hc, strict=True))
+        + ";\n"
+        "* mesh damping ratio, one impact of a rigid spur pair on the pinion at rest at "
+        f"{ZETA_IMPACT['v'] * 1e3:g} mm/s (`solver.h_max` = {ZETA_IMPACT['h_max'] * 1e6:g} "
+        "µs): e = " + ", ".join(f"{e:.3f}" for e in ratio) + " for ζ = "
+        + ", ".join(f"{z:g}" for z in ZETAS) + ".\n\n"
+        "(`model_doc.dissipation_constants`: the model library's `rm_probe_squeeze`, "
+        "`rm_probe_loads`, `rm_probe_damping_factor` and `rm_probe_restitution`, and single "
+        "impacts stepped through it.)\n")
+
+
 # --- section 3.6: the contact options -----------------------------------------------------
 
 def contact_options(horizon: dict | None = None) -> str:
@@ -87,6 +279,11 @@ def contact_findings(horizon: dict | None = None) -> str:
            if contact_laws.sensitive([runs[n].scatter(f) for n in runs])]
     no = [label for label, f, _ in contact_laws.ROWS if label not in yes]
     delta = {n: sc[n]["max_penetration"].mean * 1e6 for n in runs}
+    # Johnson's roughness parameter of the peak approaches (section 3.5): sigma / delta_max
+    from drive_rattle import MeshParameters
+
+    sigma = MeshParameters().sigma * 1e6
+    ratios = [sigma / d for d in delta.values()]
     onsets = {n: sc[n]["impacts_per_second_drive"].mean for n in runs}
     return (
         "\n* **Pairs in contact**: the paper's ellipsoids load "
@@ -101,7 +298,10 @@ def contact_findings(horizon: dict | None = None) -> str:
         f"{'; '.join(no) or 'none'}.\n"
         "* Peak approach δmax " + ", ".join(f"{n} {_g(delta[n])} µm" for n in runs)
         + "; drive-flank onsets per second " + ", ".join(f"{n} {_g(onsets[n])}" for n in runs)
-        + ".\n")
+        + f". Johnson's roughness parameter of the peak approaches, σ/δmax (σ = {sigma:g} µm), "
+        f"is {_g(min(ratios), 2)}–{_g(max(ratios), 2)}: "
+        + ("above" if min(ratios) > 0.05 else "not everywhere above")
+        + " the 0.05 below which a smooth-surface law holds (section 3.5).\n")
 
 
 # --- section 4: where the mixed regime is reached ----------------------------------------
@@ -374,7 +574,343 @@ def two_states() -> str:
             f"{period * 1e3:.4g} ms.)\n")
 
 
+# --- section 6.2: the compliant teeth's grid, a committed measurement --------------------
+
+#: The grid of section 6.2 (the multistability study's default grid with 24 phases): too long
+#: for a test (about ten minutes on two threads), so measured once into GRID_DATA by
+#: ``python -m drive_rattle_cosim.model_doc --measure-grid`` (or reduced from that
+#: command's JSON with ``--grid-from``) and rendered from there; the slow
+#: tests/analysis/test_multistability.py re-measures two of its points against it.
+GRID = {"loads": (0.3, 0.4, 0.5, 0.6, 0.8, 1.0), "backlash": (1e-4, 2e-4), "min_time": 20.0,
+        "max_time": 60.0, "phases": 24}
+GRID_COMMAND = ("python -m drive_rattle_cosim.multistability --loads "
+                + ",".join(f"{x:g}" for x in GRID["loads"]) + " --backlash "
+                + ",".join(f"{x:g}" for x in GRID["backlash"])
+                + f" --min-time {GRID['min_time']:g} --max-time {GRID['max_time']:g} "
+                f"--workers 2 --phases {GRID['phases']}")
+GRID_DATA = DOC.parent / "data" / "multistability_grid.json"
+
+
+def grid_starts() -> list:
+    """The grid's starts: the seven named ones and the phase starts of GRID."""
+    from . import multistability as ms
+
+    return ms.with_phase_starts(list(ms.STARTS), GRID["phases"])
+
+
+def grid_summary(points: list[dict], measured: str, commit: str) -> dict:
+    """The data of GRID_DATA from the points of the study's JSON (``multistability.to_json``):
+    per point its verdict, each attractor's starts, windows, mean and window-to-window
+    scatter of every statistic, and the starts that did not settle; the runs' count and the
+    sum of their times."""
+    runs = [r for p in points for r in p["runs"]]
+    return {
+        "command": GRID_COMMAND, "measured": measured, "commit": commit,
+        "runs": len(runs), "run_seconds": round(sum(r["wall"] for r in runs), 1),
+        "points": [{
+            "load_fraction": p["load_fraction"], "load": p["load"], "backlash": p["backlash"],
+            "verdict": p["verdict"],
+            "attractors": [{k: a[k] for k in ("starts", "windows", "mean", "scatter")}
+                           for a in p["attractors"]],
+            "unsettled": [{"start": r["start"], "seconds": r["seconds"]}
+                          for r in p["runs"] if not r["settled"]]}
+            for p in points]}
+
+
+def _commit() -> str:
+    import subprocess
+
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=DOC.parent,
+                              capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def write_grid(points: list[dict], path: Path = GRID_DATA) -> Path:
+    """GRID_DATA from the study's JSON points, dated today, with the sources' commit."""
+    import datetime
+    import json
+
+    wanted = [(f, b) for b in GRID["backlash"] for f in GRID["loads"]]
+    found = [(p["load_fraction"], p["backlash"]) for p in points]
+    starts = sorted(s.name for s in grid_starts())
+    if found != wanted or any(sorted(r["start"] for r in p["runs"]) != starts
+                              for p in points):
+        raise ValueError(f"the study's points are {found} with their starts; allowed: those "
+                         f"of `{GRID_COMMAND}` ({wanted}, {len(starts)} starts each)")
+    data = grid_summary(points, datetime.date.today().isoformat(), _commit())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    return path
+
+
+def measure_grid(path: Path = GRID_DATA, workers: int = 2) -> Path:
+    """Run GRID (the study of GRID_COMMAND) and write its data to ``path``."""
+    from . import multistability as ms
+
+    results = ms.study(GRID["loads"], GRID["backlash"], starts=grid_starts(), workers=workers,
+                       min_time=GRID["min_time"], max_time=GRID["max_time"])
+    return write_grid(ms.to_json(results), path)
+
+
+def grid_data(path: Path = GRID_DATA) -> dict:
+    import json
+
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def compliant_grid(data: dict | None = None) -> str:
+    """The committed grid (GRID_DATA) as a table, one row per attractor, and what it shows."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    data = data or grid_data()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        m, sd = a["mean"][name], a["scatter"][name]
+        sd = sd if sd is not None and sd > 1e-9 * abs(m) else 0.0
+        return f"{m * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| load | backlash [mm] | verdict | starts | drive / coast onsets [1/s] | median "
+            "drive onset [mm/s] | δmax [µm] | pairs loaded |", "|---|---|---|---|---|---|---|---|"]
+    points = data["points"]
+    n_starts = max(sum(len(a["starts"]) for a in p["attractors"]) + len(p["unsettled"])
+                   for p in points)
+    for p in points:
+        head = f"| {p['load_fraction']:g} M* | {p['backlash'] * 1e3:g} | {p['verdict']} |"
+        for a in p["attractors"]:
+            k = len(a["starts"])
+            starts = (f"all {k}" if k == n_starts else f"{k}: " + ", ".join(a["starts"])
+                      if k <= 6 else f"{k}: {a['starts'][0]} and {k - 1} others")
+            rows.append(f"{head} {starts} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+                        f"{c(a, 'drive_p50', 1e3)} | {c(a, 'delta_max', 1e6)} | "
+                        f"{c(a, 'pairs')} |")
+        for u in p["unsettled"]:
+            rows.append(f"{head} unsettled: {u['start']} after {u['seconds']:.3g} s "
+                        "| | | | |")
+    single = [p for p in points if p["verdict"] == "single-valued"]
+    multi = [f"{p['load_fraction']:g} M* at {p['backlash'] * 1e3:g} mm" for p in points
+             if p["verdict"] == "multistable"]
+    # an orbit of one onset per flank and forcing period (the rigid teeth's, below)
+    one_each = [f"{p['load_fraction']:g} M* at {p['backlash'] * 1e3:g} mm" for p in points
+                for a in p["attractors"]
+                if all(abs(a["mean"][f] * period - 1.0) < 1e-3
+                       for f in ("drive_rate", "coast_rate"))]
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"(`{data['command']}`: {n_starts} starts per point, {data['runs']} runs of "
+            f"{GRID['min_time']:g}–{GRID['max_time']:g} s, measured on {data['measured']} at "
+            f"commit {data['commit']}, the runs' times summing to {data['run_seconds']:.0f} s; "
+            "each attractor's mean ± scatter over the windows of its first start; "
+            f"`{GRID_DATA.relative_to(DOC.parents[1])}`, rendered by "
+            "`model_doc.compliant_grid`.) "
+            f"{len(single)} of the {len(points)} points single-valued"
+            + (f"; multistable: {', '.join(multi)}" if multi else "")
+            + ". An orbit of one onset per flank and forcing period (the rigid teeth's, "
+            "below) is reached "
+            + (f"at {', '.join(one_each)}" if one_each else "from no start at any point")
+            + ".\n")
+
+
+# --- section 6.2: the rigid teeth's orbit and the former default's two states -------------
+
+#: The rigid teeth's orbit's point of section 6.2: load [M*], backlash [m], phase starts.
+RIGID_ORBIT = (0.4, 2e-4, 24)
+
+
+@lru_cache(maxsize=1)
+def rigid_orbit_point():
+    """The multistability study at 0.4 M* and 0.2 mm with rigid teeth (the default physics
+    otherwise) from the smooth start and the phase starts of ``--phases 24``
+    (tests/analysis/test_multistability.py's ``test_phase_starts_find_the_orbit_the_seven_
+    starts_miss``, shared within a session)."""
+    from drive_rattle import MeshParameters
+
+    from . import multistability as ms
+
+    load, backlash, phases = RIGID_ORBIT
+    return ms.study_point(load, backlash, MeshParameters(tooth_compliance=0),
+                          starts=[ms.STARTS_BY_KEY["smooth"], *ms.phase_starts(phases)],
+                          workers=2)
+
+
+def _is_orbit(a, period: float) -> bool:
+    """One onset per flank and forcing period."""
+    return all(abs(a.mean[f] * period - 1.0) < 1e-3 for f in ("drive_rate", "coast_rate"))
+
+
+def rigid_orbit() -> str:
+    """The attractors of ``rigid_orbit_point`` with their statistics, and which starts reach
+    the orbit of one onset per flank and forcing period."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    point = rigid_orbit_point()
+    period = ms.forcing_period(MeshParameters(), DrivelineParameters())
+
+    def c(a, name, scale=1.0, digits=3):
+        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
+        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+
+    rows = ["| starts | drive / coast onsets [1/s] | per forcing period | median onset drive / "
+            "coast [mm/s] | δmax [µm] | pairs loaded | windows |",
+            "|---|---|---|---|---|---|---|"]
+    for a in point.attractors:
+        k = len(a.starts)
+        starts = ", ".join(a.starts) if k <= 6 else f"{k}: {a.starts[0]} and {k - 1} others"
+        rows.append(
+            f"| {starts} | {c(a, 'drive_rate')} / {c(a, 'coast_rate')} | "
+            f"{a.mean['drive_rate'] * period:.3g} / {a.mean['coast_rate'] * period:.3g} | "
+            f"{c(a, 'drive_p50', 1e3)} / {c(a, 'coast_p50', 1e3)} | "
+            f"{c(a, 'delta_max', 1e6)} | {c(a, 'pairs')} | {a.windows} |")
+    if point.unsettled:
+        rows.append(f"| unsettled: {', '.join(point.unsettled)} | | | | | | |")
+    load, backlash, phases = RIGID_ORBIT
+    orbit = [s for a in point.attractors if _is_orbit(a, period) for s in a.starts]
+    n_phase = len(point.runs) - 1
+    reach = (f"the orbit of one onset per flank and forcing period is reached from "
+             f"{len(orbit)} of the {n_phase} phase starts ({', '.join(orbit)})"
+             if orbit else "no start reaches an orbit of one onset per flank and period")
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"({load:g} M*, backlash {backlash * 1e3:g} mm, rigid teeth, verdict "
+            f"{point.verdict}; `python -m drive_rattle_cosim.multistability --loads {load:g} "
+            f"--backlash {backlash:g} --starts smooth --phases {phases} --set "
+            "GearMeshRattle.tooth.compliance=0`, `model_doc.rigid_orbit_point`; mean ± scatter "
+            f"over the windows of each attractor's first start.) {reach[0].upper()}{reach[1:]}"
+            + ("; the smooth start reaches the chaotic rattle" if "smooth" not in orbit
+               else "") + ".\n")
+
+
+#: The physics the former default's two states were measured with (Hunt-Crossley
+#: dissipation from e = 0.8 at 4 mm/s, 10 um crowning, the exact Hertz law, friction form 0
+#: on the entrainment speed, rigid teeth), pinned: the study's --set items.
+HUNT_CROSSLEY_PINNED = (
+    "GearMeshRattle.contact.dissipation=1", "GearMeshRattle.contact.restitution=0.8",
+    "GearMeshRattle.contact.restitution_speed=0.004", "GearMeshRattle.contact.crowning=1e-5",
+    "GearMeshRattle.contact.hertz_law=0", "GearMeshRattle.friction.enabled=true",
+    "GearMeshRattle.friction.form=0", "GearMeshRattle.friction.shear_speed=0",
+    "GearMeshRattle.gear.backlash=1e-4", "GearMeshRattle.tooth.compliance=0")
+#: Its two commands: (loads, starts; None: the seven named starts).
+HUNT_CROSSLEY_RUNS = (("0.4", "smooth,kick-1"), ("0.8", None))
+
+
+def hunt_crossley_arguments(loads: str, starts: str, out: Path) -> list[str]:
+    """The study command's arguments on the pinned physics at the default backlash."""
+    args = ["--loads", loads, "--backlash", "1e-4", "--starts", starts, "--min-time", "20",
+            "--max-time", "60", "--workers", "2", "--out", str(out)]
+    for item in HUNT_CROSSLEY_PINNED:
+        args += ["--set", item]
+    return args
+
+
+@lru_cache(maxsize=1)
+def hunt_crossley_points() -> tuple:
+    """The study command at 0.4 M* (smooth, kick -1) and 0.8 M* (the seven starts) on the
+    pinned physics: per command (its JSON points, its markdown report)
+    (tests/analysis/test_multistability.py's
+    ``test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8``, shared within a
+    session)."""
+    import contextlib
+    import io
+    import json
+    import tempfile
+
+    from . import multistability as ms
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (loads, starts) in enumerate(HUNT_CROSSLEY_RUNS):
+            path = Path(tmp) / f"run{k}.md"
+            with contextlib.redirect_stdout(io.StringIO()):
+                status = ms.main(hunt_crossley_arguments(
+                    loads, starts or ",".join(ms.STARTS_BY_KEY), path))
+            if status:
+                raise RuntimeError(f"the study command ended with status {status}")
+            out.append((json.loads(path.with_suffix(".json").read_text(encoding="utf-8")),
+                        path.read_text(encoding="utf-8")))
+    return tuple(out)
+
+
+def hunt_crossley_states() -> str:
+    """What the pinned former default's two commands find, attractor by attractor."""
+    parts = []
+    for points, _ in hunt_crossley_points():
+        for p in points:
+            found = []
+            for a in p["attractors"]:
+                m = a["mean"]
+                runs = sorted({f"{x:.3g}" for x in a["durations"].values()}, key=float)
+                found.append(
+                    f"{', '.join(a['starts'])}: {m['drive_rate']:.4g} / {m['coast_rate']:.3g} "
+                    f"drive / coast onsets per second, δmax {m['delta_max'] * 1e6:.4g} µm "
+                    f"(runs of {' or '.join(runs)} s, the longest transient "
+                    f"{max(a['transients'].values()):.2g} s)")
+            parts.append(f"{p['load_fraction']:g} M*, {p['backlash'] * 1e3:g} mm: "
+                         f"{p['verdict']} -- " + "; ".join(found))
+    return ("\n" + "\n".join(f"    * {x}" for x in parts) + "\n\n"
+            "    (`python -m drive_rattle_cosim.multistability --loads L --backlash 1e-4 "
+            "--starts S --min-time 20 --max-time 60 --workers 2 --set ...` with the settings "
+            "`model_doc.HUNT_CROSSLEY_PINNED`, `model_doc.hunt_crossley_points`.)\n")
+
+
+# --- section 6.1: the separation load ---------------------------------------------------
+
+def separation_load() -> str:
+    """The default orders, the pinion's deepest deceleration, M* and the default drag over it
+    (``multistability.deepest_deceleration``, ``separation_load``)."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    from . import multistability as ms
+
+    mesh, drive = MeshParameters(), DrivelineParameters()
+    orders = [k for k in range(1, 5) if getattr(drive, f"amplitude_{k}")]
+    a = ms.deepest_deceleration(drive)
+    m_star = ms.separation_load(mesh, drive)
+    return ("With the default engine orders ("
+            + "/".join(f"{getattr(drive, f'order_{k}'):g}" for k in orders) + " at "
+            + "/".join(f"{getattr(drive, f'amplitude_{k}'):g}" for k in orders)
+            + f" rad/s²) the pinion's deepest deceleration is {a:.4g} rad/s² (tested), so a "
+            f"load below\n\n    M* = I_w (z_p/z_w) · {a:.4g} rad/s² = {m_star:.4g} N·m\n\n"
+            "lets the fluctuation separate the teeth quasi-statically (MODEL_NOTES §3). The "
+            f"default drag is **{drive.drag / m_star:.3g} M* = {drive.drag:.4g} N·m**")
+
+
 # --- section 6: the coupled system's memory ---------------------------------------------
+
+def vehicle_mode() -> str:
+    """The default driveline's vehicle mode: frequency, damping ratio and decay time
+    (``DrivelineParameters().derived()``, the library's)."""
+    from drive_rattle import DrivelineParameters
+
+    d = DrivelineParameters().derived()
+    return (f"f = √(k/J_v)/2π = {d['vehicle_mode_frequency']:.3g} Hz with damping ratio "
+            f"ζ = (c + c_v)/(2√(k J_v)) = {d['vehicle_mode_damping_ratio'] * 100:.2g} %, so a "
+            "disturbance of the vehicle's steady state decays as exp(−t/τ) with **τ = 1/(ζ ω) "
+            f"= {d['vehicle_mode_decay_time']:.4g} s**")
+
+
+def start_offset() -> str:
+    """The wheel's mean line ahead of its coupled start angle, rho sum A_k/W_k^2 cos p_k (the
+    engine orders' mean angle offset at the defaults), and the shaft torque it adds."""
+    import math
+
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    mesh, drive = MeshParameters(), DrivelineParameters()
+    ratio = mesh.z_pinion / mesh.z_wheel
+    offset = ratio * sum(
+        getattr(drive, f"amplitude_{k}") / (getattr(drive, f"order_{k}") * drive.w_mean) ** 2
+        * math.cos(getattr(drive, f"phase_{k}")) for k in range(1, 5)
+        if getattr(drive, f"amplitude_{k}"))
+    torque = drive.k_shaft * offset
+    return (f"ρ Σ A_k/W_k² cos p_k = {offset * 1e3:.2g} mrad ahead of its start angle (the "
+            "orders' mean angle offset, ρ = z_p/z_w), so the shaft's mean torque after the "
+            f"start is the drag plus k × {offset * 1e3:.2g} mrad = {torque * 1e3:+.3g} mN·m "
+            f"({torque / drive.drag * 100:+.2g} %)")
+
 
 #: The coupled default's long run [s] (about four periods of the vehicle mode).
 MEMORY_SECONDS = 120.0
@@ -446,7 +982,15 @@ def kicked_coupled(seconds: float = KICK_SECONDS) -> str:
 #: name -> function giving the block's text.
 BLOCKS: dict[str, Callable[[], str]] = {
     "mixed regime": mixed_regime,
+    "reference pair": reference_pair,
+    "crown radius": crown_radius,
+    "eq6 radius": eq6_radius,
+    "eq6 laws": eq6_laws,
+    "line lengths": line_lengths,
+    "half lines": half_lines,
+    "crowned laws": crowned_laws,
     "single impacts": lambda: "\n" + squeeze_impacts.table() + "\n",
+    "dissipation constants": dissipation_constants,
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
     "contact options": contact_options,
     "contact findings": contact_findings,
@@ -455,8 +999,14 @@ BLOCKS: dict[str, Callable[[], str]] = {
     "band": band_table,
     "band findings": band_findings,
     "coupled memory": coupled_memory,
+    "separation load": separation_load,
+    "vehicle mode": vehicle_mode,
+    "start offset": start_offset,
     "separation loads": separation_loads,
     "two states": two_states,
+    "compliant grid": compliant_grid,
+    "rigid orbit": rigid_orbit,
+    "hunt-crossley states": hunt_crossley_states,
     "kicked coupled": kicked_coupled,
 }
 
@@ -529,7 +1079,22 @@ def main(argv=None) -> int:
                     help="with --update: rewrite only this block (repeatable; the others kept)")
     ap.add_argument("--doc", type=Path, action="append",
                     help="a document (docs/model.md or docs/analysis.md; default both)")
+    ap.add_argument("--measure-grid", action="store_true",
+                    help=f"run section 6.2's grid (about ten minutes) into {GRID_DATA.name}")
+    ap.add_argument("--grid-from", type=Path, metavar="JSON",
+                    help=f"write {GRID_DATA.name} from the JSON of `{GRID_COMMAND} --out X`")
     args = ap.parse_args(argv)
+    if args.measure_grid or args.grid_from:
+        import json
+
+        try:
+            path = (write_grid(json.loads(args.grid_from.read_text(encoding="utf-8")))
+                    if args.grid_from else measure_grid())
+        except (OSError, ValueError) as err:
+            print(f"model_doc: {err}", file=sys.stderr)
+            return 1
+        print(f"wrote {path}")
+        return 0
     stale_names = []
     for doc in args.doc or [DOC, ANALYSIS_DOC]:
         blocks = DOCUMENTS.get(doc.name, BLOCKS)

@@ -3,7 +3,6 @@ attractor grouping on synthetic window statistics, starts that are what they cla
 of the model forced into different states, and the published finding -- a second attractor at
 0.4 M* that persists 60 s, 0.8 M* single-valued -- on the physics it was measured with."""
 
-import json
 import math
 import subprocess
 import sys
@@ -194,28 +193,18 @@ def test_two_starts_forced_into_different_states_are_two_attractors():
 
 #: The physics the 0.4 M* attractors were measured with (docs/analysis.md section 7: Hunt-Crossley
 #: dissipation from e = 0.8 at 4 mm/s, 10 um crowning, the exact Hertz law, friction form 0 on the
-#: entrainment speed), pinned: other physics options may change the defaults later.
-PINNED = ("GearMeshRattle.contact.dissipation=1", "GearMeshRattle.contact.restitution=0.8",
-          "GearMeshRattle.contact.restitution_speed=0.004",
-          "GearMeshRattle.contact.crowning=1e-5", "GearMeshRattle.contact.hertz_law=0",
-          "GearMeshRattle.friction.enabled=true", "GearMeshRattle.friction.form=0",
-          "GearMeshRattle.friction.shear_speed=0", "GearMeshRattle.gear.backlash=1e-4",
-          "GearMeshRattle.tooth.compliance=0")
-
-
-def command(out, loads: str, starts: str) -> list[dict]:
-    """The study command on the pinned physics at the default backlash: its points (JSON)."""
-    args = ["--loads", loads, "--backlash", "1e-4", "--starts", starts, "--min-time", "20",
-            "--max-time", "60", "--workers", "2", "--out", str(out)]
-    for item in PINNED:
-        args += ["--set", item]
-    assert ms.main(args) == 0
-    return json.loads(out.with_suffix(".json").read_text())
+#: entrainment speed, rigid teeth), pinned: other physics options may change the defaults later.
+PINNED = model_doc.HUNT_CROSSLEY_PINNED
+#: docs/model.md, whose section 6.2 holds blocks of these tests' runs.
+MODEL_DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
 
 
 @pytest.mark.slow
-def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8(tmp_path, capsys):
-    (at_04,) = command(tmp_path / "a.md", "0.4", "smooth,kick-1")
+def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8():
+    # the two commands' runs (model_doc.hunt_crossley_points: `command` at 0.4 M* from smooth
+    # and kick -1, at 0.8 M* from the seven starts), shared with docs/model.md's block
+    (points_04, md_04), (points_08, md_08) = model_doc.hunt_crossley_points()
+    (at_04,) = points_04
     assert at_04["verdict"] == "multistable"
     by_start = {s: a for a in at_04["attractors"] for s in a["starts"]}
     smooth, kicked = by_start["smooth"], by_start["kick -1"]
@@ -230,11 +219,15 @@ def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8(tmp_path, 
         for s in a["starts"]:
             assert a["durations"][s] == pytest.approx(60.0, abs=0.1)
             assert a["transients"][s] < 6.0
-    assert "| 0.4 | 0.06667 | 0.1 | multistable |" in (tmp_path / "a.md").read_text()
-    (at_08,) = command(tmp_path / "b.md", "0.8", ",".join(ms.STARTS_BY_KEY))
+    assert "| 0.4 | 0.06667 | 0.1 | multistable |" in md_04
+    (at_08,) = points_08
     assert at_08["verdict"] == "single-valued"
     assert len(at_08["attractors"][0]["starts"]) == len(ms.STARTS)
-    assert "| 0.8 | 0.1333 | 0.1 | single-valued |" in (tmp_path / "b.md").read_text()
+    assert "| 0.8 | 0.1333 | 0.1 | single-valued |" in md_08
+    text = MODEL_DOC.read_text(encoding="utf-8")
+    assert model_doc.stale(text, ["hunt-crossley states"]) == [], (
+        "docs/model.md section 6.2's Hunt-Crossley states are not this run's: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'hunt-crossley states'`")
 
 
 #: Both units' records (rm_save: an 8-byte little-endian length, the GearMeshRattle record,
@@ -302,14 +295,63 @@ def test_phase_starts_find_the_orbit_the_seven_starts_miss():
     the orbit can change with rounding, as the phase-1/3 start's did; that none of 23 would
     is what this test would catch (the study then missing the state again)."""
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
-    point = ms.study_point(0.4, 2e-4, RIGID_TEETH, starts=[ms.STARTS_BY_KEY["smooth"],
-                                                             *ms.phase_starts(24)], workers=2)
+    # ms.study_point(0.4, 2e-4, RIGID_TEETH, starts=[smooth, *ms.phase_starts(24)],
+    # workers=2), the computation of docs/model.md's block (shared within a session)
+    point = model_doc.rigid_orbit_point()
+    assert (point.load_fraction, point.backlash) == (0.4, 2e-4)
+    assert sorted(r.start for r in point.runs) == sorted(
+        ["smooth", *(s.name for s in ms.phase_starts(24))])
     assert point.verdict == "multistable", ms.report([point], {})
     orbits = [a for a in point.attractors
               if a.mean["drive_rate"] == pytest.approx(1 / period, rel=1e-3)
               and a.mean["coast_rate"] == pytest.approx(1 / period, rel=1e-3)]
     assert len(orbits) == 1 and "smooth" not in orbits[0].starts, ms.report([point], {})
     assert orbits[0].mean["delta_max"] == pytest.approx(2.45e-6, rel=0.01)
+    text = MODEL_DOC.read_text(encoding="utf-8")
+    assert model_doc.stale(text, ["rigid orbit"]) == [], (
+        "docs/model.md section 6.2's rigid teeth's orbit is not this run's: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'rigid orbit'`")
+
+
+#: The grid's points measured again (the cheapest of docs/data/multistability_grid.json, about
+#: 15 s of runs each on two threads): the default drag and backlash, and the rigid teeth's
+#: orbit's point.
+GRID_POINTS = ((0.5, 1e-4), (0.4, 2e-4))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("load, backlash", GRID_POINTS)
+def test_two_points_of_the_grid_measure_as_committed(load, backlash):
+    """A point of docs/model.md section 6.2's committed grid, measured again from all its
+    starts: the same verdict, and the attractor each committed attractor's first start
+    reaches with its signature statistics within the study's own criterion of one attractor
+    (twice the root sum of squares of the two window scatters plus the floor) of the
+    committed ones -- the rattle is chaotic, so its statistics are compared, not which
+    start ends where.  A change of the default physics fails here until the grid is measured again
+    (``python -m drive_rattle_cosim.model_doc --measure-grid``)."""
+    data = model_doc.grid_data()
+    (committed,) = [p for p in data["points"]
+                    if (p["load_fraction"], p["backlash"]) == (load, backlash)]
+    point = ms.study_point(load, backlash, MeshParameters(), starts=model_doc.grid_starts(),
+                           workers=2, min_time=model_doc.GRID["min_time"],
+                           max_time=model_doc.GRID["max_time"])
+    assert point.verdict == committed["verdict"], ms.report([point], {})
+    window = point.runs[0].window
+    for old in committed["attractors"]:
+        # the attractor the committed one's first start reaches now
+        (new,) = [a for a in point.attractors if old["starts"][0] in a.starts]
+        for name in ms.SIGNATURE:
+            mean, scatter = old["mean"][name], _finite(old["scatter"][name])
+            allowed = (ms.SEPARATION * math.hypot(_finite(new.scatter[name]), scatter)
+                       + ms._floor(name, abs(mean), window))
+            assert abs(new.mean[name] - mean) <= allowed, (
+                f"{load} M*, {backlash * 1e3:g} mm, the attractor of {old['starts'][0]}: "
+                f"{name} {new.mean[name]:.6g}, committed {mean:.6g}; allowed a difference of "
+                f"{allowed:.3g}")
+
+
+def _finite(x) -> float:
+    return x if x is not None and math.isfinite(x) else 0.0
 
 
 # ------------------------------------------------------------------ the two engines

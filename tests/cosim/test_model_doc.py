@@ -34,6 +34,96 @@ def test_the_single_impacts_table_is_a_fresh_runs():
         "drive_rattle_cosim.model_doc --update --only 'single impacts'`")
 
 
+def test_the_dissipation_constants_are_the_librarys():
+    assert model_doc.stale(TEXT, ["dissipation constants"]) == [], (
+        "docs/model.md section 3.3's constants of the dissipation laws are stale: run `python "
+        "-m drive_rattle_cosim.model_doc --update --only 'dissipation constants'`")
+    text = model_doc.dissipation_constants()
+    # the defaults' critical speed sits where the band's low and high cases bracket it, the
+    # flooded film's far above it (phi enters v_c linearly: 1/0.03 times)
+    central, low, high, flooded = (float(x) for x in re.search(
+        r"v_c = (\S+) mm/s at the defaults.*? from (\S+) mm/s .*? to (\S+) mm/s .*?"
+        r"flooded \(φ = 1\) (\S+) mm/s", text).groups())
+    assert low < central < high < flooded
+    assert flooded / central == pytest.approx(1 / 0.03, rel=1e-2)
+
+
+def test_the_constants_of_the_defaults_are_the_librarys():
+    """The reference pair's geometry, the radii of its crown and of eq. 6 and the two Hertz
+    laws over the path, the vehicle mode, the coupled start's offset and the separation load:
+    inline blocks of the defaults' derived values and the library's pair laws."""
+    names = ["reference pair", "crown radius", "eq6 radius", "eq6 laws", "crowned laws",
+             "line lengths", "half lines",
+             "vehicle mode", "start offset", "separation load"]
+    assert model_doc.stale(TEXT, names) == [], (
+        "docs/model.md's constants of the defaults are stale: run `python -m "
+        "drive_rattle_cosim.model_doc --update` and review the diff")
+    # the offset's torque is the shaft stiffness times the offset angle, as the text says
+    mrad, mnm = (float(x) for x in re.search(
+        r"k × (\S+) mrad = (\S+) mN·m", model_doc.start_offset()).groups())
+    from drive_rattle import DrivelineParameters
+
+    assert mnm == pytest.approx(DrivelineParameters().k_shaft * mrad, rel=0.02)
+
+
+def test_the_defaults_the_text_quotes_are_the_specs():
+    """The parameter defaults docs/model.md quotes in its prose, each as the specs give it
+    (drive_rattle.parameters): a changed default fails here until the text follows."""
+    from drive_rattle import DrivelineParameters, MeshParameters
+
+    p, d = MeshParameters(), DrivelineParameters()
+    text = " ".join(re.sub(r"<!-- BEGIN (.+?) -->.*?<!-- END \1 -->", "", TEXT,
+                           flags=re.S).split())
+    quoted = [
+        f"(default {p.crowning * 1e6:g} µm, a representative value",
+        f"St_c = {p.stokes_critical:g}: Gondret", f"e_dry = {p.restitution_dry:g}: Gondret",
+        f"η = {p.eta:g} Pa·s: a gear oil", f"σ = {p.sigma * 1e6:g} µm: MODEL_NOTES",
+        f"φ = {p.squeeze_fraction:g} has **no published value**",
+        f"Hunt–Crossley e = {p.restitution:g} at {p.restitution_speed * 1e3:g} mm/s, the "
+        "default before",
+        f"`contact.stokes_critical` (default {p.stokes_critical:g},",
+        f"`contact.restitution_dry` (default {p.restitution_dry:g},",
+        f"oil film develops (default {p.squeeze_fraction:g})",
+        f"with σ `surface.sigma` ({p.sigma * 1e6:g} µm, the paper)",
+        # (the powers of ten as the text writes them; another default: the plain number,
+        # which the text does not hold)
+        ("`surface.gamma` (the asperity tip radius, 10⁻⁴ m" if p.gamma == 1e-4
+         else f"`surface.gamma` (the asperity tip radius, {p.gamma:g} m"),
+        ("`surface.asperity_density` (default 10⁹ m⁻²" if p.asperity_density == 1e9
+         else f"`surface.asperity_density` (default {p.asperity_density:g} m⁻²"),
+        f"defaults {p.body_ratio_pinion:g} and {p.body_ratio_wheel:g}, the reference",
+        f"(`solver.h_max`, default {p.h_max * 1e6:g} µs)",
+        f"`rattle.time_constant` (default {p.rattle_time:g} s,",
+        f"**A soft shaft, k = {d.k_shaft:g} N·m/rad (default).**",
+        f"**Light shaft damping** c = {d.c_shaft:g} N·m·s/rad",
+        f"`lubricant.alpha` α = {p.alpha_pv * 1e8:g}·10⁻⁸ 1/Pa",
+        f"`lubricant.tau_limit_0` {p.tau_limit_0 / 1e6:g} MPa and "
+        f"`lubricant.tau_limit_slope` {p.tau_limit_slope:g}",
+    ]
+    missing = [q for q in quoted if q not in text]
+    assert not missing, (f"docs/model.md does not quote these defaults as the specs give "
+                         f"them: {missing}")
+
+
+def test_the_compliant_grid_is_the_committed_measurement():
+    """Section 6.2's grid is rendered from docs/data/multistability_grid.json, the data of the
+    grid's command (every point of it, every start at each point); the slow
+    tests/analysis/test_multistability.py measures two of its points again."""
+    assert model_doc.stale(TEXT, ["compliant grid"]) == [], (
+        "docs/model.md section 6.2's grid is not the rendering of its data: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'compliant grid'`")
+    data = model_doc.grid_data()
+    assert data["command"] == model_doc.GRID_COMMAND, (
+        f"the grid's data was measured by {data['command']!r}; allowed: "
+        f"{model_doc.GRID_COMMAND!r} (run `python -m drive_rattle_cosim.model_doc "
+        "--measure-grid`)")
+    starts = sorted(s.name for s in model_doc.grid_starts())
+    for p in data["points"]:
+        found = sorted([*(s for a in p["attractors"] for s in a["starts"]),
+                        *(u["start"] for u in p["unsettled"])])
+        assert found == starts, (p["load_fraction"], p["backlash"], found)
+
+
 def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
     text = model_doc.mixed_regime(SHORT)
     rows = [r for r in text.splitlines() if r.startswith("| 0.")]
