@@ -21,7 +21,7 @@ from drive_rattle_build.native import RESOURCE_MARKER
 from drive_rattle_cosim.regression import reference_files
 
 from ..faces.hosts import ADAPTER, HOST_SOURCE
-from ..native.twin import bits, input_rows, twin_run
+from ..faces.twin import bits, input_rows, twin_run
 from .sanitizers import ASAN_FLAGS, IEEE, SANITIZE, reports
 
 pytestmark = pytest.mark.slow

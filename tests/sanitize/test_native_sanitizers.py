@@ -31,7 +31,7 @@ from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.regression import reference_files
 
 from ..faces.hosts import HOST_SOURCE, host_arguments, read_table
-from ..native.twin import bits, input_rows, interface, twin_run
+from ..faces.twin import bits, input_rows, interface, twin_run
 from .sanitizers import ASAN_FLAGS, SANITIZE, TSAN, TSAN_FLAGS, build_fmu_binary, reports
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is needed")
