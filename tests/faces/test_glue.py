@@ -32,7 +32,7 @@ N_REFERENCES = {"2.0": "nvr", "3.0": "nValueReferences"}
 
 # ------------------------------------------------------------------ the library's messages
 #: (logging on at instantiation, SetDebugLogging's (on, categories) or None) -> whether a
-#: warning reaches the logger, by standard.  FMI 2.0's face logs every non-OK status whatever
+#: warning reaches the logger, by standard.  FMI 2.0's faces log every non-OK status whatever
 #: debug logging says; FMI 3.0's logs a warning only while logStatusWarning or logAll is on
 #: (SetDebugLogging with no category: all of them; with some: those only).  Errors reach the
 #: logger always, on both.
