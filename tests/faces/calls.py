@@ -9,8 +9,8 @@ import pytest
 from drive_rattle.library import ModelError
 from drive_rattle.units import Unit
 
-from ..native.twin import KINDS
 from .raw_fmi import OK, Model, unpack
+from .twin import KINDS
 
 
 def loaded(fmus: dict, tmp_path_factory, tag: str) -> dict:

@@ -18,7 +18,7 @@ from fmpy import read_model_description
 
 from drive_rattle_cosim.harness import Unit
 
-from ..native.twin import interface
+from .twin import interface
 
 HOST_SOURCE = Path(__file__).with_name("fmu_host.c")
 #: The host compiles warning-free under these.

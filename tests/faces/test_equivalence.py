@@ -20,8 +20,8 @@ from drive_rattle_cosim.harness import CoSimulation
 from drive_rattle_cosim.regression import REFERENCE_ROOT, read_opt, simulate_on_inputs
 from drive_rattle_cosim.system import SIGNALS, simulate
 
-from ..native.twin import bits, input_rows, interface, twin_run
 from .hosts import run_fmpy
+from .twin import bits, input_rows, interface, twin_run
 
 
 @pytest.mark.parametrize("model", MODELS)

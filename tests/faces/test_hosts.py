@@ -32,7 +32,6 @@ from drive_rattle_build.compiler import zig_cc
 from drive_rattle_build.fmi3 import source_files as fmi3_source_files
 from drive_rattle_cosim.regression import reference_files
 
-from ..native.twin import assert_passes_references, bits, input_rows, interface, twin_run
 from .conftest import FACES
 from .hosts import (
     STRICT,
@@ -45,6 +44,7 @@ from .hosts import (
     windows_path,
     wine,
 )
+from .twin import assert_passes_references, bits, input_rows, interface, twin_run
 
 pytestmark = pytest.mark.skipif(gcc() is None,
                                 reason="gcc is not installed: the native host cannot be compiled")

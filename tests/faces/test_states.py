@@ -15,10 +15,10 @@ import pytest
 from drive_rattle.interface import MODELS
 from drive_rattle.units import Unit
 
-from ..native.twin import KINDS, input_rows
 from .calls import last, started
 from .conftest import FACES
 from .raw_fmi import ERROR, HEADER, OK, Model, fnv1a64, unpack, with_payload
+from .twin import KINDS, input_rows
 
 
 @pytest.mark.parametrize("model", MODELS)

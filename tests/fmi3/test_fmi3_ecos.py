@@ -18,7 +18,7 @@ import pytest
 from drive_rattle.interface import DRIVELINE, MESH
 from drive_rattle_cosim.harness import CoSimulation
 
-from ..native.twin import bits
+from ..faces.twin import bits
 
 ROOT = Path(__file__).resolve().parents[2]
 STOP, STEP = 0.02, 1e-4  # 200 communication steps

@@ -29,8 +29,8 @@ from drive_rattle_build.platforms import (
 from drive_rattle_cosim.regression import reference_files
 
 from ..faces.hosts import compile_host, host_arguments, qemu_aarch64, read_table
+from ..faces.twin import bits, input_rows, interface, twin_run
 from ..fmi3.test_fmi3_build import header_functions
-from ..native.twin import bits, input_rows, interface, twin_run
 
 #: FMI 3.0.2, 2.5.1.4.1 "Platform Tuple Definition": <arch>-<sys>.
 FMI3_ARCHITECTURES = {"aarch32", "aarch64", "x86", "x86_64"}

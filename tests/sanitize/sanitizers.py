@@ -43,16 +43,23 @@ def compile_probe(folder: Path, name: str, sources, include_dirs, flags=ASAN_FLA
     return exe
 
 
-def build_fmu_binary(model: str, folder: Path, flags: Sequence[str]) -> tuple[Path, Path, str]:
-    """The native ``model``'s binary compiled with ``flags`` from the sources the FMU ships
-    (drive_rattle_build.native.stage_sources), in an FMU-like folder: ``folder/binary.so``
-    and ``folder/resources`` with its marker.  Returns (binary, resources folder, GUID)."""
-    from drive_rattle_build.native import RESOURCE_MARKER, native_guid, stage_sources
+def build_fmu_binary(model: str, folder: Path, flags: Sequence[str],
+                     standard: str = "2.0") -> tuple[Path, Path, str]:
+    """The native ``model``'s binary of ``standard`` compiled with ``flags`` from the sources
+    its FMU ships (drive_rattle_build.native's or drive_rattle_build.fmi3's stage_sources), in
+    an FMU-like folder: ``folder/<model>.so`` and ``folder/resources`` with its marker.
+    Returns (binary, resources folder, token: FMI 2.0's GUID, FMI 3.0's instantiation
+    token)."""
+    from drive_rattle_build import fmi3, native
 
     folder = Path(folder)
     sources = folder / "sources"
-    guid = native_guid(model)
-    stage_sources(model, guid, sources)
+    if standard == "3.0":
+        token = fmi3.fmi3_token(model)
+        fmi3.stage_sources(model, token, sources)
+    else:
+        token = native.native_guid(model)
+        native.stage_sources(model, token, sources)
     binary = folder / f"{model}.so"
     cmd = ["gcc", *IEEE, *flags, "-Werror", "-fPIC", "-shared", "-I", str(sources), "-o",
            str(binary), *(str(s) for s in sorted(sources.glob("*.c"))), "-lm"]
@@ -60,13 +67,89 @@ def build_fmu_binary(model: str, folder: Path, flags: Sequence[str]) -> tuple[Pa
     assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
     resources = folder / "resources"
     resources.mkdir(exist_ok=True)
-    (resources / RESOURCE_MARKER).write_text(f"{model}\n", encoding="utf-8")
-    return binary, resources, guid
+    (resources / native.RESOURCE_MARKER).write_text(f"{model}\n", encoding="utf-8")
+    return binary, resources, token
+
+
+def compile_program(exe: Path, source: Path, flags: Sequence[str] = ASAN_FLAGS,
+                    standard: str = "2.0", defines: Sequence[str] = ()) -> Path:
+    """A host program (``source``, with ``defines``) against the C headers of ``standard``,
+    compiled with ``flags`` and warning-free into ``exe``; AssertionError with the compiler's
+    output."""
+    from drive_rattle_build.fmi3 import fmi3_headers
+    from drive_rattle_build.shim import fmi2_headers
+
+    include = fmi3_headers() if standard == "3.0" else fmi2_headers()
+    cmd = ["gcc", "-std=c99", *flags, *defines, "-Wall", "-Wextra", "-Werror", "-I",
+           str(include), "-o", str(exe), str(source), "-lm", "-lpthread", "-ldl"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
+    return Path(exe)
 
 
 def reports(text: str) -> list[str]:
     """The lines of a sanitizer report in a program's output."""
     return [line for line in text.splitlines() if any(m in line for m in REPORT_MARKS)]
+
+
+def assert_clean(run: subprocess.CompletedProcess) -> None:
+    """A sanitized program's run: exit 0 and no sanitizer report; AssertionError with the
+    reports and the ends of its output otherwise."""
+    found = reports(run.stdout + run.stderr)
+    assert not found and run.returncode == 0, (
+        f"exit {run.returncode}; sanitizer reports:\n" + "\n".join(found[:20])
+        + f"\n--- stdout (end)\n{run.stdout[-3000:]}\n--- stderr (end)\n{run.stderr[-6000:]}")
+
+
+# ------------------------------------------------------------------ the abuse host
+#: One abuse host for both standards: its FMI 2.0 or FMI 3.0 adapter chosen when it is
+#: compiled (as tests/faces/fmu_host.c's, tests/faces/hosts.py's ADAPTER).
+ABUSE_SOURCE = HERE / "fmi_abuse.c"
+ABUSE_ADAPTER = {"2.0": (), "3.0": ("-DFMI_ABUSE_FMI3",)}
+#: The variables the abuse host probes, by model: a Real parameter, a Real input, a Real
+#: output, an Integer output, a String parameter, an Enumeration parameter (None where the
+#: unit has none).
+PROBED = {
+    "GearMeshRattle": ("gear.backlash", "pinion.w", "wheel.w", "mesh.n_contact", None,
+                       "contact.hertz_law"),
+    "Driveline": ("shaft.k", "wheel.w", "pinion.w", None, "engine.speed_table",
+                  "vehicle.model"),
+}
+#: Fewer cases than this means the states' loops did not run (the record's every byte
+#: changed and re-sealed, so that it reaches rm_restore: thousands of cases per unit).
+ABUSE_CASES = 1000
+
+
+def compile_abuse(exe: Path, standard: str) -> Path:
+    """fmi_abuse.c with the adapter of ``standard``, under ASAN and UBSAN, into ``exe``."""
+    return compile_program(exe, ABUSE_SOURCE, ASAN_FLAGS, standard, ABUSE_ADAPTER[standard])
+
+
+def run_abuse(abuse: Path, binary: Path, resources: str, token: str, root: Path,
+              fifo_folder: Path, references: dict, model: str, time: int | None = None) -> str:
+    """The abuse host on ``binary`` (``references``: the value references by name; ``time``:
+    the independent variable's, FMI 3.0's); asserts a clean run and no failed expectation,
+    with the number of cases above ABUSE_CASES, and returns the host's summary line."""
+    vrs = [str(references[n]) if n is not None else "-" for n in PROBED[model]]
+    run = subprocess.run([str(abuse), str(binary), resources, token, str(root),
+                          str(fifo_folder), *vrs, "-" if time is None else str(time)],
+                         env=SANITIZE, capture_output=True, text=True, timeout=120)
+    assert_clean(run)
+    summary = run.stdout.strip().splitlines()[-1]
+    fields = summary.split()
+    assert fields[0::2] == ["cases", "failures", "logged"], run.stdout[-3000:]
+    assert fields[3] == "0", run.stdout[-3000:]
+    assert int(fields[1]) > ABUSE_CASES, summary
+    return summary
+
+
+def fifo_resources(folder: Path) -> Path:
+    """A resources folder whose marker file is a FIFO (opening it to read would block)."""
+    from drive_rattle_build.native import RESOURCE_MARKER
+
+    folder.mkdir()
+    os.mkfifo(folder / RESOURCE_MARKER)
+    return folder
 
 
 # ------------------------------------------------------------------ Python hosts

@@ -1,5 +1,5 @@
 """The boundary rows and the boundary fuzzer (tests/adversarial) against sanitizer builds of
-both flavours (issue 20): the native FMUs' binaries and the pythonfmu FMUs' model library and
+both flavours: the native FMUs' binaries and the pythonfmu FMUs' model library and
 status shim compiled with AddressSanitizer and UndefinedBehaviorSanitizer
 (-fno-sanitize-recover=all), driven by a Python host with the runtime preloaded
 (sanitized_child.py).  Any memory error or undefined behaviour, and any leak of memory the

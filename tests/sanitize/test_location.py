@@ -1,6 +1,8 @@
 """The resource location decoder of both flavours' glue (rattle_fmi_common.c) on strings that
 end at a page boundary, under AddressSanitizer and UndefinedBehaviorSanitizer: a relative
-location made only of URI-scheme characters ("resources") was read past its end (issue 20)."""
+location made only of URI-scheme characters ("resources") was once read past its end.  Each
+string ends exactly at a page with an unmapped page after it (location_probe.c), so a read past
+its end faults or is reported."""
 
 import shutil
 import subprocess

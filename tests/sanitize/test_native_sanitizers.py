@@ -1,18 +1,18 @@
 """The native FMUs' binaries (the model library with its FMI 2.0 face, compiled from the
-sources the FMUs ship) under the sanitizers (issue 20):
+sources the FMUs ship) under the sanitizers:
 
 * AddressSanitizer + UndefinedBehaviorSanitizer (-fno-sanitize-recover=all, leaks detected):
   the C host fmu_host.c over the regression inputs, its outputs the in-process twin's bit for
-  bit, and fmi_abuse.c's bad calls -- NULL pointers and arrays, unknown value references,
-  calls out of order, non-finite values, resource locations that are not this FMU's
-  ("resources", "", NULL, other schemes, a FIFO as the marker file), FMU states foreign,
-  truncated at every length, and every byte of the record changed and re-sealed so that it
-  reaches rm_restore;
+  bit, and fmi_abuse.c's bad calls (its FMI 2.0 adapter) -- NULL pointers and arrays, unknown
+  value references, calls out of order, non-finite values, resource locations that are not
+  this FMU's ("resources", "", NULL, other schemes, a FIFO as the marker file), FMU states
+  foreign, truncated at every length, and every byte of the record changed and re-sealed so
+  that it reaches rm_restore;
 * ThreadSanitizer: threads instantiating, stepping, saving, restoring and freeing their own
   instances at once (the Driveline reading its speed table), each run equal to a sequential
   one.
 
-Any sanitizer report fails the test."""
+Any sanitizer report fails the test.  The FMI 3.0 face's: test_fmi3_sanitizers.py."""
 
 from __future__ import annotations
 
@@ -27,22 +27,26 @@ from fmpy import read_model_description
 
 from drive_rattle.interface import MODELS
 from drive_rattle_build.native import render_model_description
-from drive_rattle_build.shim import fmi2_headers
 from drive_rattle_cosim.regression import reference_files
 
 from ..faces.hosts import HOST_SOURCE, host_arguments, read_table
-from ..native.twin import bits, input_rows, interface, twin_run
-from .sanitizers import ASAN_FLAGS, SANITIZE, TSAN, TSAN_FLAGS, build_fmu_binary, reports
+from ..faces.twin import bits, input_rows, interface, twin_run
+from .sanitizers import (
+    ASAN_FLAGS,
+    HERE,
+    PROBED,
+    SANITIZE,
+    TSAN,
+    TSAN_FLAGS,
+    assert_clean,
+    build_fmu_binary,
+    compile_abuse,
+    compile_program,
+    fifo_resources,
+    run_abuse,
+)
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is needed")
-
-#: Value references the probes use, by name: a Real parameter, a Real input, a Real output,
-#: an Integer output and a String parameter (None where the unit has none).
-PROBED = {
-    "GearMeshRattle": ("gear.backlash", "pinion.w", "wheel.w", "mesh.n_contact", None),
-    "Driveline": ("shaft.k", "wheel.w", "pinion.w", None, "engine.speed_table"),
-}
-
 
 def fmu_folder(model: str, folder: Path, flags) -> tuple[Path, Path]:
     """An FMU-like folder of the sanitized binary (its modelDescription beside it):
@@ -54,18 +58,10 @@ def fmu_folder(model: str, folder: Path, flags) -> tuple[Path, Path]:
     return binary, folder
 
 
-def value_references(folder: Path, model: str) -> list[str]:
-    by_name = {v.name: v.valueReference for v in
-               read_model_description(str(folder / "modelDescription.xml")).modelVariables}
-    return [str(by_name[n]) if n is not None else "-" for n in PROBED[model]]
-
-
-def compile_program(exe: Path, source: Path, flags) -> Path:
-    cmd = ["gcc", "-std=c99", *flags, "-Wall", "-Wextra", "-Werror", "-I", str(fmi2_headers()),
-           "-o", str(exe), str(source), "-lm", "-lpthread", "-ldl"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
-    return exe
+def value_references(folder: Path) -> dict[str, int]:
+    """{name: value reference} of the FMU-like folder's modelDescription."""
+    return {v.name: v.valueReference for v in
+            read_model_description(str(folder / "modelDescription.xml")).modelVariables}
 
 
 @pytest.fixture(scope="module")
@@ -74,16 +70,8 @@ def asan(tmp_path_factory):
     root = tmp_path_factory.mktemp("asan")
     folders = {model: fmu_folder(model, root / model, ASAN_FLAGS)[1] for model in MODELS}
     host = compile_program(root / "fmu_host", HOST_SOURCE, ASAN_FLAGS)
-    abuse = compile_program(root / "fmi_abuse", Path(__file__).with_name("fmi_abuse.c"),
-                            ASAN_FLAGS)
+    abuse = compile_abuse(root / "fmi_abuse", "2.0")
     return folders, host, abuse
-
-
-def assert_clean(run: subprocess.CompletedProcess) -> None:
-    found = reports(run.stdout + run.stderr)
-    assert not found and run.returncode == 0, (
-        f"exit {run.returncode}; sanitizer reports:\n" + "\n".join(found[:20])
-        + f"\n--- stdout (end)\n{run.stdout[-3000:]}\n--- stderr (end)\n{run.stderr[-6000:]}")
 
 
 @pytest.mark.slow
@@ -112,26 +100,16 @@ def test_host_over_the_regression_inputs_under_asan(asan, model, tmp_path):
 def test_bad_calls_under_asan(asan, model, tmp_path):
     folders, _, abuse = asan
     folder = folders[model]
-    fifo = tmp_path / "fifo resources"
-    fifo.mkdir()
-    os.mkfifo(fifo / "model_identifier.txt")
     guid = read_model_description(str(folder / "modelDescription.xml")).guid
-    run = subprocess.run([str(abuse), str(folder / f"{model}.so"),
-                          (folder / "resources").as_uri(), guid, str(folder), str(fifo),
-                          *value_references(folder, model)],
-                         env=SANITIZE, capture_output=True, text=True, timeout=60)
-    assert_clean(run)
-    summary = run.stdout.strip().splitlines()[-1]
-    assert summary.startswith("cases ") and " failures 0 " in summary, run.stdout[-3000:]
-    assert int(summary.split()[1]) > 1000  # the state mutations reached rm_restore
+    run_abuse(abuse, folder / f"{model}.so", (folder / "resources").as_uri(), guid, folder,
+              fifo_resources(tmp_path / "fifo resources"), value_references(folder), model)
 
 
 @pytest.fixture(scope="module")
 def tsan(tmp_path_factory):
     root = tmp_path_factory.mktemp("tsan")
     folders = {model: fmu_folder(model, root / model, TSAN_FLAGS)[1] for model in MODELS}
-    threads = compile_program(root / "fmi_threads", Path(__file__).with_name("fmi_threads.c"),
-                              TSAN_FLAGS)
+    threads = compile_program(root / "fmi_threads", HERE / "fmi_threads.c", TSAN_FLAGS)
     return folders, threads
 
 
@@ -141,7 +119,9 @@ def test_threads_under_tsan(tsan, model):
     folders, threads = tsan
     folder = folders[model]
     guid = read_model_description(str(folder / "modelDescription.xml")).guid
-    _, vr_input, vr_output, _, vr_string = value_references(folder, model)
+    by_name = value_references(folder)
+    _, vr_input, vr_output, _, vr_string, _ = (
+        str(by_name[n]) if n is not None else "-" for n in PROBED[model])
     extra = []
     if model == "Driveline":  # each instance reads and parses its speed table
         (folder / "resources" / "run-up.csv").write_text(

@@ -1,8 +1,9 @@
-"""The in-process twin of one native FMU: a unit of the model library (``drive_rattle.units``,
-the library the FMU compiles) driven through the calls a host makes of the FMU (the C host
-that makes them of the FMU's binary: tests/faces/fmu_host.c, tests/faces/hosts.py).  Tables
-are compared as the hexadecimal text of every float: bit for bit, never with a tolerance
-(rattle is chaotic)."""
+"""The in-process twin of an FMU of any face: a unit of the model library
+(``drive_rattle.units``, the library every face wraps) driven through the calls a host makes of
+the FMU (the C host that makes them of the FMU's binary: tests/faces/fmu_host.c,
+tests/faces/hosts.py). Tables are compared as the hexadecimal text of every float: bit for bit,
+never with a tolerance (rattle is chaotic). Shared by the face suite, tests/sanitize, tests/fmu
+and tests/fmi3."""
 
 from __future__ import annotations
 
@@ -56,14 +57,6 @@ def twin_run(model: str, rows: Sequence[Sequence[float]], names: Sequence[str]) 
             table.append([following[0], *unit.outputs().values()])
         assert not unit.warnings, unit.warnings
         return table
-
-
-
-
-
-
-
-
 
 
 def assert_passes_references(model: str, table, columns: Sequence[str]) -> None:
