@@ -38,7 +38,7 @@ ROWS = {
     12: "corrupt, forged and foreign states refused",
     13: "counters saturate at the fmi2Integer limit",
     14: "non-UTF-8 unpack path; value references >= 2^31 reported unsigned",
-    15: "no OK with a non-finite output or state (issue 20)",
+    15: "no OK with a non-finite output or state",
     16: "a state taken before the first step restores its outputs",
 }
 #: Examples per FMU and run: about 6000 calls per FMU, 5 to 20 s on the CI machine.
