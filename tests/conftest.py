@@ -110,6 +110,12 @@ def pytest_collection_modifyitems(config, items):
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
+    # The files that hold long tests first, each file's tests kept together and in order:
+    # pytest-xdist (the README's ``-n auto --dist loadfile --no-loadscope-reorder``) hands
+    # whole files to the workers in this order, so the long ones start early and the short
+    # ones fill in around them, instead of one worker finishing a long file alone at the end.
+    long_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in long_files)
 
 
 @pytest.fixture(scope="session")

@@ -54,7 +54,7 @@ def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("row", list(ROWS), ids=[f"row{k}-{v}" for k, v in ROWS.items()])
-def test_issue12_row(row, flavour_fmus, tmp_path):
+def test_boundary_row(row, flavour_fmus, tmp_path):
     fmus = flavour_fmus
     run = _child([ROWS_SCRIPT, row, fmus["GearMeshRattle"], fmus["Driveline"], tmp_path], 300)
     assert run.returncode == 0, (
