@@ -22,7 +22,12 @@ profile below, tests/seeds.py), so that one commit gives one answer; ``tests/soa
 them on fresh seeds.
 """
 
+import fcntl
+import importlib
+import json
 import os
+import pkgutil
+import shutil
 from pathlib import Path
 
 import pytest
@@ -47,10 +52,56 @@ LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", 
 
 def pytest_configure(config):
     """The model library built from this checkout's sources before anything is collected (a
-    fresh clone has none; the tests, the oracle's start and the studies load it)."""
+    fresh clone has none; the tests, the oracle's start and the studies load it).  Under
+    pytest-xdist the controller builds it before it starts the workers, which find it built."""
     from drive_rattle_build.library import build_in_place
 
-    build_in_place()
+    if not hasattr(config, "workerinput"):
+        build_in_place()
+
+
+def made_once(tmp_path_factory, name: str, make):
+    """What ``make(folder)`` returns (JSON: paths as strings), for a folder of this run that every
+    pytest-xdist worker shares: the first worker to ask makes it while the others wait on a
+    lock, then read its result.  Without workers, a folder of this session like any other.
+    A build is costly and the same in every worker; doing it once keeps two workers from
+    doubling the run's work."""
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the run's folder: each worker's own is a folder inside it
+    folder = base / f"made-{name}"
+    with open(base / f"made-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, even on an error
+        result = folder / "made.json"
+        if result.is_file():
+            return json.loads(result.read_text(encoding="utf-8"))
+        if folder.exists():  # a worker failed while making it: make it again, from nothing
+            shutil.rmtree(folder)
+        folder.mkdir()
+        made = make(folder)
+        result.write_text(json.dumps(made), encoding="utf-8")
+        return made
+
+
+#: The project's packages (fmu_src/): the modules hypothesis calls local.
+PACKAGES = ("drive_rattle", "drive_rattle_build", "drive_rattle_cosim", "drive_rattle_fmi")
+
+
+def pytest_collection_finish(session):
+    """Every module of the project's packages imported before the first test, in every
+    process.  Hypothesis draws some examples from the constants of the local modules imported
+    so far (``hypothesis.internal.conjecture.providers._get_local_constants``), so a test's
+    examples would otherwise depend on which tests ran before it in its process, which
+    pytest-xdist decides anew in every run; imported up front, the constants are the same in
+    every process and every order, and one commit draws one set of examples."""
+    for package in PACKAGES:
+        for module in pkgutil.walk_packages(importlib.import_module(package).__path__,
+                                            f"{package}."):
+            source = module.module_finder.find_spec(module.name).origin or ""
+            # no __main__ (importing it runs the command), no shared library (rattle_model.so
+            # is loaded by ctypes, not imported)
+            if source.endswith(".py") and not module.name.endswith(".__main__"):
+                importlib.import_module(module.name)
 
 
 def pytest_collection_modifyitems(config, items):
@@ -59,14 +110,19 @@ def pytest_collection_modifyitems(config, items):
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
+    # The files that hold long tests first, each file's tests kept together and in order:
+    # pytest-xdist (the README's ``-n auto --dist loadfile --no-loadscope-reorder``) hands
+    # whole files to the workers in this order, so the long ones start early and the short
+    # ones fill in around them, instead of one worker finishing a long file alone at the end.
+    long_files = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in long_files)
 
 
 @pytest.fixture(scope="session")
 def fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}, built and validated for this session."""
-    out = tmp_path_factory.mktemp("dist")
-    paths = build(out)
-    return {p.stem: p for p in paths}
+    made = made_once(tmp_path_factory, "dist", lambda out: [str(p) for p in build(out)])
+    return {Path(p).stem: Path(p) for p in made}
 
 
 @pytest.fixture(scope="session")
@@ -75,9 +131,9 @@ def native_fmus(tmp_path_factory):
     binaries and sources, built and validated for this session."""
     from drive_rattle_build.native import build_native  # on first use: the native build alone
 
-    out = tmp_path_factory.mktemp("dist_native")
-    paths = build_native(out)
-    return {p.stem: p for p in paths}
+    made = made_once(tmp_path_factory, "dist_native",
+                     lambda out: [str(p) for p in build_native(out)])
+    return {Path(p).stem: Path(p) for p in made}
 
 
 @pytest.fixture(scope="session")
@@ -87,17 +143,28 @@ def fmi3_fmus(tmp_path_factory):
     for this session."""
     from drive_rattle_build.fmi3 import build_fmi3  # on first use: the FMI 3.0 build alone
 
-    out = tmp_path_factory.mktemp("dist_fmi3")
-    return {p.stem: p for p in build_fmi3(out)}
+    made = made_once(tmp_path_factory, "dist_fmi3", lambda out: [str(p) for p in build_fmi3(out)])
+    return {Path(p).stem: Path(p) for p in made}
 
 
 @pytest.fixture(scope="session")
 def wine_env(tmp_path_factory) -> dict:
-    """The environment of every program run under wine this session: one wine prefix, made by
-    the first run (a new prefix takes about a minute)."""
-    prefix = tmp_path_factory.mktemp("wineprefix")
-    return {**os.environ, "WINEPREFIX": str(prefix), "WINEDEBUG": "-all",
-            "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no .NET/Gecko installers in a new prefix
+    """The environment of every program run under wine this session: one wine prefix, made
+    (``wineboot --init``, about a minute) before the first program runs in it, so that two
+    workers never both start a new prefix."""
+    import subprocess
+
+    from .faces.hosts import wine
+
+    env = {**os.environ, "WINEDEBUG": "-all",
+           "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no .NET/Gecko installers in a new prefix
+
+    def boot(prefix: Path) -> str:
+        subprocess.run([wine(), "wineboot", "--init"], env={**env, "WINEPREFIX": str(prefix)},
+                       check=True, capture_output=True, timeout=600)
+        return str(prefix)
+
+    return {**env, "WINEPREFIX": made_once(tmp_path_factory, "wineprefix", boot)}
 
 
 FLAVOURS = ("pythonfmu", "native")

@@ -58,7 +58,7 @@ SQUEEZE_CENTRAL = {"dissipation": 3, "stokes_critical": 10.0, "restitution_dry":
 SQUEEZE_HIGH = {"dissipation": 3, "stokes_critical": 20.0, "restitution_dry": 0.9,
                 "squeeze_fraction": 0.1}
 
-#: Hunt-Crossley from a restitution at 4 mm/s (an option; the default before issue 19).
+#: Hunt-Crossley from a restitution at 4 mm/s (an option; the default of earlier releases).
 HUNT_CROSSLEY = {"dissipation": 1}
 #: The boundary friction coefficient A_e tau_s / W is proportional to tau_s (eq. 12-13), 0.1
 #: at the default; lubricated steel in the boundary regime: about 0.05-0.15 (the paper gives

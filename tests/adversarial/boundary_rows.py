@@ -1,5 +1,5 @@
-"""The cases of issue 12 ("no host crash, leak or half-applied call at the FMI boundary"), one
-function per row of its table, each run against the built FMUs in a child process:
+"""The FMI boundary's cases (no host crash, no leak, no half-applied call, whatever a master
+passes), one function per row, each run against the built FMUs in a child process:
 
     python boundary_rows.py <row> <GearMeshRattle.fmu> <Driveline.fmu> <work folder>
 
@@ -73,7 +73,7 @@ def started(model: Model, inputs: dict, params: dict | None = None, steps: int =
 
 
 def finite_outputs(inst, where: str = "") -> None:
-    """The invariant of issue 20: an output that a get answers with fmi2OK is finite (an
+    """An output that a get answers with fmi2OK is finite (an
     output that cannot be computed is refused)."""
     names = inst.m.names("Real", "output")
     st, values = inst.get("Real", [inst.m.vr(n) for n in names])
@@ -617,7 +617,7 @@ def rest(index: int, value: float):
 
 
 def row_15(fmus, work):
-    """Issue 20, finding 2: no call answers fmi2OK or fmi2Warning with a non-finite output or
+    """No call answers fmi2OK or fmi2Warning with a non-finite output or
     state -- speed tables whose speeds, times or angle overflow, pinion.phi_start = 1e300,
     start time 1e15 s, steps that do not move the time, re-sealed states whose times do not
     go together; each refused with the value and what is allowed, nothing changed."""

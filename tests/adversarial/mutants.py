@@ -1,11 +1,10 @@
 """Defects injected into the model library's sources (patched copies: variants.py builds FMUs
-of both flavours from them), which the boundary rows and the fuzzer must catch (issue 20,
-finding 9: the fuzzer passed a doStep that refused every valid step, and row 12 a NaN
-output).  Each is a list of variants.Patch; the patched text must exist exactly once."""
+of both flavours from them), which the boundary rows and the fuzzer must catch (each is a defect they once let pass:
+the fuzzer passed a doStep that refused every valid step, and row 12 a NaN output).  Each is a list of variants.Patch; the patched text must exist exactly once."""
 
 from __future__ import annotations
 
-#: The three defects of issue 20: name -> (patches, what it does).
+#: The three defects: name -> (patches, what it does).
 MUTANTS = {
     "refuse-every-step": (
         [("unit.c",

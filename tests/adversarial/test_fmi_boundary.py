@@ -38,7 +38,7 @@ ROWS = {
     12: "corrupt, forged and foreign states refused",
     13: "counters saturate at the fmi2Integer limit",
     14: "non-UTF-8 unpack path; value references >= 2^31 reported unsigned",
-    15: "no OK with a non-finite output or state (issue 20)",
+    15: "no OK with a non-finite output or state",
     16: "a state taken before the first step restores its outputs",
 }
 #: Examples per FMU and run: about 6000 calls per FMU, 5 to 20 s on the CI machine.
@@ -54,7 +54,7 @@ def _child(args: list, timeout: float) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("row", list(ROWS), ids=[f"row{k}-{v}" for k, v in ROWS.items()])
-def test_issue12_row(row, flavour_fmus, tmp_path):
+def test_boundary_row(row, flavour_fmus, tmp_path):
     fmus = flavour_fmus
     run = _child([ROWS_SCRIPT, row, fmus["GearMeshRattle"], fmus["Driveline"], tmp_path], 300)
     assert run.returncode == 0, (

@@ -1,6 +1,5 @@
 """The model library's own boundary, in process (drive_rattle.units): the messages and the
-"a refused call changes nothing" rule that both FMI faces pass on verbatim (issue 20, minor
-items).  The same cases through the built FMUs of both flavours: boundary_rows.py (row 15)."""
+"a refused call changes nothing" rule that both FMI faces pass on verbatim.  The same cases through the built FMUs of both flavours: boundary_rows.py (row 15)."""
 
 from __future__ import annotations
 
@@ -105,7 +104,7 @@ def test_a_refused_set_of_a_motion_input_changes_nothing(kind, motion, other):
 
 @pytest.mark.parametrize("value", [0.0, 0.5])
 def test_poisson_ratios_at_the_edges_of_their_range_are_accepted(value):
-    """material.nu_* is declared [0, 0.5]: both edges are legal (issue 20, minor item)."""
+    """material.nu_* is declared [0, 0.5]: both edges are legal."""
     Unit(MESH, {"material.nu_pinion": value, "material.nu_wheel": value}).close()
 
 

@@ -1,4 +1,4 @@
-"""A mutation run (issue 20, finding 9): FMUs of both flavours built from the model library
+"""A mutation run: FMUs of both flavours built from the model library
 with an injected defect (mutants.py) -- every step refused, a NaN output answered with fmi2OK,
 a half-applied fmi2SetReal -- and the boundary rows and the fuzzer run against them.  Each
 defect must be caught by at least one row, by the fuzzer, and by the fuzzer without its

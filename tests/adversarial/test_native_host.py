@@ -206,7 +206,7 @@ def test_horizon_contains_impacts(runs):
     assert reference[-1][column] == host_table[-1][column]
 
 
-# ------------------------------------------------------------------ issue 11, item 7
+# ------------------------------------------------------------------ a wrong python3 on PATH
 def wrong_python(folder: Path, with_stdlib: bool) -> Path:
     """A prefix with a ``python3`` that does not belong to the preloaded libpython: with
     ``with_stdlib`` its lib/pythonX.Y holds the real standard library but an empty
@@ -238,7 +238,7 @@ def wrong_python(folder: Path, with_stdlib: bool) -> Path:
 ])
 def test_native_host_never_fails_silently(case, reasons, host, native_env, fmus,
                                           tmp_path):
-    """Issue 11, item 7: with a wrong python3 first on PATH the embedded interpreter cannot
+    """With a wrong python3 first on PATH the embedded interpreter cannot
     start or cannot import the slave; with logging off the host's logger still gets the
     reason, fmi2Instantiate returns NULL, and the host process ends normally."""
     stdlib = Path(sysconfig.get_paths()["stdlib"])

@@ -1,4 +1,4 @@
-"""One reader for both flavours (issue 20, findings 3 and 4): a shared corpus of speed tables
+"""One reader for both flavours: a shared corpus of speed tables
 and state records (corpus.py: line ends, a byte-order mark, blank lines, quoting, cells of
 512 characters and more, a long first row, Unicode digits, huge numbers; records truncated,
 extended, edited and large) read by the pythonfmu FMUs, the native FMUs and the model library

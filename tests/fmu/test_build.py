@@ -157,8 +157,8 @@ def test_the_cli_builds_the_library_in_place():
 
 
 def test_a_state_saved_by_one_build_restores_in_another_of_the_same_sources(fmus, tmp_path):
-    """Issue 20: the GUID was random per build, so a state saved by one build could not be
-    restored by another build of the same source."""
+    """The GUID comes from the sources: it was once random per build, and a state saved by one
+    build could not be restored by another build of the same sources."""
     from drive_rattle_cosim.harness import Unit
 
     other = fmu.package(SOURCE / "slaves" / "GearMeshRattle.py", tmp_path, references=False)

@@ -1,0 +1,66 @@
+"""Fill ziglang's cache for every cross target the tests compile for, in the background of CI's
+installation (.ci/run): on a new machine the first program zig links for a target builds
+that target's C runtime first (about two minutes of CPU for x86_64-windows-gnu, 20 s for each
+of the others), which otherwise falls on whichever test compiles for it first.  Each target
+gets a shared library compiled as the build compiles the FMUs' (platforms.compile_for) and a
+program; zig's own cache locks make a test that starts meanwhile wait rather than build it
+again.  Prints each target's time."""
+
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from drive_rattle_build.compiler import ZIG_TARGET, zig_cc
+from drive_rattle_build.platforms import PLATFORMS, build_machine, compile_for
+
+#: A library function exported as the FMI functions are (an empty export list crashes zig's
+#: macOS linker), and a program around it.
+SOURCE = """#include <math.h>
+#include <stdio.h>
+#if defined(_WIN32)
+#define EXPORT __declspec(dllexport)
+#else
+#define EXPORT __attribute__((visibility("default")))
+#endif
+EXPORT double warm(double x) { return sqrt(x); }
+#ifdef WARM_PROGRAM
+int main(void) { printf("%g\\n", warm(2.0)); return 0; }
+#endif
+"""
+
+
+def platform_machine() -> str:
+    import platform
+
+    return platform.machine()
+
+
+def run(cc: list, flags: list, source: Path, out: Path) -> None:
+    subprocess.run([*cc, *flags, "-o", str(out), str(source), "-lm"], check=True,
+                   capture_output=True, timeout=1800)
+
+
+def main() -> int:
+    with tempfile.TemporaryDirectory(prefix="warm_zig_") as tmp:
+        source = Path(tmp) / "warm.c"
+        source.write_text(SOURCE, encoding="utf-8")
+        for name, platform in PLATFORMS.items():
+            start = time.monotonic()
+            if name == build_machine():  # the build's compiler where gcc is missing
+                run(zig_cc(ZIG_TARGET[platform_machine()]), ["-shared", "-fPIC"], source,
+                    Path(tmp) / "zig-native.so")
+            else:  # the FMUs' binaries, and the test hosts (no macOS host runs here)
+                compile_for(name, [source], Path(tmp), Path(tmp) / f"{name}{platform.suffix}",
+                            what="warm-up")
+                if platform.system != "darwin":
+                    run(zig_cc(platform.zig_target), ["-DWARM_PROGRAM"], source,
+                        Path(tmp) / f"{name}.exe")
+            print(f"warm_cross_compilers: {name} ({platform.zig_target}) "
+                  f"{time.monotonic() - start:.0f} s", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
