@@ -659,3 +659,87 @@ def vehicle_damping() -> str:
     return (f"c_v = {VEHICLE_DAMPING_EXAMPLE:g} N·m·s/rad: ζ = "
             f"{d['vehicle_mode_damping_ratio']:.2g}, τ = {d['vehicle_mode_decay_time']:.2g} s) "
             f"but adds a mean drag c_v ω_v of {VEHICLE_DAMPING_EXAMPLE * w_v:.2g} N·m")
+
+
+# --- further constants the text quotes (sections 3.4, 3.5, 4, 6, 7) ---------------------------
+
+def roughness_parameter() -> str:
+    """The defaults' roughness parameter eta gamma sigma."""
+    from drive_rattle import MeshParameters
+
+    p = MeshParameters()
+    return f"η γ σ = {p.asperity_density * p.gamma * p.sigma:.2g}"
+
+
+#: The approaches [sigma] at which section 3.5 gives the rough law's deficit.
+DEFICIT_APPROACHES = (100.0, 1e3, 1e5)
+
+
+def roughness_deficits() -> list[list[float]]:
+    """1 - W_rough/W_smooth at DEFICIT_APPROACHES for the first pair in the zone at phi_p = 0
+    (drive flank) of each contact model (the crowned, the paper's, the line), the library's
+    laws with and without the asperity layer at the rough unit's coefficients."""
+    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    sigma = MeshParameters().sigma
+    found = []
+    for changes in (CROWNED, PAPER, LINE):
+        rough = Unit(MESH, MeshParameters(**{**changes, **ROUGH}), initialize=False)
+        smooth = Unit(MESH, MeshParameters(**changes), initialize=False)
+        try:
+            law = _rows(rough, "rm_probe_pair_laws", LAW_FIELDS, int(DRIVE), 0.0)[0]
+            found.append([1.0 - _approach(rough, law, k * sigma)[0]
+                          / _approach(smooth, {**law, "W_r": 0.0}, k * sigma)[0]
+                          for k in DEFICIT_APPROACHES])
+        finally:
+            rough.close()
+            smooth.close()
+    return found
+
+
+def roughness_deficit() -> str:
+    from drive_rattle import MeshParameters
+
+    sigma = MeshParameters().sigma
+    at = list(zip(*roughness_deficits(), strict=True))
+    near, far, farthest = DEFICIT_APPROACHES
+    return (f"{_span(at[0], scale=100)} % at {near:g}σ = {near * sigma * 1e6:g} µm, "
+            f"{_span(at[1], scale=100)} % at {far:g}σ, at most {max(at[2]) * 100:.1g} % at "
+            f"10{str(round(math.log10(farthest))).translate(_SUPERSCRIPT)}σ")
+
+
+#: The pressure [Pa] at which section 4 gives Barus' viscosity factor.
+BARUS_PRESSURE = 400e6
+
+
+def barus_factor() -> str:
+    from drive_rattle import MeshParameters
+
+    x = MeshParameters().alpha_pv * BARUS_PRESSURE
+    return f"e^(αp) = e^{x:.3g} ≈ {float(f'{math.exp(x):.1g}'):g} at {BARUS_PRESSURE / 1e6:g} MPa"
+
+
+def ehl_ellipticity() -> str:
+    """Hamrock and Dowson's ellipticity k = 1.03 (r_y/r_x)^0.64 of the crowned pairs over a base
+    pitch (the library's radii)."""
+    k = [1.03 * (r["law"]["r_y"] / r["law"]["r_x"]) ** 0.64
+         for rows in static_pairs() for r in rows]
+    return f"k = {_span(k, '.0f')}"
+
+
+def backlash_angle() -> str:
+    """Half the backlash as the wheel's angle, j_n / (2 r_bw cos beta_b)."""
+    d = _derived()
+    return f"j_n/(2 r_bw cos β_b) = {d['half_backlash'] / d['arm_wheel'] * 1e3:.2g} mrad"
+
+
+def order_frequencies() -> str:
+    """The default engine orders' frequencies k n/60 at the default engine speed."""
+    from drive_rattle import DrivelineParameters
+
+    drive = DrivelineParameters()
+    hz = [k * drive.w_mean / (2.0 * math.pi) for k, _, _ in drive.order_terms()]
+    rpm = drive.w_mean * 60.0 / (2.0 * math.pi)
+    return "/".join(f"{f:.1f}" for f in hz) + f" Hz at {rpm:.4g} rpm"

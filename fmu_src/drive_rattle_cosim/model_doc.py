@@ -46,8 +46,12 @@ CONSTANT_BLOCKS: dict[str, Callable[[], str]] = {
     "line statics": const.line_statics,
     "smooth approaches": const.smooth_approaches,
     "layer approach": const.layer_approach,
+    "roughness parameter": const.roughness_parameter,
+    "roughness deficit": const.roughness_deficit,
     "plasticity index": const.plasticity_index,
     "mesh stiffness": lambda: "\n" + mesh_stiffness.report() + "\n",
+    "barus factor": const.barus_factor,
+    "ehl ellipticity": const.ehl_ellipticity,
     "ehl film": const.ehl_film,
     "mixed friction": const.mixed_friction,
     "form jump": const.form_jump,
@@ -56,11 +60,13 @@ CONSTANT_BLOCKS: dict[str, Callable[[], str]] = {
     "boundary friction": const.boundary_friction,
     "sliding acceleration": const.sliding_acceleration,
     "extrapolation error": const.extrapolation_error,
+    "backlash angle": const.backlash_angle,
     "vehicle mode": const.vehicle_mode,
     "start offset": const.start_offset,
     "shaft damping": const.shaft_damping,
     "vehicle damping": const.vehicle_damping,
     "separation load": const.separation_load,
+    "order frequencies": const.order_frequencies,
 }
 #: name -> function giving the block's text: the runs.
 RUN_BLOCKS: dict[str, Callable[[], str]] = {

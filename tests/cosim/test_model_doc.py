@@ -138,10 +138,13 @@ def test_the_damping_examples_say_what_the_text_says():
 
 def test_the_defaults_the_text_quotes_are_the_specs():
     """The parameter defaults docs/model.md quotes in its prose, each as the specs give it
-    (drive_rattle.parameters): a changed default fails here until the text follows."""
+    (drive_rattle.parameters), and a limit and a derived constant it quotes: a changed
+    default fails here until the text follows."""
     from drive_rattle import DrivelineParameters, MeshParameters
+    from drive_rattle.parameters import specs
 
     p, d = MeshParameters(), DrivelineParameters()
+    limits = dict(specs(p))
     text = " ".join(re.sub(r"<!-- BEGIN (.+?) -->.*?<!-- END \1 -->", "", TEXT,
                            flags=re.S).split())
     quoted = [
@@ -169,6 +172,10 @@ def test_the_defaults_the_text_quotes_are_the_specs():
         f"`lubricant.alpha` α = {p.alpha_pv * 1e8:g}·10⁻⁸ 1/Pa",
         f"`lubricant.tau_limit_0` {p.tau_limit_0 / 1e6:g} MPa and "
         f"`lubricant.tau_limit_slope` {p.tau_limit_slope:g}",
+        # a spec's limit and a derived constant inside a formula block, where no inline
+        # block can stand
+        f"`contact.crowning` is limited to ≥ {limits['crowning'].minimum * 1e6:g} µm",
+        f"E*_steel^0.9 = {p.derived()['palmgren_constant']:.5g}",
     ]
     missing = [q for q in quoted if q not in text]
     assert not missing, (f"docs/model.md does not quote these defaults as the specs give "
