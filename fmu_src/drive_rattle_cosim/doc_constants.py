@@ -743,3 +743,39 @@ def order_frequencies() -> str:
     hz = [k * drive.w_mean / (2.0 * math.pi) for k, _, _ in drive.order_terms()]
     rpm = drive.w_mean * 60.0 / (2.0 * math.pi)
     return "/".join(f"{f:.1f}" for f in hz) + f" Hz at {rpm:.4g} rpm"
+
+
+#: The radius ratio at which section 3.1 compares eq. 2 with the exact law (MODEL_NOTES §4's).
+SPHERE_RATIO = 10.0
+
+
+def sphere_at_ratio() -> str:
+    """How much stiffer the exact law is than eq. 2's sphere at SPHERE_RATIO: K_exact =
+    E* sqrt(R) kappa (``rm_probe_exact_ellipse``) over (4/3) E* (R r)^(1/4) = (4/3) E* sqrt(R)
+    rho^(-1/4)."""
+    from drive_rattle import MeshParameters
+    from drive_rattle.library import MESH
+    from drive_rattle.units import Unit
+
+    out = (ctypes.c_double * 4)()
+    with Unit(MESH, MeshParameters(), initialize=False) as unit:
+        unit.call("rm_probe_exact_ellipse", SPHERE_RATIO, out)
+    ratio = out[1] / (4.0 / 3.0 * SPHERE_RATIO ** -0.25)
+    return f"at ρ = {SPHERE_RATIO:g}, {(ratio - 1.0) * 100:.0f} %"
+
+
+def rigid_stiffness() -> str:
+    """The rigid teeth's static mesh stiffness over ISO 6336-1's (``mesh_stiffness``): the
+    point contacts at the paper scenario's load, the crowned and line contacts at the loads
+    where ISO's holds."""
+    from . import mesh_stiffness as ms
+
+    light, *working = ms.LOADS[0], *(q for q in ms.LOADS if q >= ms.ISO_LOAD)
+    (crowned, _), (paper, _), (line, _) = ms.CONTACTS
+    ratios = ms.stiffness_ratios(loads=(light, *working), teeth=0)
+    soft = [ratios[c][0] for c in (crowned, paper)]
+    stiff = [x for c in (crowned, line) for x in ratios[c][1:]]
+    return (f"the point contacts too soft at the rattle load ({_span(soft)} × at {light:g} N/mm, "
+            "where the soft Hertz contact dominates) and the crowned and line contacts "
+            f"{_span(stiff)} times too stiff at working loads ("
+            + "–".join(f"{q:g}" for q in working) + " N/mm)")

@@ -182,6 +182,21 @@ def test_the_defaults_the_text_quotes_are_the_specs():
                          f"them: {missing}")
 
 
+def test_the_gear_bodies_defaults_are_the_root_radii_on_the_text_shafts():
+    """Section 3.7: the default root/bore radius ratios are the reference pair's root radii
+    (pitch radius less the ISO 53 dedendum 1.25 m_n) on the shafts the text names."""
+    from drive_rattle import MeshParameters
+
+    p = MeshParameters()
+    d = p.derived()
+    shafts = [float(x) * 1e-3 for x in re.search(
+        r"root radii on a (\d+) mm input and a (\d+) mm output shaft", " ".join(TEXT.split())
+    ).groups()]
+    found = [round((r - 1.25 * p.m_n) / (shaft / 2), 1)
+             for r, shaft in zip((d["r_pinion"], d["r_wheel"]), shafts, strict=True)]
+    assert found == [p.body_ratio_pinion, p.body_ratio_wheel], (found, shafts)
+
+
 def test_the_compliant_grid_is_the_committed_measurement():
     """Section 6.2's grid is rendered from docs/data/multistability_grid.json, the data of the
     grid's command (every point of it, every start at each point); the slow
