@@ -7,8 +7,8 @@ from the parameter specs (drive_rattle.parameters); a value chosen to illustrate
 load, a damping) is a named constant here and the text gives the law's output at it.  Values
 that are neither (published hardness, Johnson's bound) are named constants with their source.
 
-tests/cosim/test_model_doc.py holds every block to a fresh computation (a second in all) and
-checks the sentences around them that depend on the numbers.
+tests/cosim/test_model_doc.py holds every block to a fresh computation and
+checks the sentences around them that depend on the numbers (about two seconds in all).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import ctypes
 import math
 from functools import lru_cache
 
-from . import band, squeeze_impacts
+from . import band, contact_laws, squeeze_impacts
 
 # --- section 2: the reference pair ----------------------------------------------------
 
@@ -273,9 +273,11 @@ LOAD_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_sp
                "entrainment_speed", "h", "film_parameter", "dry_fraction", "delta_max_eq7")
 LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r", "c_t")
 _CAPACITY = 16
-#: The contact models of the text, as section 3.6 runs them (``contact_laws.CASES``): the
-#: paper's ellipsoids with rigid teeth as printed, the others with the default teeth.
-CROWNED, PAPER, LINE = {}, {"contact_geometry": 1, "tooth_compliance": 0}, {"contact_geometry": 2}
+#: The contact models of the text as section 3.6 runs them: the paper's ellipsoids with rigid
+#: teeth as printed, the others with the default teeth; and the asperity layer.
+CROWNED = contact_laws.CASES["default (crowned, exact law)"]
+PAPER = contact_laws.CASES["paper, exact law"]
+LINE = contact_laws.CASES["line (Palmgren)"]
 ROUGH = {"roughness": 1}
 
 
