@@ -5,6 +5,7 @@ whole here, with the sentences around them that their values decide; of the runs
 (``doc_runs``) the contact options' block (seven 11 s runs of the compiled loop, a few
 seconds), the findings' sentences on short runs, and the whole document in the slow layer."""
 
+import math
 import re
 from pathlib import Path
 
@@ -142,6 +143,7 @@ def test_the_defaults_the_text_quotes_are_the_specs():
     default fails here until the text follows."""
     from drive_rattle import DrivelineParameters, MeshParameters
     from drive_rattle.parameters import specs
+    from drive_rattle_cosim import band, mesh_stiffness
 
     p, d = MeshParameters(), DrivelineParameters()
     limits = dict(specs(p))
@@ -176,7 +178,17 @@ def test_the_defaults_the_text_quotes_are_the_specs():
         # block can stand
         f"`contact.crowning` is limited to ≥ {limits['crowning'].minimum * 1e6:g} µm",
         f"E*_steel^0.9 = {p.derived()['palmgren_constant']:.5g}",
+        f"{p.z_pinion}/{p.z_wheel} teeth, m_n = {p.m_n * 1e3:g} mm, α_n = "
+        f"{math.degrees(p.alpha_n):.4g}°, β = {math.degrees(p.beta):.4g}°, b = {p.b * 1e3:g} mm",
+        f"every report carries its band φ = {band.SQUEEZE_LOW['squeeze_fraction']:g}–"
+        f"{band.SQUEEZE_HIGH['squeeze_fraction']:g}",
+        f"and {limits['body_ratio_pinion'].minimum:g} ≤ h ≤ "
+        f"{limits['body_ratio_pinion'].maximum:g} (the range of",
+        f"tested within {mesh_stiffness.ISO_BAND[0]:g}–{mesh_stiffness.ISO_BAND[1]:g} × c_γα b "
+        f"at {mesh_stiffness.ISO_LOAD:g} and",
     ]
+    assert [limits["body_ratio_wheel"].minimum, limits["body_ratio_wheel"].maximum] == [
+        limits["body_ratio_pinion"].minimum, limits["body_ratio_pinion"].maximum]
     missing = [q for q in quoted if q not in text]
     assert not missing, (f"docs/model.md does not quote these defaults as the specs give "
                          f"them: {missing}")
