@@ -16,7 +16,7 @@ from drive_rattle import DrivelineParameters, MeshParameters, Unit
 from drive_rattle.interface import MESH as MESH_NAME
 from drive_rattle.library import DRIVELINE, MESH
 from drive_rattle.units import run_coupled
-from drive_rattle_cosim import model_doc
+from drive_rattle_cosim import doc_runs, model_doc
 from drive_rattle_cosim import multistability as ms
 from tests.oracle.reference import EngineOrders
 
@@ -194,16 +194,16 @@ def test_two_starts_forced_into_different_states_are_two_attractors():
 #: The physics the 0.4 M* attractors were measured with (docs/analysis.md section 7: Hunt-Crossley
 #: dissipation from e = 0.8 at 4 mm/s, 10 um crowning, the exact Hertz law, friction form 0 on the
 #: entrainment speed, rigid teeth), pinned: other physics options may change the defaults later.
-PINNED = model_doc.HUNT_CROSSLEY_PINNED
+PINNED = doc_runs.HUNT_CROSSLEY_PINNED
 #: docs/model.md, whose section 6.2 holds blocks of these tests' runs.
 MODEL_DOC = Path(__file__).resolve().parents[2] / "docs" / "model.md"
 
 
 @pytest.mark.slow
 def test_the_command_finds_the_second_attractor_at_0_4_and_one_at_0_8():
-    # the two commands' runs (model_doc.hunt_crossley_points: `command` at 0.4 M* from smooth
+    # the two commands' runs (doc_runs.hunt_crossley_points: `command` at 0.4 M* from smooth
     # and kick -1, at 0.8 M* from the seven starts), shared with docs/model.md's block
-    (points_04, md_04), (points_08, md_08) = model_doc.hunt_crossley_points()
+    (points_04, md_04), (points_08, md_08) = doc_runs.hunt_crossley_points()
     (at_04,) = points_04
     assert at_04["verdict"] == "multistable"
     by_start = {s: a for a in at_04["attractors"] for s in a["starts"]}
@@ -297,7 +297,7 @@ def test_phase_starts_find_the_orbit_the_seven_starts_miss():
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
     # ms.study_point(0.4, 2e-4, RIGID_TEETH, starts=[smooth, *ms.phase_starts(24)],
     # workers=2), the computation of docs/model.md's block (shared within a session)
-    point = model_doc.rigid_orbit_point()
+    point = doc_runs.rigid_orbit_point()
     assert (point.load_fraction, point.backlash) == (0.4, 2e-4)
     assert sorted(r.start for r in point.runs) == sorted(
         ["smooth", *(s.name for s in ms.phase_starts(24))])
@@ -329,12 +329,12 @@ def test_two_points_of_the_grid_measure_as_committed(load, backlash):
     committed ones -- the rattle is chaotic, so its statistics are compared, not which
     start ends where.  A change of the default physics fails here until the grid is measured again
     (``python -m drive_rattle_cosim.model_doc --measure-grid``)."""
-    data = model_doc.grid_data()
+    data = doc_runs.grid_data()
     (committed,) = [p for p in data["points"]
                     if (p["load_fraction"], p["backlash"]) == (load, backlash)]
-    point = ms.study_point(load, backlash, MeshParameters(), starts=model_doc.grid_starts(),
-                           workers=2, min_time=model_doc.GRID["min_time"],
-                           max_time=model_doc.GRID["max_time"])
+    point = ms.study_point(load, backlash, MeshParameters(), starts=doc_runs.grid_starts(),
+                           workers=2, min_time=doc_runs.GRID["min_time"],
+                           max_time=doc_runs.GRID["max_time"])
     assert point.verdict == committed["verdict"], ms.report([point], {})
     window = point.runs[0].window
     for old in committed["attractors"]:
@@ -451,7 +451,7 @@ def test_the_compliant_teeth_have_two_states_at_0_4_and_0_1_mm():
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
     # ms.study_point(0.4, 1e-4, MeshParameters(), starts=[smooth, kick+1], workers=2), the
     # computation of docs/model.md's block (shared within a session)
-    point = model_doc.two_states_point()
+    point = doc_runs.two_states_point()
     assert (point.load_fraction, point.backlash) == (0.4, 1e-4)
     assert sorted(r.start for r in point.runs) == ["kick +1", "smooth"]
     assert point.verdict == "multistable", ms.report([point], {})
