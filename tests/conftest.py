@@ -104,18 +104,34 @@ def pytest_collection_finish(session):
                 importlib.import_module(module.name)
 
 
+#: Seconds each of the longest files took in a full run on two workers (--junitxml, summed
+#: over the file's tests, builds counted where they fall), 2026-12-02: the run's schedule.
+LONG_FILES = {
+    "test_wheel.py": 161, "cosim/test_model_doc.py": 150, "analysis/test_multistability.py": 124,
+    "adversarial/test_fmi_boundary.py": 97, "adversarial/test_endurance.py": 90,
+    "sanitize/test_boundary_sanitized.py": 87, "cosim/test_cluster.py": 86,
+    "adversarial/test_mutants.py": 74, "cosim/test_tools_doc.py": 64, "test_examples.py": 46,
+    "analysis/test_spectral_lines.py": 37, "faces/test_hosts.py": 37,
+    "cosim/test_masters.py": 34, "cosim/test_ssp.py": 30,
+    "adversarial/test_fmi_bad_input.py": 27, "model/test_stepper.py": 26,
+    "fmu/test_platforms.py": 24, "sanitize/test_native_sanitizers.py": 24,
+    "model/test_system.py": 21, "sanitize/test_fmi3_sanitizers.py": 17,
+}
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
-    # The files that hold long tests first, each file's tests kept together and in order:
-    # pytest-xdist (the README's ``-n auto --dist loadfile --no-loadscope-reorder``) hands
-    # whole files to the workers in this order, so the long ones start early and the short
-    # ones fill in around them, instead of one worker finishing a long file alone at the end.
-    long_files = {item.path for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: item.path not in long_files)
+    # The longest files first, each file's tests kept together and in order: pytest-xdist (the
+    # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
+    # hands whole files to the workers in this order, so the long ones start early and the
+    # short ones fill in around them, instead of one worker finishing a long file alone at
+    # the end.  Only the order depends on LONG_FILES, never a result.
+    items.sort(key=lambda item: -LONG_FILES.get(
+        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
 
 
 @pytest.fixture(scope="session")

@@ -461,3 +461,7 @@ def test_the_compliant_teeth_have_two_states_at_0_4_and_0_1_mm():
     assert orbit.mean["drive_rate"] == pytest.approx(3 / period, rel=1e-3)
     assert orbit.mean["coast_rate"] == pytest.approx(2.5 / period, rel=1e-3)
     assert orbit.scatter["drive_rate"] < 1e-9 * orbit.mean["drive_rate"]
+    text = MODEL_DOC.read_text(encoding="utf-8")
+    assert model_doc.stale(text, ["two states"]) == [], (
+        "docs/model.md section 6.2's two states are not this run's: run `python -m "
+        "drive_rattle_cosim.model_doc --update --only 'two states'`")
