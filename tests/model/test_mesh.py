@@ -1,7 +1,7 @@
 """mesh.c, the loads of every tooth pair and the torques they put on both gears (paper
-eq. 1-2, 10-17), against the oracle's mesh.py: each pair's law coefficients
-(rm_probe_pair_laws) and the loads with their per-pair detail (rm_probe_loads) at random
-states; in steady drive the mesh carries the load and, without friction, loses no power;
+eq. 1-2, 10-17), against the oracle's mesh.py: the loads with their per-pair detail
+(rm_probe_loads) at random states (the pairs' laws themselves: test_pairs.py); in steady
+drive the mesh carries the load and, without friction, loses no power;
 a film law the contact geometry does not have is refused."""
 
 import numpy as np
@@ -13,27 +13,10 @@ from drive_rattle import COAST, DRIVE, MeshParameters, MeshUnit, ModelError
 from drive_rattle.parameters import DEG
 from tests.oracle.mesh import MeshModel
 
-from .helpers import LINE, PAIR_FIELDS, PAIR_LAW_FIELDS, PAPER, REL, W_PINION, Probe, close
+from .helpers import LINE, PAIR_FIELDS, PAPER, REL, W_PINION, Probe, close
 
 
-# ---------------------------------------------------------- pair laws and loads, against the oracle
-@pytest.mark.parametrize("flank", [DRIVE, COAST])
-def test_pair_laws_equal_the_oracle(pair, flank):
-    # Every pair's contact point, engaged line, radii and law coefficients (rm_probe_pair_laws)
-    # against the oracle's, at random pinion angles.
-    probe, m = pair
-    rng = np.random.default_rng(11)
-    for phi in np.concatenate([rng.uniform(-3.0, 3.0, 150), rng.uniform(-1e3, 1e3, 50)]):
-        got, want = probe.pair_laws(flank, phi), m.pair_laws(flank, phi)
-        assert [r["slot"] for r in got] == [w.slot for w in want], phi
-        for row, oracle in zip(got, want, strict=True):
-            for name in PAIR_LAW_FIELDS[1:]:
-                value, expected = row[name], getattr(oracle, name)
-                # (roll coordinates and lengths: absolute, as the pairs' test)
-                abs_ = 1e-15 if name in ("s", "length") else 1e-300
-                assert close(value, expected, abs_=abs_), (name, phi, value, expected)
-
-
+# ---------------------------------------------------------- loads, against the oracle
 def assert_loads_equal(got, want):
     """The library's loads (helpers.Loads) against the oracle's (oracle.mesh.MeshLoads)."""
     assert got.delta == want.delta

@@ -9,6 +9,7 @@ package's ``__init__`` is not an edge: that is how packages load, not a dependen
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from pathlib import Path
 
@@ -231,3 +232,28 @@ def test_the_oracle_is_independent_of_the_library(path):
         if top in sys.stdlib_module_names or top == "__future__":
             continue
         assert top in allowed, f"tests/oracle/{path} imports {name}"
+
+
+# ------------------------------------------------------------------ the tests' map
+TESTS_MAP = ROOT / "tests" / "README.md"
+
+
+def test_every_room_of_the_model_library_is_in_the_tests_map():
+    """tests/README.md names each C file of the model library, and each test or oracle file it
+    names exists: the map a maintainer reads to find a room's tests cannot go stale."""
+    text = TESTS_MAP.read_text(encoding="utf-8")
+    rooms = sorted(p.name for p in (SOURCE / "rattle_model").glob("*.[ch]"))
+    assert [r for r in rooms if f"`{r}`" not in text] == []
+    named = set(re.findall(r"`((?:\w+/)*\w+\.py)`", text))
+    paths = [n for n in named if "/" in n]
+    assert paths, "no test file named in tests/README.md"
+    # (relative to tests/, to fmu_src/ for a source, or to the repository where it says so)
+    assert [n for n in paths if not any((base / n).is_file()
+                                        for base in (ROOT / "tests", SOURCE, ROOT))] == []
+
+
+def test_every_test_file_of_the_model_is_in_the_tests_map():
+    text = TESTS_MAP.read_text(encoding="utf-8")
+    files = sorted(p.relative_to(ROOT / "tests").as_posix()
+                   for p in (ROOT / "tests" / "model").glob("test_*.py"))
+    assert [f for f in files if f"`{f}" not in text] == []
