@@ -33,6 +33,7 @@ CYCLES = 5000
 MAX_KIB_PER_CYCLE = 1.0
 
 
+@pytest.mark.slow  # 5000 cycles of the pythonfmu FMU: 9-19 s
 @pytest.mark.parametrize("name", ["GearMeshRattle", "Driveline"])
 def test_instantiate_free_cycles_keep_no_memory(fmus, name):
     """5,000 cycles of instantiate, initialize, step, terminate, free (unpacked once, as a

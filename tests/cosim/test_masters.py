@@ -165,6 +165,7 @@ def test_fmucontainer_container_in_fmpy(fmus, system_ssp, tmp_path):
     assert "Driveline.fmu: doStep at the first step" in printed
 
 
+@pytest.mark.slow  # gemseo in its own environment: about 15 s
 def test_gemseo_fmu_time_stepping_system(fmus, gemseo_run):
     """gemseo-fmu (inputs and outputs limited to the Real coupling signals): no exchange during
     initialization, the start values serve the first step."""
