@@ -56,28 +56,34 @@ def half_lines() -> str:
     return f"b/(2 cos β_b) = {half * 1e3:.3g} mm"
 
 
-def line_lengths() -> str:
-    """The mean total contact-line length b eps_alpha / cos(beta_b) of the reference pair and
-    the range of the engaged lines' sum over a base pitch (the library's line contact)."""
-    import ctypes
+def _pitch_pair_laws(p) -> list[list[dict]]:
+    """The drive flank's pairs (``rm_probe_pair_laws``, LAW_FIELDS) at LAW_SAMPLES pinion
+    angles over a base pitch, for the mesh parameters ``p``."""
     import math
 
-    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle import DRIVE
     from drive_rattle.library import MESH
     from drive_rattle.units import Unit
 
-    p = MeshParameters(contact_geometry=2)
-    d = p.derived()
-    totals = []
     unit = Unit(MESH, p, initialize=False)
     try:
-        out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
-        for k in range(LAW_SAMPLES):
-            phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
-            unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
-            totals.append(sum(out[10 * i + 2] for i in range(n.value)))
+        return [_rows(unit, "rm_probe_pair_laws", LAW_FIELDS, int(DRIVE),
+                      k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES)
+                for k in range(LAW_SAMPLES)]
     finally:
         unit.close()
+
+
+def line_lengths() -> str:
+    """The mean total contact-line length b eps_alpha / cos(beta_b) of the reference pair and
+    the range of the engaged lines' sum over a base pitch (the library's line contact)."""
+    import math
+
+    from drive_rattle import MeshParameters
+
+    p = MeshParameters(contact_geometry=2)
+    d = p.derived()
+    totals = [sum(r["length"] for r in rows) for rows in _pitch_pair_laws(p)]
     mean = p.b * d["eps_alpha"] / math.cos(d["beta_b"])
     return (f"{mean * 1e3:.4g} mm for the reference pair, the sum of the engaged lines "
             f"{min(totals) * 1e3:.3g}–{max(totals) * 1e3:.3g} mm over a base pitch "
@@ -91,30 +97,14 @@ LAW_SAMPLES = 200
 @lru_cache(maxsize=4)
 def _pair_laws(geometry: int) -> list[tuple[float, float, float, float]]:
     """(r_x, r_y, K of the exact law, K of eq. 2) of every pair in the zone on the drive flank
-    at LAW_SAMPLES pinion angles over a base pitch, for ``contact.geometry`` ``geometry``
-    (``rm_probe_pair_laws``: slot, s, length, r_x, r_y, K, ...)."""
-    import ctypes
-    import math
+    at LAW_SAMPLES pinion angles over a base pitch, for ``contact.geometry`` ``geometry``."""
+    from drive_rattle import MeshParameters
 
-    from drive_rattle import DRIVE, MeshParameters
-    from drive_rattle.library import MESH
-    from drive_rattle.units import Unit
-
-    found = {}
-    for law in (0, 1):
-        p = MeshParameters(contact_geometry=geometry, hertz_law=law)
-        unit = Unit(MESH, p, initialize=False)
-        try:
-            out, n = (ctypes.c_double * (10 * 16))(), ctypes.c_size_t()
-            for k in range(LAW_SAMPLES):
-                phi_p = k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES
-                unit.call("rm_probe_pair_laws", int(DRIVE), phi_p, out, 16, ctypes.byref(n))
-                for i in range(n.value):
-                    row = out[10 * i: 10 * i + 10]
-                    found.setdefault((k, int(row[0])), []).append(row[3:6])
-        finally:
-            unit.close()
-    return [(a[0], a[1], a[2], b[2]) for a, b in found.values()]
+    exact, sphere = (_pitch_pair_laws(MeshParameters(contact_geometry=geometry, hertz_law=law))
+                     for law in (0, 1))
+    return [(a["r_x"], a["r_y"], a["K"], b["K"])
+            for rows_a, rows_b in zip(exact, sphere, strict=True)
+            for a, b in zip(rows_a, rows_b, strict=True)]
 
 
 def crowned_laws() -> str:

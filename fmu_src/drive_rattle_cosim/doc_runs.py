@@ -333,6 +333,15 @@ def separation_loads() -> str:
 TWO_STATES = (0.4, 1e-4, ("smooth", "kick+1"))
 
 
+def _mean_and_scatter(mean: dict, scatter: dict, name: str, scale: float = 1.0) -> str:
+    """An attractor's statistic ``name`` as "mean ± window scatter" (times ``scale``); a
+    periodic orbit's windows differ by rounding only, so a scatter below 1e-9 of the mean (or
+    none recorded) is said as 0."""
+    m, sd = mean[name], scatter[name]
+    sd = sd if sd is not None and sd > 1e-9 * abs(m) else 0.0
+    return f"{m * scale:.3g} ± {sd * scale:.2g}"
+
+
 @lru_cache(maxsize=1)
 def two_states_point():
     """The multistability study at 0.4 M* and 0.1 mm from the smooth start and the kick of
@@ -356,10 +365,8 @@ def two_states() -> str:
     point = two_states_point()
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
 
-    def c(a, name, scale=1.0, digits=3):
-        # a periodic orbit's windows differ by rounding only: no scatter, said as 0
-        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
-        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+    def c(a, name, scale=1.0):  # an attractor of the study
+        return _mean_and_scatter(a.mean, a.scatter, name, scale)
 
     rows = ["| start | drive / coast onsets [1/s] | per forcing period | median drive onset "
             "[mm/s] | δmax [µm] | pairs loaded | windows |",
@@ -476,10 +483,8 @@ def compliant_grid(data: dict | None = None) -> str:
     data = data or grid_data()
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
 
-    def c(a, name, scale=1.0, digits=3):
-        m, sd = a["mean"][name], a["scatter"][name]
-        sd = sd if sd is not None and sd > 1e-9 * abs(m) else 0.0
-        return f"{m * scale:.{digits}g} ± {sd * scale:.2g}"
+    def c(a, name, scale=1.0):  # an attractor of the data (a dict)
+        return _mean_and_scatter(a["mean"], a["scatter"], name, scale)
 
     rows = ["| load | backlash [mm] | verdict | starts | drive / coast onsets [1/s] | median "
             "drive onset [mm/s] | δmax [µm] | pairs loaded |", "|---|---|---|---|---|---|---|---|"]
@@ -558,9 +563,8 @@ def rigid_orbit() -> str:
     point = rigid_orbit_point()
     period = ms.forcing_period(MeshParameters(), DrivelineParameters())
 
-    def c(a, name, scale=1.0, digits=3):
-        sd = a.scatter[name] if a.scatter[name] > 1e-9 * abs(a.mean[name]) else 0.0
-        return f"{a.mean[name] * scale:.{digits}g} ± {sd * scale:.2g}"
+    def c(a, name, scale=1.0):  # an attractor of the study
+        return _mean_and_scatter(a.mean, a.scatter, name, scale)
 
     rows = ["| starts | drive / coast onsets [1/s] | per forcing period | median onset drive / "
             "coast [mm/s] | δmax [µm] | pairs loaded | windows |",
