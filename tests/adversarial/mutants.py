@@ -1,6 +1,8 @@
 """Defects injected into the model library's sources (patched copies: variants.py builds FMUs
-of both flavours from them), which the boundary rows and the fuzzer must catch (each is a defect they once let pass:
-the fuzzer passed a doStep that refused every valid step, and row 12 a NaN output).  Each is a list of variants.Patch; the patched text must exist exactly once."""
+of both flavours from them), which the boundary rows and the fuzzer must catch.  Each is a
+defect they once let pass: the fuzzer passed a doStep that refused every valid step, and
+row 12 a NaN output.  Each is a list of variants.Patch; the patched text must exist exactly
+once."""
 
 from __future__ import annotations
 

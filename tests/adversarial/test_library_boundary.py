@@ -1,5 +1,6 @@
 """The model library's own boundary, in process (drive_rattle.units): the messages and the
-"a refused call changes nothing" rule that both FMI faces pass on verbatim.  The same cases through the built FMUs of both flavours: boundary_rows.py (row 15)."""
+"a refused call changes nothing" rule that both FMI faces pass on verbatim.  The same cases
+through the built FMUs of both flavours: boundary_rows.py (row 15)."""
 
 from __future__ import annotations
 
