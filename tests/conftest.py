@@ -166,8 +166,8 @@ def fmi3_fmus(tmp_path_factory):
 @pytest.fixture(scope="session")
 def wine_env(tmp_path_factory) -> dict:
     """The environment of every program run under wine this session: one wine prefix, made
-    (``wineboot --init``, about a minute) before the first program runs in it, so that two
-    workers never both start a new prefix."""
+    (``wineboot --init``, 13 s on a 2-core machine) before the first program runs in it, so
+    that two workers never both start a new prefix."""
     import subprocess
 
     from .faces.hosts import wine
