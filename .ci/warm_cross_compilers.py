@@ -6,6 +6,7 @@ gets a shared library compiled as the build compiles the FMUs' (platforms.compil
 program; zig's own cache locks make a test that starts meanwhile wait rather than build it
 again.  Prints each target's time."""
 
+import platform as host
 import subprocess
 import sys
 import tempfile
@@ -31,12 +32,6 @@ int main(void) { printf("%g\\n", warm(2.0)); return 0; }
 """
 
 
-def platform_machine() -> str:
-    import platform
-
-    return platform.machine()
-
-
 def run(cc: list, flags: list, source: Path, out: Path) -> None:
     subprocess.run([*cc, *flags, "-o", str(out), str(source), "-lm"], check=True,
                    capture_output=True, timeout=1800)
@@ -46,18 +41,18 @@ def main() -> int:
     with tempfile.TemporaryDirectory(prefix="warm_zig_") as tmp:
         source = Path(tmp) / "warm.c"
         source.write_text(SOURCE, encoding="utf-8")
-        for name, platform in PLATFORMS.items():
+        for name, target in PLATFORMS.items():
             start = time.monotonic()
             if name == build_machine():  # the build's compiler where gcc is missing
-                run(zig_cc(ZIG_TARGET[platform_machine()]), ["-shared", "-fPIC"], source,
+                run(zig_cc(ZIG_TARGET[host.machine()]), ["-shared", "-fPIC"], source,
                     Path(tmp) / "zig-native.so")
             else:  # the FMUs' binaries, and the test hosts (no macOS host runs here)
-                compile_for(name, [source], Path(tmp), Path(tmp) / f"{name}{platform.suffix}",
+                compile_for(name, [source], Path(tmp), Path(tmp) / f"{name}{target.suffix}",
                             what="warm-up")
-                if platform.system != "darwin":
-                    run(zig_cc(platform.zig_target), ["-DWARM_PROGRAM"], source,
+                if target.system != "darwin":
+                    run(zig_cc(target.zig_target), ["-DWARM_PROGRAM"], source,
                         Path(tmp) / f"{name}.exe")
-            print(f"warm_cross_compilers: {name} ({platform.zig_target}) "
+            print(f"warm_cross_compilers: {name} ({target.zig_target}) "
                   f"{time.monotonic() - start:.0f} s", flush=True)
     return 0
 
