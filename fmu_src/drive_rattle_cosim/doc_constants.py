@@ -18,6 +18,7 @@ import math
 from functools import lru_cache
 
 from . import band, contact_laws, squeeze_impacts
+from .probe_rows import loads, pair_laws
 
 # --- section 2: the reference pair ----------------------------------------------------
 
@@ -61,14 +62,12 @@ def _pitch_pair_laws(p) -> list[list[dict]]:
     angles over a base pitch, for the mesh parameters ``p``."""
     import math
 
-    from drive_rattle import DRIVE
     from drive_rattle.library import MESH
     from drive_rattle.units import Unit
 
     unit = Unit(MESH, p, initialize=False)
     try:
-        return [_rows(unit, "rm_probe_pair_laws", LAW_FIELDS, int(DRIVE),
-                      k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES)
+        return [pair_laws(unit, k * 2.0 * math.pi / p.z_pinion / LAW_SAMPLES)
                 for k in range(LAW_SAMPLES)]
     finally:
         unit.close()
@@ -258,35 +257,12 @@ def start_offset() -> str:
 
 #: Pinion angles over a base pitch at which the static equilibria are solved.
 STATIC_SAMPLES = 20
-#: Doubles per pair row of rm_probe_loads and rm_probe_pair_laws, in their order (rm_probe.h).
-LOAD_FIELDS = ("slot", "s", "offset", "r_x", "K", "delta", "W", "F", "sliding_speed",
-               "entrainment_speed", "h", "film_parameter", "dry_fraction", "delta_max_eq7")
-LAW_FIELDS = ("slot", "s", "length", "r_x", "r_y", "K", "ka", "kz", "W_r", "c_t")
-_CAPACITY = 16
 #: The contact models of the text as section 3.6 runs them: the paper's ellipsoids with rigid
 #: teeth as printed, the others with the default teeth; and the asperity layer.
 CROWNED = contact_laws.CASES["default (crowned, exact law)"]
 PAPER = contact_laws.CASES["paper, exact law"]
 LINE = contact_laws.CASES["line (Palmgren)"]
 ROUGH = {"roughness": 1}
-
-
-def _rows(unit, name: str, fields: tuple, *args) -> list[dict]:
-    out, n = (ctypes.c_double * (len(fields) * _CAPACITY))(), ctypes.c_size_t()
-    unit.call(name, *args, out, _CAPACITY, ctypes.byref(n))
-    w = len(fields)
-    return [dict(zip(fields, out[w * i: w * (i + 1)], strict=True)) for i in range(n.value)]
-
-
-def _loads(unit, phi_p, w_p, phi_w, w_w, v_impact) -> list[dict]:
-    from drive_rattle import DRIVE
-
-    totals = (ctypes.c_double * 5)()
-    out, n = (ctypes.c_double * (len(LOAD_FIELDS) * _CAPACITY))(), ctypes.c_size_t()
-    unit.call("rm_probe_loads", int(DRIVE), phi_p, w_p, phi_w, w_w, v_impact, totals, out,
-              _CAPACITY, ctypes.byref(n))
-    w = len(LOAD_FIELDS)
-    return [dict(zip(LOAD_FIELDS, out[w * i: w * (i + 1)], strict=True)) for i in range(n.value)]
 
 
 def _approach(unit, law: dict, pen: float) -> tuple:
@@ -308,7 +284,7 @@ def static_pairs(changes: tuple = (), v_impact: float = 0.0, load: float | None 
     (``rm_probe_pair_laws``, LAW_FIELDS, under "law") and, loaded, its contact's own approach
     (the teeth's deflection not counted) and apparent area (``rm_probe_approach``: "own",
     "area")."""
-    from drive_rattle import DRIVE, DrivelineParameters, MeshParameters, MeshUnit
+    from drive_rattle import DrivelineParameters, MeshParameters, MeshUnit
     from drive_rattle.library import MESH
     from drive_rattle.units import Unit
 
@@ -325,10 +301,9 @@ def static_pairs(changes: tuple = (), v_impact: float = 0.0, load: float | None 
             phi_p = k * d["base_pitch"] / d["rb_pinion"] / STATIC_SAMPLES
             with MeshUnit(p, phi_p, drive.w_mean, load) as start:
                 wheel = start.wheel()
-            laws = {int(r["slot"]): r for r in _rows(unit, "rm_probe_pair_laws",
-                                                      LAW_FIELDS, int(DRIVE), phi_p)}
+            laws = {int(r["slot"]): r for r in pair_laws(unit, phi_p)}
             pairs = []
-            for r in _loads(unit, phi_p, drive.w_mean, *wheel, v_impact):
+            for r in loads(unit, phi_p, drive.w_mean, *wheel, v_impact):
                 r["law"] = laws[int(r["slot"])]
                 if r["W"] > 0.0:
                     law_w, _, _, r["area"], r["own"] = _approach(unit, r["law"], r["delta"])
@@ -562,7 +537,7 @@ def sliding_accelerations() -> tuple[float, float]:
     unit = Unit(MESH, p, initialize=False)
     try:
         def at_pitch(phi):
-            (pair,) = [r for r in _loads(unit, phi, drive.w_mean, phi_w, w_w, 0.0)
+            (pair,) = [r for r in loads(unit, phi, drive.w_mean, phi_w, w_w, 0.0)
                        if int(r["slot"]) == 0]
             return pair
 
@@ -671,7 +646,7 @@ def roughness_deficits() -> list[list[float]]:
     """1 - W_rough/W_smooth at DEFICIT_APPROACHES for the first pair in the zone at phi_p = 0
     (drive flank) of each contact model (the crowned, the paper's, the line), the library's
     laws with and without the asperity layer at the rough unit's coefficients."""
-    from drive_rattle import DRIVE, MeshParameters
+    from drive_rattle import MeshParameters
     from drive_rattle.library import MESH
     from drive_rattle.units import Unit
 
@@ -681,7 +656,7 @@ def roughness_deficits() -> list[list[float]]:
         rough = Unit(MESH, MeshParameters(**{**changes, **ROUGH}), initialize=False)
         smooth = Unit(MESH, MeshParameters(**changes), initialize=False)
         try:
-            law = _rows(rough, "rm_probe_pair_laws", LAW_FIELDS, int(DRIVE), 0.0)[0]
+            law = pair_laws(rough, 0.0)[0]
             found.append([1.0 - _approach(rough, law, k * sigma)[0]
                           / _approach(smooth, {**law, "W_r": 0.0}, k * sigma)[0]
                           for k in DEFICIT_APPROACHES])

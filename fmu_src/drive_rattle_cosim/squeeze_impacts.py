@@ -19,6 +19,8 @@ from drive_rattle import DRIVE, MeshParameters, MeshUnit
 from drive_rattle.library import MESH
 from drive_rattle.units import Unit
 
+from . import probe_rows
+
 #: The speeds of the table: multiples of the critical speed v_c (three below it, sticking;
 #: four just above it), then fixed speeds [m/s] up to 100 mm/s.
 CRITICAL_MULTIPLES = (0.3, 0.6, 0.95, 1.02, 1.2, 1.6, 2.5)
@@ -97,14 +99,9 @@ def pitch_point_damper() -> float:
     try:
         load = {}
         for w_w in (0.0, -rate / d["arm_wheel"]):
-            totals, pairs = (ctypes.c_double * 5)(), (ctypes.c_double * (14 * 16))()
-            n = ctypes.c_size_t()
-            unit.call("rm_probe_loads", int(DRIVE), phi_p, 0.0, phi_w, w_w, v_stick, totals,
-                      pairs, 16, ctypes.byref(n))
-            rows = [pairs[14 * i: 14 * (i + 1)] for i in range(n.value)]
-            # (slot, s, ...): the pair at the pitch point, its load W (field 6)
-            (at_pitch,) = [r for r in rows if abs(r[1] - d["s_pitch"]) < 1e-9 * d["s_pitch"]]
-            load[w_w] = at_pitch[6]
+            (at_pitch,) = [r for r in probe_rows.loads(unit, phi_p, 0.0, phi_w, w_w, v_stick)
+                           if abs(r["s"] - d["s_pitch"]) < 1e-9 * d["s_pitch"]]
+            load[w_w] = at_pitch["W"]
         static, moving = load.values()
         return (moving - static) / rate
     finally:
