@@ -76,12 +76,10 @@ def compile_program(exe: Path, source: Path, flags: Sequence[str] = ASAN_FLAGS,
     """A host program (``source``, with ``defines``) against the C headers of ``standard``,
     compiled with ``flags`` and warning-free into ``exe``; AssertionError with the compiler's
     output."""
-    from drive_rattle_build.fmi3 import fmi3_headers
-    from drive_rattle_build.shim import fmi2_headers
+    from ..faces.hosts import headers
 
-    include = fmi3_headers() if standard == "3.0" else fmi2_headers()
     cmd = ["gcc", "-std=c99", *flags, *defines, "-Wall", "-Wextra", "-Werror", "-I",
-           str(include), "-o", str(exe), str(source), "-lm", "-lpthread", "-ldl"]
+           str(headers(standard)), "-o", str(exe), str(source), "-lm", "-lpthread", "-ldl"]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
     return Path(exe)
