@@ -93,7 +93,11 @@ def pytest_collection_finish(session):
     so far (``hypothesis.internal.conjecture.providers._get_local_constants``), so a test's
     examples would otherwise depend on which tests ran before it in its process, which
     pytest-xdist decides anew in every run; imported up front, the constants are the same in
-    every process and every order, and one commit draws one set of examples."""
+    every process and every order, and one commit draws one set of examples.  (Only where a
+    property test is collected: the import costs seconds, and only hypothesis reads it.)"""
+    if not any(getattr(getattr(item, "obj", None), "is_hypothesis_test", False)
+               for item in session.items):
+        return
     for package in PACKAGES:
         for module in pkgutil.walk_packages(importlib.import_module(package).__path__,
                                             f"{package}."):
