@@ -138,33 +138,41 @@ def pytest_collection_modifyitems(config, items):
         Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
 
 
+def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
+    """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built and validated
+    once for this run, all in one process: the native FMI 2.0 and FMI 3.0 builds then compile
+    the model library once per platform between them (``platforms.shared_objects``)."""
+    def make(out: Path) -> dict:
+        from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
+        from drive_rattle_build.native import NATIVE_SUBDIR, build_native
+
+        return {"pythonfmu": [str(p) for p in build(out)],
+                "native": [str(p) for p in build_native(out / NATIVE_SUBDIR)],
+                "fmi3": [str(p) for p in build_fmi3(out / FMI3_SUBDIR)]}
+
+    made = made_once(tmp_path_factory, "dist", make)
+    return {face: {Path(p).stem: Path(p) for p in paths} for face, paths in made.items()}
+
+
 @pytest.fixture(scope="session")
 def fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}, built and validated for this session."""
-    made = made_once(tmp_path_factory, "dist", lambda out: [str(p) for p in build(out)])
-    return {Path(p).stem: Path(p) for p in made}
+    return built_faces(tmp_path_factory)["pythonfmu"]
 
 
 @pytest.fixture(scope="session")
 def native_fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, linux64 and win64
     binaries and sources, built and validated for this session."""
-    from drive_rattle_build.native import build_native  # on first use: the native build alone
-
-    made = made_once(tmp_path_factory, "dist_native",
-                     lambda out: [str(p) for p in build_native(out)])
-    return {Path(p).stem: Path(p) for p in made}
+    return built_faces(tmp_path_factory)["native"]
 
 
 @pytest.fixture(scope="session")
 def fmi3_fmus(tmp_path_factory):
-    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only, x86_64-linux and
-    x86_64-windows binaries and sources), built, held against their templates and validated
-    for this session."""
-    from drive_rattle_build.fmi3 import build_fmi3  # on first use: the FMI 3.0 build alone
-
-    made = made_once(tmp_path_factory, "dist_fmi3", lambda out: [str(p) for p in build_fmi3(out)])
-    return {Path(p).stem: Path(p) for p in made}
+    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only, x86_64-linux,
+    x86_64-windows and aarch64-linux binaries and sources), built, held against their
+    templates and validated for this session."""
+    return built_faces(tmp_path_factory)["fmi3"]
 
 
 @pytest.fixture(scope="session")

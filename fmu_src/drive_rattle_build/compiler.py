@@ -12,6 +12,8 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 
@@ -82,16 +84,63 @@ def zig_cc(target: str) -> list[str]:
     """``python -m ziglang cc -target <target>`` (the ziglang package, a dependency): the
     cross-compiler of every binary but the build machine's own."""
     try:
-        import ziglang  # noqa: F401
+        import ziglang
     except ImportError:
         raise BuildError(f"cross-compiling for {target} needs the ziglang package: "
                          "`pip install ziglang` (a dependency of this project)") from None
+    if os.name == "posix":  # its executable itself (what ``python -m ziglang`` execs): a
+        # build starts it once per C file, and a Python start each time would cost seconds
+        return [str(Path(ziglang.__file__).with_name("zig")), "cc", "-target", target]
     return [sys.executable, "-m", "ziglang", "cc", "-target", target]
 
 
-def compile_library(cc, flags, sources, out_path: Path, what: str, libs=()) -> Path:
-    """Compile ``sources`` with ``cc`` (an executable, or a command as a list) and ``flags``,
-    linked with ``libs``, into the shared library ``out_path``, written atomically (a
+def link_only(flag: str) -> bool:
+    """Whether the compiler ``flag`` concerns the link alone (a C file compiled with ``-c``
+    takes every other flag; with clang's -Werror a link-only one would fail the compile)."""
+    return flag == "-shared" or flag.startswith(("-Wl,", "-L", "-l"))
+
+
+def at_link(flag: str) -> bool:
+    """Whether ``flag`` is also given to the link: the link-only ones, and those that choose
+    the runtime or debug information the objects were compiled for."""
+    return link_only(flag) or flag == "-pthread" or flag.startswith(
+        ("-fsanitize", "-fno-sanitize", "-g"))
+
+
+def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
+    """Compile each of ``sources`` alone (``-c``) with ``cc`` (an executable, or a command as a
+    list) and ``flags`` into ``folder/<n>-<stem>.o``, one compiler per core at a time, and
+    return the objects in the order of ``sources``.  RuntimeError with the command and the
+    compiler's output when the compiler is missing or fails on a file."""
+    compiler = [cc] if isinstance(cc, (str, Path)) else list(cc)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    jobs = [(Path(source).resolve(), folder / f"{n}-{Path(source).stem}.o")
+            for n, source in enumerate(sources)]
+
+    def compile_one(job):
+        source, obj = job
+        cmd = [*compiler, *(f for f in flags if not link_only(f)), "-c", "-o", str(obj),
+               str(source)]
+        try:
+            # in the objects' folder: a cross-compiler may leave files beside its output
+            proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=folder)
+        except OSError as exc:
+            raise RuntimeError(f"cannot run the C compiler {compiler[0]!r}: {exc}") from exc
+        if proc.returncode != 0 or not obj.is_file():
+            raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
+                               f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+        return obj
+
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return list(pool.map(compile_one, jobs))
+
+
+def compile_library(cc, flags, sources, out_path: Path, what: str, libs=(),
+                    objects: Sequence[Path] = ()) -> Path:
+    """Compile ``sources`` with ``cc`` (an executable, or a command as a list) and ``flags``
+    (each file alone, side by side: :func:`compile_objects`), linked with the already compiled
+    ``objects`` and ``libs``, into the shared library ``out_path``, written atomically (a
     temporary file renamed into place).  RuntimeError with the command and the compiler's
     output when the compiler is missing or fails."""
     out = Path(out_path).resolve()
@@ -101,14 +150,16 @@ def compile_library(cc, flags, sources, out_path: Path, what: str, libs=()) -> P
     # then copied next to the target and renamed into place
     with tempfile.TemporaryDirectory(prefix="drive_rattle_cc_") as scratch:
         built = Path(scratch) / out.name
-        cmd = [*compiler, *flags, "-o", str(built), *(str(Path(s).resolve()) for s in sources),
-               *libs]
+        compiled = compile_objects(compiler, flags, sources, Path(scratch) / "objects", what)
+        cmd = [*compiler, *(f for f in flags if at_link(f)), "-o", str(built),
+               *(str(o) for o in compiled),
+               *(str(Path(o).resolve()) for o in objects), *libs]
         try:
             proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=scratch)
         except OSError as exc:
             raise RuntimeError(f"cannot run the C compiler {compiler[0]!r}: {exc}") from exc
         if proc.returncode != 0 or not built.is_file():
-            raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
+            raise RuntimeError(f"linking {what} failed (exit {proc.returncode}): "
                                f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
         tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
         shutil.copy2(built, tmp)

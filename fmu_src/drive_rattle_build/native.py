@@ -56,6 +56,7 @@ from .platforms import (
     binary_member,
     compile_for,
     cross_compile_html,
+    shared_objects,
     write_binary,
 )
 from .shim import fmi2_headers
@@ -147,9 +148,12 @@ def compile_binary(sources: Path, out: Path, platform: str = "x86_64-linux",
     BuildError with the compiler's output on failure or on any warning (-Werror: the sources
     compile warning-free)."""
     sources = Path(sources)
-    return compile_for(platform, [sources / name for name in source_files()], sources,
-                       Path(out), cc, ["-Werror", *source_flags(), *extra_flags],
-                       f"the native {Path(out).stem}")
+    library = [sources / p.name for p in model_files("*.c")]
+    flags = ["-Werror", *source_flags(), *extra_flags]
+    objects = shared_objects(platform, library, [sources / p.name for p in model_files("*.h")],
+                             cc, flags)
+    return compile_for(platform, [sources / name for name in GLUE_SOURCES], sources,
+                       Path(out), cc, flags, f"the native {Path(out).stem}", objects)
 
 
 # ------------------------------------------------------------------ modelDescription

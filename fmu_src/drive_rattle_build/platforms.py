@@ -23,8 +23,11 @@ package (a dependency).  What ships where (tested here; docs/native_fmu.md, docs
 
 from __future__ import annotations
 
+import atexit
+import hashlib
 import os
 import platform as host
+import shutil
 import sys
 import tempfile
 import zipfile
@@ -33,7 +36,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree
 
-from .compiler import IEEE_CFLAGS, BuildError, c_compiler, compile_library, zig_cc
+from .compiler import (
+    IEEE_CFLAGS,
+    BuildError,
+    c_compiler,
+    compile_library,
+    compile_objects,
+    zig_cc,
+)
 
 
 @dataclass(frozen=True)
@@ -89,14 +99,13 @@ def build_machine() -> str | None:
     return name if name in PLATFORMS else None
 
 
-def compile_for(platform: str, files: Sequence[Path], include: Path, out: Path,
-                cc: str | Sequence[str] | None = None, flags: Sequence[str] = (),
-                what: str = "the FMU") -> Path:
-    """Compile the C ``files`` (headers in ``include``) into the shared library ``out`` for
-    ``platform``: with ``cc`` (default the build's compiler, ``compiler.c_compiler``) on the
-    build machine's own platform, else with ziglang's clang for the platform's target; IEEE
-    arithmetic without contraction (``IEEE_CFLAGS``), only the FMI functions exported (the
-    standard's headers mark them), ``flags`` added.  BuildError with the compiler's output."""
+def toolchain(platform: str, cc: str | Sequence[str] | None = None,
+              flags: Sequence[str] = ()) -> tuple[str | list[str], list[str], list[str]]:
+    """(compiler, flags, libraries) of a shared library for ``platform``: ``cc`` (default the
+    build's compiler, ``compiler.c_compiler``) on the build machine's own platform, else
+    ziglang's clang for the platform's target; IEEE arithmetic without contraction
+    (``IEEE_CFLAGS``), only the FMI functions exported (the standard's headers mark them),
+    ``flags`` added."""
     target = platform_named(platform)
     if platform == build_machine():
         compiler = cc or c_compiler()
@@ -107,12 +116,59 @@ def compile_for(platform: str, files: Sequence[Path], include: Path, out: Path,
     if target.system != "windows":
         options += ["-fPIC", "-fvisibility=hidden"]
     libs = ["-lm"] if target.system == "linux" else []  # libm is in libSystem and the CRT
-    options = [*IEEE_CFLAGS, *options, "-shared", *flags, "-I", str(Path(include).resolve())]
+    return compiler, [*IEEE_CFLAGS, *options, "-shared", *flags], libs
+
+
+def compile_for(platform: str, files: Sequence[Path], include: Path, out: Path,
+                cc: str | Sequence[str] | None = None, flags: Sequence[str] = (),
+                what: str = "the FMU", objects: Sequence[Path] = ()) -> Path:
+    """Compile the C ``files`` (headers in ``include``) with :func:`toolchain` into the
+    shared library ``out`` for ``platform``, linked with the already compiled ``objects``
+    (:func:`shared_objects`).  BuildError with the compiler's output."""
+    compiler, options, libs = toolchain(platform, cc, flags)
     try:
-        return compile_library(compiler, options, files, Path(out),
-                               f"{what} for {platform}", libs=libs)
+        return compile_library(compiler, [*options, "-I", str(Path(include).resolve())], files,
+                               Path(out), f"{what} for {platform}", libs=libs,
+                               objects=objects)
     except RuntimeError as err:
         raise BuildError(str(err)) from None
+
+
+#: The objects :func:`shared_objects` compiled in this process, by what they are compiled
+#: from (platform, compiler, flags and the contents of the files and headers).
+_SHARED_OBJECTS: dict[str, list[Path]] = {}
+
+
+def shared_objects(platform: str, files: Sequence[Path], headers: Sequence[Path],
+                   cc: str | Sequence[str] | None = None, flags: Sequence[str] = (),
+                   what: str = "the model library") -> list[Path]:
+    """The objects of the C ``files`` for ``platform``, compiled as :func:`compile_for`
+    compiles (``headers``: every file they may include, in one folder): once per process for
+    the same contents, flags and compiler.  The model library is the same in every FMU of a
+    build (both models, both FMI faces: it does not include the FMU's generated config
+    header), so a build compiles it once per platform and links it into each.
+    BuildError with the compiler's output."""
+    compiler, options, _ = toolchain(platform, cc, flags)
+    digest = hashlib.sha256(repr((platform, compiler, options)).encode())
+    for path in sorted({*map(Path, files), *map(Path, headers)}, key=lambda p: p.name):
+        digest.update(f"\0{path.name}\0".encode() + path.read_bytes())
+    key = digest.hexdigest()
+    if key not in _SHARED_OBJECTS:
+        if not _OBJECTS_FOLDER:
+            folder = Path(tempfile.mkdtemp(prefix="drive_rattle_objects_"))
+            atexit.register(shutil.rmtree, folder, ignore_errors=True)
+            _OBJECTS_FOLDER.append(folder)
+        include = Path(next(iter(headers), Path(files[0]))).parent.resolve()
+        try:
+            _SHARED_OBJECTS[key] = compile_objects(
+                compiler, [*options, "-I", str(include)], files, _OBJECTS_FOLDER[0] / key[:16],
+                f"{what} for {platform}")
+        except RuntimeError as err:
+            raise BuildError(str(err)) from None
+    return _SHARED_OBJECTS[key]
+
+
+_OBJECTS_FOLDER: list[Path] = []
 
 
 # ------------------------------------------------------------------ in the FMU

@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
+import fmpy
 from fmpy import extract, read_model_description
 
 from drive_rattle.interface import CONNECTIONS, DRIVELINE, MESH
@@ -139,6 +140,8 @@ class FMI2:
     CTYPES: ClassVar[dict] = {"Real": c_double, "Integer": c_int, "Boolean": c_int}
     #: The access type of the coupling signals.
     FLOAT: ClassVar[str] = "Real"
+    #: The folder of this machine's binary (FMI 2.0 section 2.3: binaries/<platform>).
+    BINARIES: ClassVar[str] = f"binaries/{fmpy.platform}/"
 
     @staticmethod
     def load(unit: Unit, md, folder: str):
@@ -182,6 +185,8 @@ class FMI3:
     CTYPES: ClassVar[dict] = {"Float64": c_double, "Int32": c_int32, "Int64": c_int64,
                               "Boolean": c_bool}
     FLOAT: ClassVar[str] = "Float64"
+    #: The folder of this machine's binary (FMI 3.0 section 2.5.1: the platform tuple).
+    BINARIES: ClassVar[str] = f"binaries/{fmpy.platform_tuple}/"
 
     @staticmethod
     def load(unit: Unit, md, folder: str):
@@ -223,6 +228,13 @@ class FMI3:
 
 #: The adapters by the major version of ``fmiVersion``.
 STANDARDS = {"2": FMI2, "3": FMI3}
+
+
+def loaded_member(binaries: str, name: str) -> bool:
+    """Whether the FMU's member ``name`` is one an instance loads: the modelDescription, the
+    resources, and the binary in the folder ``binaries`` (this machine's)."""
+    return (name == "modelDescription.xml" or name.startswith("resources/")
+            or name.startswith(binaries))
 
 
 def standard_of(md, fmu: Path):
@@ -287,7 +299,10 @@ class Unit:
         self._dir = tempfile.mkdtemp(prefix=f"drive_rattle_{self.model_name}_")
         cwd = os.getcwd()
         try:
-            extract(str(self.fmu), self._dir)
+            # what an instance loads alone: this machine's binary and the resources (the
+            # other platforms' binaries and the sources would double the unpacking's cost)
+            extract(str(self.fmu), self._dir,
+                    include=functools.partial(loaded_member, self.standard.BINARIES))
             self.standard.load(self, md, self._dir)
         except BaseException as err:
             # fmpy changes into the binaries' folder to load them and stays there when the
