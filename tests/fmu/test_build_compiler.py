@@ -60,3 +60,71 @@ def test_a_cc_that_is_not_there_is_named(tmp_path):
     run = build_without_gcc(tmp_path / "dist", CC="no-such-cc")
     assert run.returncode == 1 and "Traceback" not in run.stderr
     assert "CC = 'no-such-cc' is not an executable" in run.stderr
+
+
+def test_each_file_is_compiled_alone_and_a_failure_names_it(tmp_path):
+    from drive_rattle_build.compiler import c_compiler, compile_library
+
+    good, bad = tmp_path / "good.c", tmp_path / "bad.c"
+    good.write_text("int rattle_answer(void) { return 42; }\n", encoding="utf-8")
+    bad.write_text("int rattle_broken(void) { return undeclared; }\n", encoding="utf-8")
+    out = compile_library(c_compiler(), ["-std=c99", "-O2", "-fPIC", "-shared", "-Werror"],
+                          [good], tmp_path / "libgood.so", "good")
+    assert "rattle_answer" in subprocess.run(["nm", "-D", str(out)], capture_output=True,
+                                             text=True, check=True).stdout
+    with pytest.raises(RuntimeError, match=r"compiling two files failed .*bad\.c"):
+        compile_library(c_compiler(), ["-std=c99", "-fPIC", "-shared"], [good, bad],
+                        tmp_path / "libbad.so", "two files")
+    assert not (tmp_path / "libbad.so").exists()
+
+
+def test_the_link_gets_the_flags_of_the_link_and_the_compile_the_others():
+    from drive_rattle_build.compiler import at_link, link_only
+
+    assert [f for f in ("-shared", "-lm", "-Wl,-z,defs", "-L/x") if link_only(f)] == [
+        "-shared", "-lm", "-Wl,-z,defs", "-L/x"]
+    for flag in ("-O2", "-Werror", "-Wall", "-std=c99", "-DRM=1", "-I", "-fPIC",
+                 "-fvisibility=hidden", "-ffp-contract=off"):
+        assert not link_only(flag) and not at_link(flag), flag
+    for flag in ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-g0",
+                 "-pthread", "-shared"):
+        assert at_link(flag), flag
+
+
+def test_the_model_library_is_compiled_once_per_platform_and_content(tmp_path):
+    """``shared_objects`` gives the same objects for the same files, headers and flags, from
+    any folder; a changed header or flag compiles them again."""
+    from drive_rattle_build.paths import model_files
+    from drive_rattle_build.platforms import build_machine, shared_objects
+
+    platform = build_machine()
+    copies = []
+    for k in range(2):
+        folder = tmp_path / f"copy{k}"
+        folder.mkdir()
+        for path in model_files("*.[ch]"):
+            (folder / path.name).write_bytes(path.read_bytes())
+        copies.append(folder)
+
+    def objects(folder, flags=("-Werror",)):
+        return shared_objects(platform, [folder / p.name for p in model_files("*.c")],
+                              [folder / p.name for p in model_files("*.h")], flags=flags)
+
+    first = objects(copies[0])
+    assert [o.stem.split("-", 1)[1] for o in first] == [p.stem for p in model_files("*.c")]
+    assert objects(copies[1]) == first
+    assert objects(copies[0], ("-Werror", "-DRATTLE_TEST_FLAG=1")) != first
+    header = copies[1] / "rm_private.h"
+    header.write_text(header.read_text(encoding="utf-8") + "\n/* changed */\n",
+                      encoding="utf-8")
+    assert objects(copies[1]) != first
+
+
+def test_no_file_of_the_model_library_includes_the_fmus_config_header():
+    # What shared_objects relies on: the FMU's generated header (its model identifier and
+    # GUID) reaches only the face's functions, so the library compiles alike for every FMU.
+    from drive_rattle_build.native import CONFIG_HEADER
+    from drive_rattle_build.paths import model_files
+
+    for path in model_files("*.[ch]"):
+        assert CONFIG_HEADER not in path.read_text(encoding="utf-8"), path.name
