@@ -25,8 +25,6 @@ TSAN = {**os.environ, "TSAN_OPTIONS": "halt_on_error=1:exitcode=66:second_deadlo
 #: What the sanitizers print when they report.
 REPORT_MARKS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
                 "WARNING: ThreadSanitizer", "SUMMARY: ")
-#: The model library's arithmetic (docs/model.md: "Reproducible numbers").
-IEEE = ("-std=c99", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra")
 
 HERE = Path(__file__).resolve().parent
 
@@ -60,11 +58,10 @@ def build_fmu_binary(model: str, folder: Path, flags: Sequence[str],
     else:
         token = native.native_guid(model)
         native.stage_sources(model, token, sources)
-    binary = folder / f"{model}.so"
-    cmd = ["gcc", *IEEE, *flags, "-Werror", "-fPIC", "-shared", "-I", str(sources), "-o",
-           str(binary), *(str(s) for s in sorted(sources.glob("*.c"))), "-lm"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr}"
+    # as the build compiles it (the library's objects shared by both models of one standard
+    # and flags: drive_rattle_build.platforms.shared_objects), with the sanitizers' flags
+    face = fmi3 if standard == "3.0" else native
+    binary = face.compile_binary(sources, folder / f"{model}.so", "x86_64-linux", "gcc", flags)
     resources = folder / "resources"
     resources.mkdir(exist_ok=True)
     (resources / native.RESOURCE_MARKER).write_text(f"{model}\n", encoding="utf-8")
