@@ -81,8 +81,9 @@ TARGETS = {"linux64": None, "win64": "x86_64-windows-gnu"}
 
 
 def zig_cc(target: str) -> list[str]:
-    """``python -m ziglang cc -target <target>`` (the ziglang package, a dependency): the
-    cross-compiler of every binary but the build machine's own."""
+    """ziglang's ``zig cc -target <target>`` (the ziglang package, a dependency; its
+    executable on POSIX, ``python -m ziglang`` elsewhere): the cross-compiler of every binary
+    but the build machine's own."""
     try:
         import ziglang
     except ImportError:

@@ -30,6 +30,7 @@ import platform as host
 import shutil
 import sys
 import tempfile
+import threading
 import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -153,6 +154,12 @@ def shared_objects(platform: str, files: Sequence[Path], headers: Sequence[Path]
     for path in sorted({*map(Path, files), *map(Path, headers)}, key=lambda p: p.name):
         digest.update(f"\0{path.name}\0".encode() + path.read_bytes())
     key = digest.hexdigest()
+    with _SHARED_LOCK:  # two threads building at once compile a set once, not into one folder
+        return _shared_objects(key, compiler, options, files, headers, f"{what} for {platform}")
+
+
+def _shared_objects(key, compiler, options, files, headers, what) -> list[Path]:
+    """:func:`shared_objects`' set ``key``, compiled on first use (under its lock)."""
     if key not in _SHARED_OBJECTS:
         if not _OBJECTS_FOLDER:
             folder = Path(tempfile.mkdtemp(prefix="drive_rattle_objects_"))
@@ -162,13 +169,14 @@ def shared_objects(platform: str, files: Sequence[Path], headers: Sequence[Path]
         try:
             _SHARED_OBJECTS[key] = compile_objects(
                 compiler, [*options, "-I", str(include)], files, _OBJECTS_FOLDER[0] / key[:16],
-                f"{what} for {platform}")
+                what)
         except RuntimeError as err:
             raise BuildError(str(err)) from None
     return _SHARED_OBJECTS[key]
 
 
 _OBJECTS_FOLDER: list[Path] = []
+_SHARED_LOCK = threading.Lock()
 
 
 # ------------------------------------------------------------------ in the FMU
