@@ -108,6 +108,19 @@ def at_link(flag: str) -> bool:
         ("-fsanitize", "-fno-sanitize", "-g"))
 
 
+def run_compiler(cmd: list[str], cwd: Path, output: Path, doing: str) -> Path:
+    """Run the compiler command ``cmd`` in ``cwd``, which writes ``output``; RuntimeError with
+    the command and the compiler's output when it is missing, fails or writes nothing."""
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=cwd)
+    except OSError as exc:
+        raise RuntimeError(f"cannot run the C compiler {cmd[0]!r}: {exc}") from exc
+    if proc.returncode != 0 or not output.is_file():
+        raise RuntimeError(f"{doing} failed (exit {proc.returncode}): {' '.join(cmd)}\n"
+                           f"{proc.stdout}{proc.stderr}")
+    return output
+
+
 def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
     """Compile each of ``sources`` alone (``-c``) with ``cc`` (an executable, or a command as a
     list) and ``flags`` into ``folder/<n>-<stem>.o``, one compiler per core at a time, and
@@ -121,17 +134,9 @@ def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
 
     def compile_one(job):
         source, obj = job
-        cmd = [*compiler, *(f for f in flags if not link_only(f)), "-c", "-o", str(obj),
-               str(source)]
-        try:
-            # in the objects' folder: a cross-compiler may leave files beside its output
-            proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=folder)
-        except OSError as exc:
-            raise RuntimeError(f"cannot run the C compiler {compiler[0]!r}: {exc}") from exc
-        if proc.returncode != 0 or not obj.is_file():
-            raise RuntimeError(f"compiling {what} failed (exit {proc.returncode}): "
-                               f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
-        return obj
+        # in the objects' folder: a cross-compiler may leave files beside its output
+        return run_compiler([*compiler, *(f for f in flags if not link_only(f)), "-c", "-o",
+                             str(obj), str(source)], folder, obj, f"compiling {what}")
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         return list(pool.map(compile_one, jobs))
@@ -152,16 +157,9 @@ def compile_library(cc, flags, sources, out_path: Path, what: str, libs=(),
     with tempfile.TemporaryDirectory(prefix="drive_rattle_cc_") as scratch:
         built = Path(scratch) / out.name
         compiled = compile_objects(compiler, flags, sources, Path(scratch) / "objects", what)
-        cmd = [*compiler, *(f for f in flags if at_link(f)), "-o", str(built),
-               *(str(o) for o in compiled),
-               *(str(Path(o).resolve()) for o in objects), *libs]
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, check=False, cwd=scratch)
-        except OSError as exc:
-            raise RuntimeError(f"cannot run the C compiler {compiler[0]!r}: {exc}") from exc
-        if proc.returncode != 0 or not built.is_file():
-            raise RuntimeError(f"linking {what} failed (exit {proc.returncode}): "
-                               f"{' '.join(cmd)}\n{proc.stdout}{proc.stderr}")
+        run_compiler([*compiler, *(f for f in flags if at_link(f)), "-o", str(built),
+                      *(str(o) for o in compiled), *(str(Path(o).resolve()) for o in objects),
+                      *libs], Path(scratch), built, f"linking {what}")
         tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
         shutil.copy2(built, tmp)
     os.replace(tmp, out)

@@ -54,9 +54,8 @@ from .platforms import (
     PLATFORMS,
     binaries_html,
     binary_member,
-    compile_for,
+    compile_face_binary,
     cross_compile_html,
-    shared_objects,
     write_binary,
 )
 from .shim import fmi2_headers
@@ -147,13 +146,9 @@ def compile_binary(sources: Path, out: Path, platform: str = "x86_64-linux",
     machine's with ``cc``, others with ziglang's clang); only the fmi2 functions exported.
     BuildError with the compiler's output on failure or on any warning (-Werror: the sources
     compile warning-free)."""
-    sources = Path(sources)
-    library = [sources / p.name for p in model_files("*.c")]
-    flags = ["-Werror", *source_flags(), *extra_flags]
-    objects = shared_objects(platform, library, [sources / p.name for p in model_files("*.h")],
-                             cc, flags)
-    return compile_for(platform, [sources / name for name in GLUE_SOURCES], sources,
-                       Path(out), cc, flags, f"the native {Path(out).stem}", objects)
+    return compile_face_binary(platform, sources, GLUE_SOURCES, out, cc,
+                               ["-Werror", *source_flags(), *extra_flags],
+                               f"the native {Path(out).stem}")
 
 
 # ------------------------------------------------------------------ modelDescription

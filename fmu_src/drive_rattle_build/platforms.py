@@ -45,6 +45,7 @@ from .compiler import (
     compile_objects,
     zig_cc,
 )
+from .paths import model_files
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,19 @@ def compile_for(platform: str, files: Sequence[Path], include: Path, out: Path,
                                objects=objects)
     except RuntimeError as err:
         raise BuildError(str(err)) from None
+
+
+def compile_face_binary(platform: str, sources: Path, glue: Sequence[str], out: Path,
+                        cc: str | Sequence[str] | None, flags: Sequence[str], what: str) -> Path:
+    """An FMU's binary for ``platform`` from its staged ``sources`` folder: the model library
+    (``paths.model_files``, compiled once per process for all FMUs alike:
+    :func:`shared_objects`) linked with the face's ``glue`` files, compiled for this FMU (its
+    generated config header).  BuildError with the compiler's output."""
+    sources = Path(sources)
+    objects = shared_objects(platform, [sources / p.name for p in model_files("*.c")],
+                             [sources / p.name for p in model_files("*.h")], cc, flags)
+    return compile_for(platform, [sources / name for name in glue], sources, Path(out), cc,
+                       flags, what, objects)
 
 
 #: The objects :func:`shared_objects` compiled in this process, by what they are compiled
