@@ -4,9 +4,11 @@ would: any bytes as strings, NULL pointers, wrong tokens and paths, any buffer s
 reused, calls in any order.  fmpy's slaves check and convert too much for that.
 
 What differs between the standards is the model's *dialect* (``FMI2``, ``FMI3``: chosen from
-the modelDescription's fmiVersion): the function names, the C types of each variable type,
-the logger's signature, instantiation's arguments, where the start time is given and where
-the binary lies.  ``Model`` and ``Instance`` are the same for both.
+the modelDescription's fmiVersion): the function names, the C types of each variable type and
+the type that gets and sets each of the model library's (``Model.kind``), the logger's
+signature, instantiation's arguments and the interfaces these FMUs refuse, where the start
+time is given and how the time reached is read, and where the binary lies.  ``Model`` and
+``Instance`` are the same for both.
 
 Every call returns the raw status; the messages the FMU logs are collected per instance
 (``Instance.log``: (status, category, message)), routed by the instance environment pointer.
