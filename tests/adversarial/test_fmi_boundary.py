@@ -164,7 +164,7 @@ def test_the_fuzzer_reseals_any_record_it_can_meet(kind, monkeypatch):
     unit = Unit({"GearMeshRattle": MESH, "Driveline": DRIVELINE}[kind])
     unit.advance(1e-4)
     record = unit.save()
-    model = types.SimpleNamespace(variables={
+    model = types.SimpleNamespace(unit_variables={
         name: (v.vr, v.type, v.causality) for name, v in unit.variables.items()})
     envelope = bytes(HEADER)
     for payload in [record[:n] for n in range(len(record) + 1)] + [b"no record at all"]:
