@@ -125,10 +125,14 @@ class Fuzz:
         self.n_vars = len(names)
         d = model.dialect
         #: the FMU's types of its unit's variables -> the library's type of each
-        self.library = {k: d.library_type(k) for _, (_, k, c) in names.items()
-                        if c != "independent"}
-        self.library.update({k: t for t, k in d.kinds.items()})  # String on the mesh too
-        self.kinds = sorted(self.library, key=list(self.library).index)
+        # in the library's order of its types (Real, Integer, Boolean, String), FMI 3.0's
+        # Enumeration after the Int32: the same draws from a seed as before FMI 3.0 came
+        self.library = {}
+        for t, kind in d.kinds.items():  # (String too: the mesh has none, calls are drawn)
+            self.library[kind] = t
+            self.library.update({k: t for _, (_, k, c) in names.items()
+                                 if c != "independent" and d.library_type(k) == t})
+        self.kinds = list(self.library)
         self.real, self.integer = model.kind("Real"), model.kind("Integer")
         #: FMI 3.0's independent variable time: the glue's, not the library's
         self.glue_vrs = {vr for _, (vr, _, c) in names.items() if c == "independent"}
