@@ -1,6 +1,6 @@
 """Randomized FMI boundary fuzzer: call sequences and arguments drawn by hypothesis against a
-built FMU through raw ctypes (raw_fmi.py), in this process -- run it as a child process, so
-that a crash of the host is an exit code:
+built FMU of any face, FMI 2.0 or 3.0, through raw ctypes (raw_fmi.py), in this process -- run
+it as a child process, so that a crash of the host is an exit code:
 
     python boundary_fuzz.py <FMU> <examples> <seed> <work folder> [--no-shadow] [--no-shrink]
         -> last line: JSON summary
@@ -15,6 +15,16 @@ debug-logging categories, status queries, unsupported functions, inputs at their
 bounds and steps on them (the costliest work a step does) -- and frees it.  NULL and dangling
 pointers are left out (FMI does not allow them).  Every call into the FMU is timed
 (call_clock.py): the summary holds the slowest and the one nearest its bound.
+
+One fuzzer for both standards: the calls are drawn in the FMU's own types (``Fuzz.kinds``:
+FMI 2.0's Real, Integer, Boolean, String; FMI 3.0's Float64, Int32, Enumeration as Int64,
+Boolean, String) and made through the model's dialect; the shadow is asked in the library's
+types.  What one standard lacks is its counterpart in the other: FMI 3.0 has no
+fmi2SetupExperiment (a drawn start time is the next fmi3EnterInitializationMode's), no status
+inquiries (its variable time is read instead, and must be the state's), no fmi2CancelStep (it
+calls fmi3EnterEventMode, which these FMUs refuse too); what only FMI 3.0 has is drawn on its
+face alone: Int32 and Int64 calls naming the other kind of integer, Int64 values beyond 32
+bits, and the independent variable time in gets and sets (the glue's refusals).
 
 What makes a run fail:
 
@@ -43,7 +53,7 @@ import math
 import os
 import struct
 import sys
-from ctypes import c_void_p
+from ctypes import c_bool, c_void_p
 from pathlib import Path
 
 from call_clock import CallClock
@@ -55,7 +65,6 @@ from raw_fmi import (
     ERROR,
     FATAL,
     HEADER,
-    MODEL_EXCHANGE,
     OK,
     PENDING,
     WARNING,
@@ -65,7 +74,7 @@ from raw_fmi import (
     with_payload,
 )
 from records import MESH_MODEL, Record
-from shadow import TYPES, Shadow
+from shadow import Shadow
 
 ALLOWED = {OK, WARNING, ERROR}  # what these FMUs may answer; FATAL/DISCARD/PENDING never
 MODES = ("instantiated", "initialization", "stepping", "terminated")  # the record's phases
@@ -114,14 +123,31 @@ class Fuzz:
         self.use_shadow = use_shadow
         names = model.variables
         self.n_vars = len(names)
-        self.by_kind = {k: [model.vr(n) for n in model.names(k)] for k in TYPES}
+        d = model.dialect
+        #: the FMU's types of its unit's variables -> the library's type of each
+        # in the library's order of its types (Real, Integer, Boolean, String), FMI 3.0's
+        # Enumeration after the Int32: the same draws from a seed as before FMI 3.0 came
+        self.library = {}
+        for t, kind in d.kinds.items():  # (String too: the mesh has none, calls are drawn)
+            self.library[kind] = t
+            self.library.update({k: t for _, (_, k, c) in names.items()
+                                 if c != "independent" and d.library_type(k) == t})
+        self.kinds = list(self.library)
+        self.real, self.integer = model.kind("Real"), model.kind("Integer")
+        #: FMI 3.0's independent variable time: the glue's, not the library's
+        self.glue_vrs = {vr for _, (vr, _, c) in names.items() if c == "independent"}
+        self.by_kind = {k: [model.vr(n) for n in model.names(k) if model.vr(n) not in
+                            self.glue_vrs] for k in self.kinds}
+        self.kind_of = {vr: k for k, vrs in self.by_kind.items() for vr in vrs}
+        #: FMI 3.0 passes Booleans as bool (0/1 whatever the importer's byte), FMI 2.0 as int
+        self.bool_booleans = d.types["Boolean"][0] is c_bool
         self.outputs = {vr for n, (vr, _, c) in names.items() if c == "output"}
-        self.real_outputs = [vr for vr in self.by_kind["Real"] if vr in self.outputs]
+        self.real_outputs = [vr for vr in self.by_kind[self.real] if vr in self.outputs]
         self.hidden = set(range(self.n_vars, self.n_vars + 3))  # the shim's hidden variables
         self.bad_vrs = [*self.hidden, self.n_vars + 3, 4096, 2**31, 2**31 + 7, 2**32 - 1]
         self.inputs = {n: vr for n, (vr, _, c) in names.items() if c == "input"}
         self.defaults = []  # (kind, vrs, start values) of the parameters
-        for kind in TYPES:
+        for kind in self.kinds:
             params = [(vr, model.starts[n]) for n, (vr, k, c) in names.items()
                       if k == kind and c == "parameter"]
             if params:
@@ -138,6 +164,23 @@ class Fuzz:
     def count(self, op: str, status: int) -> None:
         self.by_op.setdefault(op, [0, 0])[status == ERROR] += 1
 
+    def shadow_get(self, shadow: Shadow):
+        """``shadow.get`` asked in the FMU's types."""
+        return lambda kind, vrs: shadow.get(self.library[kind], vrs)
+
+    def wrong_integer(self, kind: str, vrs, values=()) -> bool:
+        """FMI 3.0's glue refuses, before the library, an Int32 call naming an Enumeration, an
+        Int64 (Enumeration) call naming anything else, and an Int64 value beyond the library's
+        32 bits; FMI 2.0 has one integer type (never)."""
+        integers = [k for k, t in self.library.items() if t == "Integer"]
+        if self.library.get(kind) != "Integer" or len(integers) == 1:
+            return False
+        if kind == self.integer:  # (a variable of another type reaches the library)
+            return any(self.library.get(self.kind_of.get(vr)) == "Integer"
+                       and self.kind_of[vr] != kind for vr in vrs)
+        return any(self.kind_of.get(vr) != kind for vr in vrs) or any(
+            not -(2**31) <= v < 2**31 for v in values)
+
 
 # ------------------------------------------------------------------ observation
 def snapshot(get, by_kind: dict) -> dict:
@@ -145,7 +188,7 @@ def snapshot(get, by_kind: dict) -> dict:
     ``get(kind, vrs) -> (status, values)``; one call per type, one per variable where the
     call is refused (an output that cannot be computed)."""
     out = {}
-    for kind in TYPES:
+    for kind in by_kind:
         vrs = by_kind[kind]
         status, values = get(kind, vrs)
         if status != OK:
@@ -157,6 +200,8 @@ def snapshot(get, by_kind: dict) -> dict:
 
 
 def _text(value) -> str:
+    if isinstance(value, bool):  # FMI 3.0's Boolean, the library's 0/1
+        value = int(value)
     return value.hex() if isinstance(value, float) else repr(value)
 
 
@@ -175,11 +220,11 @@ def observe(f: Fuzz, inst) -> tuple:
 def check_finite(f: Fuzz, observed: tuple, call) -> None:
     """No accepted call leaves a non-finite output (as an accepted get) or model state."""
     snap, record = observed
-    for vr, (status, text) in zip(f.by_kind["Real"], snap["Real"], strict=True):
+    for vr, (status, text) in zip(f.by_kind[f.real], snap[f.real], strict=True):
         if vr in f.outputs and status == OK:
             assert math.isfinite(float.fromhex(text)), ("an output is not finite", call, vr,
                                                         text)
-    r = Record.decode(record, f.m.variables)
+    r = Record.decode(record, f.m.unit_variables)
     assert math.isfinite(r.start_time) and math.isfinite(r.time), ("state times", call, r)
     if r.has_model and r.model:
         for name, fmt in MESH_MODEL:
@@ -200,18 +245,28 @@ def vr_lists(f: Fuzz, kind: str):
     return st.lists(pool, min_size=0, max_size=5)
 
 
-def value_strategy(kind: str):
+def value_strategy(f: Fuzz, kind: str):
+    if kind != f.integer and f.library[kind] == "Integer":
+        return wide_ints  # FMI 3.0's Int64 (Enumerations): beyond the library's 32 bits too
     return {"Real": floats_any, "Integer": ints_any, "Boolean": ints_any,
-            "String": strings_any}[kind]
+            "String": strings_any}[f.library[kind]]
+
+
+def vr_lists_with_glue(f: Fuzz, kind: str):
+    """vr_lists, and on FMI 3.0 now and then the glue's own variable time."""
+    if not f.glue_vrs:
+        return vr_lists(f, kind)
+    return st.one_of(vr_lists(f, kind), vr_lists(f, kind), vr_lists(f, kind),
+                     vr_lists(f, kind).map(lambda vrs: [*vrs, *sorted(f.glue_vrs)]))
 
 
 def call_strategy(f: Fuzz):
-    sets = [vr_lists(f, k).flatmap(
+    sets = [vr_lists_with_glue(f, k).flatmap(
         lambda vrs, k=k: st.tuples(st.just("set"), st.just(k), st.just(vrs),
-                                   st.lists(value_strategy(k), min_size=len(vrs),
+                                   st.lists(value_strategy(f, k), min_size=len(vrs),
                                             max_size=len(vrs))))
-            for k in TYPES]
-    gets = [st.tuples(st.just("get"), st.just(k), vr_lists(f, k)) for k in TYPES]
+            for k in f.kinds]
+    gets = [st.tuples(st.just("get"), st.just(k), vr_lists_with_glue(f, k)) for k in f.kinds]
     realistic_inputs = st.tuples(st.just("inputs"), st.sampled_from([0.0, 0.5, 1.0, 1.3]))
     step = st.tuples(st.just("step"),
                      st.one_of(st.just("next"), st.just("next"), st.just("next"), floats_any),
@@ -281,13 +336,14 @@ def call_strategy(f: Fuzz):
 def mixed_set(f: Fuzz):
     """A set whose last entry is refused (an output, another type, unknown): nothing of it
     may be stored."""
-    settable = [vr for vr in f.by_kind["Real"] if vr not in f.outputs]
-    refused_entry = st.sampled_from([*sorted(f.outputs), *f.by_kind["Integer"], *f.bad_vrs])
+    settable = [vr for vr in f.by_kind[f.real] if vr not in f.outputs]
+    refused_entry = st.sampled_from([*sorted(f.outputs), *f.by_kind[f.integer], *f.bad_vrs,
+                                     *sorted(f.glue_vrs)])
     return st.builds(lambda vrs, bad: [*vrs, bad],
                      st.lists(st.sampled_from(settable), min_size=1, max_size=3),
                      refused_entry).flatmap(
         lambda vrs: st.lists(floats_any, min_size=len(vrs), max_size=len(vrs)).map(
-            lambda values: [("set", "Real", vrs, values)]))
+            lambda values: [("set", f.real, vrs, values)]))
 
 
 def backbone(f: Fuzz):
@@ -362,7 +418,7 @@ def resealed(m: Model, blob: bytes, how: str, at: int, real: float, integer: int
     if how == "reseal truncate":
         return with_payload(blob, payload[:at % len(payload)])
     try:
-        r = Record.decode(payload, m.variables)
+        r = Record.decode(payload, m.unit_variables)
     except (ValueError, struct.error):  # no whole record (an edited one, serialized again)
         return resealed(m, blob, "reseal flip", at, real, integer)
     fields = (["phase", "motion_set", "start_time", "time", "has_model"]
@@ -409,6 +465,8 @@ class Example:
         self.init_progress = 0
         self.motion_fresh = False  # consistent inputs set for the coming step
         self.costly = 0  # costly refusals of steps so far
+        #: FMI 3.0: the start time the next fmi3EnterInitializationMode passes (its "setup")
+        self.start = 0.0
         self.observed = observe(f, self.inst)
         self.compare()
 
@@ -416,7 +474,8 @@ class Example:
         """The FMU's observable is the shadow's."""
         if self.shadow is None:
             return
-        expected = (snapshot(self.shadow.get, self.f.by_kind), self.shadow.save())
+        expected = (snapshot(self.f.shadow_get(self.shadow), self.f.by_kind),
+                    self.shadow.save())
         assert self.observed[0] == expected[0], ("the FMU's values are not the library's",
                                                  call, _diff(self.observed[0], expected[0]))
         assert self.observed[1] == expected[1], ("the FMU's state is not the library's", call)
@@ -443,10 +502,15 @@ class Example:
     def run(self, call) -> None:
         f, inst, shadow = self.f, self.inst, self.shadow
         m = f.m
+        fmi2 = m.dialect.standard == "2.0"
+        if call[0] == "setup" and not fmi2:  # FMI 3.0: the start time of the next enter
+            self.start = call[1]
+            self.track_initialization(call, OK)
+            return
         f.calls += 1
         print("CALL", repr(call)[:300], file=sys.stderr, flush=True)
         before = self.observed
-        record = Record.decode(before[1], m.variables)
+        record = Record.decode(before[1], m.unit_variables)
         mode, next_t = MODES[record.phase], record.time
         n_log = len(inst.log)
         op = call[0]
@@ -466,22 +530,28 @@ class Example:
             own = set(f.by_kind[kind])
             expect_error = any(vr not in own for vr in vrs) or (
                 kind == "String" and any(_bad_utf8(v) for v in values))
-            face_refusal = bool(f.hidden.intersection(vrs)) or (
+            # refused by the face before the library: the shim's hidden variables, strings
+            # that are not UTF-8, FMI 3.0's time (never settable) and its integer kinds
+            glue = bool(f.glue_vrs.intersection(vrs)) or f.wrong_integer(kind, vrs, values)
+            face_refusal = glue or bool(f.hidden.intersection(vrs)) or (
                 kind == "String" and any(_bad_utf8(v) for v in values))
             status = inst.set(kind, vrs, values)
             if shadow is not None:
-                expected = shadow.set(kind, vrs, values)
+                library = [int(bool(v)) for v in values] if (
+                    kind == "Boolean" and f.bool_booleans) else values
+                expected = ERROR if glue else shadow.set(f.library[kind], vrs, library)
             readback = (kind, vrs, values)
         elif op == "get":
             _, kind, vrs = call
             status, _ = inst.get(kind, vrs)
-            own = set(f.by_kind[kind])
+            own = set(f.by_kind[kind]) | (f.glue_vrs if kind == f.real else set())
             valid = all(vr in own for vr in vrs)
             must_succeed = valid and not any(vr in f.outputs for vr in vrs)
             expect_error = not valid
-            face_refusal = bool(f.hidden.intersection(vrs))
-            if shadow is not None:
-                expected = shadow.get(kind, vrs)[0]
+            glue = f.wrong_integer(kind, vrs)
+            face_refusal = glue or bool(f.hidden.intersection(vrs))
+            if shadow is not None and not f.glue_vrs.intersection(vrs):
+                expected = ERROR if glue else shadow.get(f.library[kind], vrs)[0]
             keeps_pristine = True
         elif op == "inputs":
             values = realistic(f, call[1], next_t)
@@ -506,7 +576,7 @@ class Example:
                 for kind, vrs, values in f.defaults:
                     status = max(status, inst.set(kind, vrs, values))
                     if shadow is not None:
-                        shadow.set(kind, vrs, values)
+                        shadow.set(f.library[kind], vrs, values)
                 assert status == OK, inst.log[n_log:]
         elif op == "step":
             _, t, h = call
@@ -543,14 +613,20 @@ class Example:
                             "reset": False}[op]
             # the default parameters and consistent inputs initialize
             must_succeed = op == "exit" and self.init_progress == 4
-            status = getattr(inst, op)()
-            if shadow is not None:
-                expected = getattr(shadow, op)()
-        elif op == "cancel":
-            status = m.lib.fmi2CancelStep(inst.c)
+            if op == "enter" and not fmi2:  # FMI 3.0: setup and enter in one call
+                status = inst.enter(self.start)
+                if shadow is not None:
+                    expected = shadow.setup(self.start)
+                    expected = shadow.enter() if expected == OK else expected
+            else:
+                status = getattr(inst, op)()
+                if shadow is not None:
+                    expected = getattr(shadow, op)()
+        elif op == "cancel":  # FMI 2.0's fmi2CancelStep, FMI 3.0's fmi3EnterEventMode
+            status = inst.call(m.dialect.not_provided)
             expect_error = keeps_pristine = True
         elif op == "derivative":
-            status = inst.L.fmi2GetDirectionalDerivative(inst.c, None, 0, None, 0, None, None)
+            status = inst.call("GetDirectionalDerivative", *m.dialect.derivative_arguments)
             expect_error = keeps_pristine = True
         elif op == "get_state":
             status = self.get_state(call[1])
@@ -605,6 +681,10 @@ class Example:
             _, on, cats = call
             expect_error = any(c is None or _bad_utf8(c) for c in cats)
             status = inst.logging(on, cats)
+            keeps_pristine = True
+        elif op == "status" and not fmi2:  # FMI 3.0's time: the state's, in every mode
+            status, t = inst.time()
+            assert status == OK and t.hex() == record.time.hex(), (call, t, record.time)
             keeps_pristine = True
         elif op == "status":
             _, which, kind = call
@@ -666,10 +746,11 @@ class Example:
             for vr, v in zip(vrs, values, strict=True):
                 last[vr] = v
             for vr, g in zip(vrs, got, strict=True):
-                assert _same(kind, g, last[vr]), (call, vr, g, last[vr])
+                assert _same(f.library[kind], g, last[vr]), (call, vr, g, last[vr])
 
     def track_initialization(self, call, status: int) -> None:
-        """Progress through setup(0) -> enter -> defaults -> inputs(1.0) -> exit."""
+        """Progress through setup(0) -> enter -> defaults -> inputs(1.0) -> exit (FMI 3.0's
+        setup: the start time of its enter)."""
         steps = {0: ("setup",), 1: ("enter",), 2: ("defaults",), 3: ("inputs",)}
         op = call[0]
         expected_ops = steps.get(self.init_progress)
@@ -728,7 +809,7 @@ def _status_call(inst, which: str, kind: int) -> int:
 def _bad_instantiate(m: Model, how: str):
     root = m.root
     return {
-        "model exchange": lambda: m.instantiate(kind=MODEL_EXCHANGE),
+        "model exchange": lambda: m.instantiate_other("model exchange") or None,
         "latin-1 name": lambda: m.instantiate(name=b"\xdcbersetzung"),
         "blank name": lambda: m.instantiate(name=b" "),
         "wrong guid": lambda: m.instantiate(guid=b"{not-the-guid}"),

@@ -1,7 +1,8 @@
 """Variants of the built FMUs, for the tests: the same FMU with its C compiled with other flags
 (a sanitizer build) or from patched sources (a mutant the tests must catch).
 
-* native FMU: its binary compiled again from the sources the FMU ships (``sources/``);
+* native FMU (FMI 2.0 or 3.0): its x86-64 Linux binary compiled again from the sources the
+  FMU ships (``sources/``);
 * pythonfmu FMU: the model library in ``resources/drive_rattle/`` compiled again from the
   library's sources, and, with ``shim_flags``, the status shim in ``binaries/linux64``.
 
@@ -27,12 +28,14 @@ IEEE = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wex
 SHARED = ("-fPIC", "-shared", "-fvisibility=hidden")
 
 
-def _description(root: Path) -> tuple[str, str, int, bool]:
-    """(model identifier, GUID, number of variables, native?) of an unpacked FMU."""
+def _description(root: Path) -> tuple[str, str, int, bool, str]:
+    """(model identifier, GUID or instantiation token, number of variables, native?, FMI
+    version) of an unpacked FMU."""
     md = ElementTree.parse(root / "modelDescription.xml").getroot()
     cosim = md.find("CoSimulation")
-    return (cosim.get("modelIdentifier"), md.get("guid"), len(md.find("ModelVariables")),
-            cosim.get("needsExecutionTool") == "false")
+    return (cosim.get("modelIdentifier"), md.get("guid") or md.get("instantiationToken"),
+            len(md.find("ModelVariables")), cosim.get("needsExecutionTool") == "false",
+            md.get("fmiVersion"))
 
 
 def apply_patches(folder: Path, patches: Sequence[Patch]) -> None:
@@ -99,19 +102,21 @@ def rebuild(fmu: Path, out_dir: Path, flags: Sequence[str] = (),
         with zipfile.ZipFile(fmu) as z:
             z.extractall(root)
             members = [(info, info.filename) for info in z.infolist()]
-        identifier, guid, n_variables, native = _description(root)
+        identifier, guid, n_variables, native, version = _description(root)
         replaced: dict[str, Path] = {}
         if native:
             sources = root / "sources"
             work = Path(tmp) / "sources"
             shutil.copytree(sources, work)
             apply_patches(work, patches)
-            from drive_rattle_build.native import compile_binary
+            from drive_rattle_build import fmi3
+            from drive_rattle_build import native as fmi2
 
+            build, folder = (fmi3, "x86_64-linux") if version == "3.0" else (fmi2, "linux64")
             # as the build compiles it, the library's objects shared by both models of one
             # variant (platforms.shared_objects: by the patched files' contents and the
             # flags); a patch may leave a warning the shipped sources have not
-            replaced[f"binaries/linux64/{identifier}.so"] = compile_binary(
+            replaced[f"binaries/{folder}/{identifier}.so"] = build.compile_binary(
                 work, Path(tmp) / f"{identifier}.so", "x86_64-linux", "gcc",
                 [*flags, "-Wno-error"])
         else:

@@ -4,9 +4,11 @@ would: any bytes as strings, NULL pointers, wrong tokens and paths, any buffer s
 reused, calls in any order.  fmpy's slaves check and convert too much for that.
 
 What differs between the standards is the model's *dialect* (``FMI2``, ``FMI3``: chosen from
-the modelDescription's fmiVersion): the function names, the C types of each variable type,
-the logger's signature, instantiation's arguments, where the start time is given and where
-the binary lies.  ``Model`` and ``Instance`` are the same for both.
+the modelDescription's fmiVersion): the function names, the C types of each variable type and
+the type that gets and sets each of the model library's (``Model.kind``), the logger's
+signature, instantiation's arguments and the interfaces these FMUs refuse, where the start
+time is given and how the time reached is read, and where the binary lies.  ``Model`` and
+``Instance`` are the same for both.
 
 Every call returns the raw status; the messages the FMU logs are collected per instance
 (``Instance.log``: (status, category, message)), routed by the instance environment pointer.
@@ -18,6 +20,7 @@ FMI 3.0's logMessage has no format.
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import zipfile
 from ctypes import (
@@ -75,6 +78,28 @@ class Dialect:
     spelling: ClassVar[dict] = {}
     #: the arguments every get/set takes after the values (FMI 3.0: nValues)
     counts_values: bool
+    #: the model library's four types -> this standard's name of the type that gets and sets
+    #: them (an Enumeration is FMI 3.0's own: ``library_type``)
+    kinds: ClassVar[dict]
+    #: the name of instantiation's resources argument, in the glue's refusals
+    resources_argument: str
+    #: FMI 3.0 lets an importer with no resources folder pass NULL; FMI 2.0 does not
+    null_resources_accepted: bool
+    #: what the glue's refusal of a debug-logging category that is not UTF-8 says
+    bad_category: str
+    #: the time reached, before the first step: refused (FMI 2.0's fmi2LastSuccessfulTime
+    #: needs a step) or the start time (FMI 3.0's variable time)
+    time_before_first_step_refused: bool
+    #: a function (FMI 3.0's name without the prefix) every co-simulation FMU exports and
+    #: these FMUs refuse, with the arguments of a call that asks for nothing
+    not_provided: str
+    derivative_arguments: ClassVar[tuple]
+
+    def library_type(self, kind: str) -> str:
+        """The model library's type ("Real", "Integer", "Boolean", "String") of a variable of
+        this standard's type ``kind``."""
+        return next(t for t, k in self.kinds.items() if k == kind) \
+            if kind in self.kinds.values() else "Integer"  # an FMI 3.0 Enumeration
 
     def name(self, function: str) -> str:
         return self.prefix + self.spelling.get(function, function)
@@ -115,6 +140,14 @@ class Fmi2(Dialect):
                                 "SerializeFMUState": "SerializeFMUstate",
                                 "DeserializeFMUState": "DeSerializeFMUstate"}
     counts_values = False
+    kinds: ClassVar[dict] = {"Real": "Real", "Integer": "Integer", "Boolean": "Boolean",
+                             "String": "String"}
+    resources_argument = "fmuResourceLocation"
+    null_resources_accepted = False
+    bad_category = "not valid UTF-8"
+    time_before_first_step_refused = True
+    not_provided = "CancelStep"  # no asynchronous steps
+    derivative_arguments = (None, 0, None, 0, None, None)
 
     def signatures(self) -> dict:
         comp, vrs, st = c_void_p, POINTER(c_uint), c_int
@@ -157,6 +190,12 @@ class Fmi2(Dialect):
                                       int(logging_on))
         return c, callbacks
 
+    def instantiate_other(self, model, interface, name):
+        kind = {"model exchange": MODEL_EXCHANGE, "other": 7}[interface]
+        callbacks = Callbacks(model._logger, None, None, None, 0)
+        return model.lib.fmi2Instantiate(name, kind, model.token.encode(),
+                                         model.resources_uri(), ctypes.byref(callbacks), 0, 0)
+
     def enter(self, inst, start, stop):
         assert start is None and stop is None, "FMI 2.0 takes the start time in setup()"
         return inst.L.fmi2EnterInitializationMode(inst.c)
@@ -180,6 +219,15 @@ class Fmi3(Dialect):
                              "Enumeration": (c_int64, "Int64"), "Boolean": (c_bool, "Boolean"),
                              "String": (c_char_p, "String")}
     counts_values = True
+    kinds: ClassVar[dict] = {"Real": "Float64", "Integer": "Int32", "Boolean": "Boolean",
+                             "String": "String"}
+    resources_argument = "resourcePath"
+    null_resources_accepted = True
+    # its categories are a fixed list of ASCII names: a byte string that is not UTF-8 is none
+    bad_category = "is not one of this FMU's"
+    time_before_first_step_refused = False
+    not_provided = "EnterEventMode"  # hasEventMode = false
+    derivative_arguments = (None, 0, None, 0, None, 0, None, 0)
 
     def signatures(self) -> dict:
         inst, vrs, st = c_void_p, POINTER(c_uint), c_int
@@ -227,6 +275,16 @@ class Fmi3(Dialect):
             req if required else None, len(required or []), env,
             model._logger if log else LOG(), None)
         return c, None
+
+    def instantiate_other(self, model, interface, name):
+        token, path = model.token.encode(), model.resources_path()
+        if interface == "model exchange":
+            return model.lib.fmi3InstantiateModelExchange(name, token, path, False, False, None,
+                                                          model._logger)
+        f = model.lib.fmi3InstantiateScheduledExecution
+        f.restype = c_void_p
+        return f(c_char_p(name), c_char_p(token), c_char_p(path), c_bool(False), c_bool(False),
+                 None, model._logger, None, None, None)
 
     def enter(self, inst, start, stop):
         return inst.L.fmi3EnterInitializationMode(inst.c, False, 0.0, start or 0.0,
@@ -284,10 +342,10 @@ class Model:
             kind, start = d.variable(sv)
             self.variables[sv.get("name")] = (int(sv.get("valueReference")), kind,
                                               sv.get("causality"))
-            if start is not None and d is FMI2:
+            if start is not None and sv.get("causality") != "independent":
                 self.starts[sv.get("name")] = {
                     "Real": float, "Integer": int, "Boolean": lambda x: int(x == "true"),
-                    "String": str.encode}[kind](start)
+                    "String": str.encode}[d.library_type(kind)](start)
         self.lib = ctypes.CDLL(str(self.root / "binaries" / d.platform / f"{self.identifier}.so"))
         for name, (restype, argtypes) in d.signatures().items():
             f = getattr(self.lib, d.name(name))
@@ -317,6 +375,26 @@ class Model:
     def vr(self, name: str) -> int:
         return self.variables[name][0]
 
+    @functools.cached_property
+    def unit_variables(self) -> dict:
+        """The unit's variables as the model library types them: name -> (vr, "Real" |
+        "Integer" | "Boolean" | "String", causality), without FMI 3.0's independent variable
+        (the glue's, not the library's; ``records.Record`` and the shadow read these)."""
+        return {n: (vr, self.dialect.library_type(k), c)
+                for n, (vr, k, c) in self.variables.items() if c != "independent"}
+
+    def kind(self, library_type: str) -> str:
+        """This standard's name of the type that gets and sets the library's ``library_type``
+        ("Real" -> "Float64" in FMI 3.0)."""
+        return self.dialect.kinds[library_type]
+
+    def instantiate_other(self, interface: str, name: bytes = b"inst"):
+        """Instantiation as ``interface`` ("model exchange"; "other": FMI 2.0's fmi2Type 7,
+        FMI 3.0's Scheduled Execution), which these co-simulation FMUs refuse: the returned
+        pointer (NULL expected), the messages in ``pending_log``."""
+        self.pending_log = []
+        return self.dialect.instantiate_other(self, interface, name)
+
     def names(self, kind: str | None = None, causality: str | None = None) -> list[str]:
         return [n for n, (_, k, c) in self.variables.items()
                 if (kind is None or k == kind) and (causality is None or c == causality)]
@@ -327,7 +405,7 @@ class Model:
 
     def resources_path(self) -> bytes:
         """The resources folder as FMI 3.0 gives it: a path with its trailing separator."""
-        return str(self.root / "resources").encode() + b"/"
+        return os.fsencode(self.root / "resources") + b"/"
 
     def instantiate(self, name: bytes | None = b"inst", token: bytes | None = None,
                     resources: bytes | None = None, logging_on: bool = False,

@@ -1,6 +1,6 @@
 """The boundary rows and the boundary fuzzer (tests/adversarial) against sanitizer builds of
-both flavours: the native FMUs' binaries and the pythonfmu FMUs' model library and
-status shim compiled with AddressSanitizer and UndefinedBehaviorSanitizer
+every face: the native FMI 2.0 and FMI 3.0 FMUs' binaries and the pythonfmu FMUs' model
+library and status shim compiled with AddressSanitizer and UndefinedBehaviorSanitizer
 (-fno-sanitize-recover=all), driven by a Python host with the runtime preloaded
 (sanitized_child.py).  Any memory error or undefined behaviour, and any leak of memory the
 project's C allocated (checked after the host freed its instances), fails the test.  The
@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..adversarial.variants import rebuild
+from ..faces.conftest import FACES
 from ..seeds import fuzz_seed
 from .sanitizers import ASAN_FLAGS, python_environment, python_reports
 
@@ -31,18 +32,18 @@ FUZZ_EXAMPLES = 60
 MODELS = ("GearMeshRattle", "Driveline")
 
 
-@pytest.fixture(scope="module", params=("pythonfmu", "native"))
+@pytest.fixture(scope="module", params=list(FACES))
 def sanitized(request, tmp_path_factory) -> dict:
-    """{model: FMU} of one flavour, its C compiled with the sanitizers; "library": the
+    """{model: FMU} of one face, its C compiled with the sanitizers; "library": the
     sanitized model library (the pythonfmu FMUs ship it; the fuzzer's shadow loads it)."""
     flavour = request.param
-    built = request.getfixturevalue("fmus" if flavour == "pythonfmu" else "native_fmus")
+    built = request.getfixturevalue(FACES[flavour].fixture)
     out = tmp_path_factory.mktemp(f"sanitized_{flavour}")
     fmus = {model: rebuild(built[model], out, ASAN_FLAGS,
                            shim_flags=ASAN_FLAGS if flavour == "pythonfmu" else None)
             for model in MODELS}
     library = out / "rattle_model.so"
-    if not library.is_file():  # the native flavour: the library alone, for the shadow
+    if not library.is_file():  # the native faces: the library alone, for the shadow
         from ..adversarial.variants import model_library
 
         model_library(library, ASAN_FLAGS)
