@@ -15,14 +15,29 @@ from drive_rattle import DrivelineParameters, ModelError
     ("0,1\n1,x\n", "row 2: expected two numbers"),
     ("0,1\n1,nan\n", "row 2: speed 'nan' reads as nan; allowed: finite numbers"),
 ])
-def test_bad_speed_tables_are_refused_naming_the_table_and_row(tmp_path, content, fragment):
-    f = tmp_path / "bad.csv"
-    f.write_text(content)
+def test_bad_speed_tables_are_refused_naming_the_table_and_row(tmp_path, monkeypatch, content,
+                                                               fragment):
+    # A relative path: the message quotes at most 80 bytes of it, and pytest's own folder
+    # for tmp_path is of any length (test_a_long_path_is_quoted_to_80_bytes covers longer).
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "bad.csv").write_text(content)
     with pytest.raises(ModelError) as err:
-        DrivelineParameters(speed_table=str(f))
-    assert fragment in str(err.value) and str(f) in str(err.value)
+        DrivelineParameters(speed_table="bad.csv")
+    assert fragment in str(err.value) and "speed table 'bad.csv'" in str(err.value)
 
 
-def test_a_missing_speed_table_names_the_parameter(tmp_path):
-    with pytest.raises(ModelError, match=r"'engine\.speed_table' = .*nope\.csv.* cannot be read"):
-        DrivelineParameters(speed_table=str(tmp_path / "nope.csv"))
+def test_a_missing_speed_table_names_the_parameter(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelError, match=r"'engine\.speed_table' = 'nope\.csv' cannot be read: "
+                                         r"no such file or directory; allowed: a readable regular "
+                                         r"file of at most \d+ bytes"):
+        DrivelineParameters(speed_table="nope.csv")
+
+
+def test_a_long_path_is_quoted_to_80_bytes_and_its_length(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = "d" * 100 + "/nope.csv"
+    with pytest.raises(ModelError) as err:
+        DrivelineParameters(speed_table=path)
+    assert f"'engine.speed_table' = '{path[:80]}'... ({len(path)} bytes) cannot be read" \
+        in str(err.value)
