@@ -14,7 +14,9 @@ Every test carries the marker of its layer, from its folder (registered in pypro
   UndefinedBehaviorSanitizer;
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
 
-``slow`` (tests that take more than about 10 s) is set on the tests themselves.
+``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
+2-core machine running the suite on both cores (``--durations`` of the README's command), so
+that ``-m "not slow"`` is a loop of about two minutes.
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
@@ -28,6 +30,7 @@ import json
 import os
 import pkgutil
 import shutil
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -141,14 +144,19 @@ def pytest_collection_modifyitems(config, items):
 def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
     """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built and validated
     once for this run, all in one process: the native FMI 2.0 and FMI 3.0 builds then compile
-    the model library once per platform between them (``platforms.shared_objects``)."""
+    the model library once per platform between them (``platforms.shared_objects``), while a
+    thread builds the pythonfmu face (mostly Python, its validation and its shim's compile: it
+    fills the core the C builds leave idle; each face writes its own folder)."""
     def make(out: Path) -> dict:
         from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
         from drive_rattle_build.native import NATIVE_SUBDIR, build_native
 
-        return {"pythonfmu": [str(p) for p in build(out)],
-                "native": [str(p) for p in build_native(out / NATIVE_SUBDIR)],
-                "fmi3": [str(p) for p in build_fmi3(out / FMI3_SUBDIR)]}
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            python = pool.submit(build, out)
+            native = build_native(out / NATIVE_SUBDIR)
+            fmi3 = build_fmi3(out / FMI3_SUBDIR)
+            return {"pythonfmu": [str(p) for p in python.result()],
+                    "native": [str(p) for p in native], "fmi3": [str(p) for p in fmi3]}
 
     made = made_once(tmp_path_factory, "dist", make)
     return {face: {Path(p).stem: Path(p) for p in paths} for face, paths in made.items()}

@@ -23,6 +23,7 @@ def load(name):
     return mod
 
 
+@pytest.mark.slow
 def test_paper_scenario_example(tmp_path, fmus):
     mod = load("paper_scenario")
     result = mod.run(stop_time=0.5, transient=0.1, window=0.2, out_dir=tmp_path,
@@ -155,6 +156,7 @@ def test_fig5_names_the_strongest_detected_lines_only():
     assert mod.named_lines([], 4) == []
 
 
+@pytest.mark.slow
 def test_rattle_maps_example(tmp_path):
     """The maps on the library engine (the default; engine 'fmu' is the same numbers bit for
     bit, tests/cosim/test_sweep.py), every cell from two starts."""

@@ -4,6 +4,8 @@ import os
 import re
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 
@@ -55,6 +57,7 @@ BUILT = ("*.so", "*.so.id", "*.dll", "__pycache__", "*.egg-info", ".venv", "dist
          ".git", ".hypothesis", ".pytest_cache", ".ruff_cache")
 
 
+@pytest.mark.slow
 def test_the_main_command_runs_in_a_clone_with_no_model_library(fmus, tmp_path):
     """The README's main command on a fresh clone: no model library has been built yet (the
     tests' own session built one next to this checkout's sources, which hid that the scenario

@@ -9,6 +9,7 @@ build.
 
 from __future__ import annotations
 
+import functools
 import math
 import struct
 import sys
@@ -82,6 +83,7 @@ def _png(width: int, height: int, rows: list[bytes]) -> bytes:
             + chunk(b"IEND", b""))
 
 
+@functools.cache  # the same bytes every time; drawing them takes about 1 s of pure Python
 def model_png() -> bytes:
     """The icon as PNG bytes (RGBA, transparent outside the gears)."""
     gears = _gears()
@@ -109,6 +111,7 @@ def model_png() -> bytes:
     return _png(SIZE, SIZE, rows)
 
 
+@functools.cache
 def flange_png() -> bytes:
     """A terminal's image as PNG bytes (RGBA): the flange's disc, transparent around it."""
     n, radius = SUPERSAMPLE, FLANGE_SIZE / 2

@@ -47,6 +47,7 @@ def test_instantiate_free_cycles_keep_no_memory(fmus, name):
     assert slope <= MAX_KIB_PER_CYCLE, (name, slope, report["rss_kib"][::10])
 
 
+@pytest.mark.slow
 def test_many_live_instances_keep_little_once_freed(fmus):
     """Rounds of 300 live instances, all freed after each: memory freed in one round serves
     the next.  Beyond the first round, fresh instantiations (the idle instances serve only a

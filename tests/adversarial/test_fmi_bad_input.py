@@ -38,6 +38,7 @@ def battery(request):
 
 
 @pytest.mark.parametrize("model", MODELS)
+@pytest.mark.slow
 def test_both_flavours_answer_every_case_alike(request, model):
     """The native FMUs give every case of the battery the pythonfmu FMUs' status, message and
     outcome (state kept, continuation, limits accepted or refused)."""
@@ -48,6 +49,7 @@ def test_both_flavours_answer_every_case_alike(request, model):
         assert n == p
 
 
+@pytest.mark.slow
 def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):
     _, results = battery
     calls = [r for r in results
@@ -65,6 +67,7 @@ def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):
         assert f"input '{name}' = {value}" in r["message"], r
 
 
+@pytest.mark.slow
 def test_every_parameter_at_and_beyond_its_limits(battery):
     _, results = battery
     params = [r for r in results if "parameter" in r]

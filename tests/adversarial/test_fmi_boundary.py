@@ -98,6 +98,7 @@ def _text(out) -> str:
 
 
 @pytest.mark.parametrize("row", list(ROWS), ids=[f"row{k}-{v}" for k, v in ROWS.items()])
+@pytest.mark.slow
 def test_boundary_row(row, face, face_fmus, rows_run, tmp_path):
     """The row's line from the child that ran every row of the face; without one (that child
     crashed or hung first) the row alone in a child of its own, so that a crash is its row's."""

@@ -94,6 +94,7 @@ def test_the_library_refuses_broken_records_with_a_reason(library_results):
 
 
 @pytest.mark.parametrize("reader", ["pythonfmu", "native"])
+@pytest.mark.slow
 def test_both_flavours_read_the_corpus_as_the_library_does(reader, corpus, library_results,
                                                            request, tmp_path):
     fmus = request.getfixturevalue("fmus" if reader == "pythonfmu" else "native_fmus")

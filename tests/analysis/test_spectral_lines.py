@@ -367,6 +367,7 @@ def test_noise_gives_no_line_and_no_subharmonic():
     ("mesh", syn.MESH_TRAIN, syn.MESH_TRAIN_2T, syn.F_MESH),
     ("engine cycle", syn.CYCLE_TRAIN, syn.CYCLE_TRAIN_2T, syn.F_FORCING),
 ])
+@pytest.mark.slow
 def test_subharmonic_flag_tells_period_2t_from_t(label, train, train_2t, f0):
     """Measured (500 windows): mesh train 1.4 % vs 97.6 %; engine-cycle pattern 0.2 % vs
     100 %.  The 2T changes are small against the scatter of single impacts (mesh: +-20 %

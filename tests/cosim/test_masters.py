@@ -119,6 +119,7 @@ def test_shipped_ssp_binds_every_parameter_and_consistent_input_starts(system_ss
 
 
 # ------------------------------------------------------------------ masters
+@pytest.mark.slow
 def test_libcosim_runs_the_shipped_system(fmus, system_ssp):
     """libcosim (native C++, OSP): exchanges during initialization, integer-nanosecond grid;
     records from the first point after the start."""
@@ -137,6 +138,7 @@ def test_ecos_runs_the_shipped_system(fmus, system_ssp):
     assert "[warning]" not in printed, printed
 
 
+@pytest.mark.slow
 def test_fmpy_ssp_runner_with_its_first_step_worked_around(fmus, system_ssp):
     """fmpy.ssp feeds 0 to every input at the first step; with the workaround (the first step
     keeps the start values) it computes the harness's run on its accumulated time."""
@@ -173,6 +175,7 @@ def test_gemseo_fmu_time_stepping_system(fmus, gemseo_run):
     assert_identical(result, harness(fmus, MASTER_GRIDS["gemseo"]), first=1)
 
 
+@pytest.mark.slow
 def test_cofmupy_with_its_workarounds(fmus):
     """cofmupy (in an environment of its own: it pins an old fmpy): Jacobi on accumulated
     time, no exchange during initialization; with only the Real outputs read and every
@@ -187,6 +190,7 @@ def test_cofmupy_with_its_workarounds(fmus):
     ({"workarounds": False, "outputs": "real"}, "the flanks would penetrate"),
     ({"fixed_point": True}, "setupExperiment is not allowed in mode 'stepping'"),
 ])
+@pytest.mark.slow
 def test_cofmupy_without_them_fails_with_the_units_reason(fmus, variant, message):
     """Its three defects for these FMUs, as docs/tools.md describes them: Integer outputs
     read as Real; zeros written to every input before initialization (then the units settle
@@ -232,6 +236,7 @@ def gauss_seidel(parameters: dict, steps: int, step: float) -> dict:
 
 
 @pytest.mark.parametrize("face", ["native_fmus", "fmi3_fmus"])
+@pytest.mark.slow
 def test_pathsim_fmi_runs_the_real_outputs_copies(face, request, tmp_path):
     """pathsim-fmi (reads every output as a float) on the ``real-outputs`` copies of the native
     FMI 2.0 and of the FMI 3.0 FMUs, with parameters and an integer code set as its start
@@ -273,6 +278,7 @@ def fmpy_default_step(stop: float) -> float:
     return step
 
 
+@pytest.mark.slow
 def test_mesh_alone_under_fmpy_defaults_is_loaded_drive_at_a_constant_pinion_speed(fmus, tmp_path):
     """`fmpy simulate GearMeshRattle.fmu --stop-time 10`: fmpy takes a 12.8 ms step and sets no
     input; the pinion runs at its held start speed and the run is that of the core stepped

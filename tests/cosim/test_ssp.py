@@ -322,6 +322,7 @@ def test_the_integer_codes_copy_of_an_ssp_applies_every_edit(master, fmus, edite
     assert "[warning]" not in printed, printed
 
 
+@pytest.mark.slow
 def test_gemseo_sets_the_parameters_once(fmus):
     """gemseo-fmu runs the FMUs: the parameters as inputs of the disciplines, set once before
     initialization (it would set them before every step, which the units refuse), and the

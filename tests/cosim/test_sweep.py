@@ -215,6 +215,7 @@ def test_a_lock_file_removed_while_it_is_taken_is_opened_again(tmp_path, monkeyp
         writer.close()
 
 
+@pytest.mark.slow
 def test_sweep_on_two_workers_records_failures_and_resumes(tmp_path):
     bad = Case.of({"GearMeshRattle.gear.backlash": -1.0, "Driveline.vehicle.drag": 0.2})
     cases = [*grid_design(RANGES, 2), bad]

@@ -112,6 +112,7 @@ def listed_sources(face, fmu: Path, root: Path) -> list[Path]:
 
 
 @pytest.mark.parametrize("model", MODELS)
+@pytest.mark.slow
 def test_sources_alone_compile_into_a_working_fmu(native_face, linux_host, face_fmus, model,
                                                   tmp_path):
     """The FMU's sources/ compile alone, warning-free, into a binary that gives the shipped

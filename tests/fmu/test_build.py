@@ -66,6 +66,7 @@ def test_model_description_matches_committed_template(fmus, name):
         "interface changed: run `python build_fmu.py --update-templates` and review the diff")
 
 
+@pytest.mark.slow
 def test_build_refuses_an_interface_that_differs_from_its_template(tmp_path, monkeypatch):
     fake = tmp_path / "templates"
     fake.mkdir()
@@ -156,6 +157,7 @@ def test_the_cli_builds_the_library_in_place():
     assert (SOURCE / "drive_rattle" / "rattle_model.so").is_file()
 
 
+@pytest.mark.slow
 def test_a_state_saved_by_one_build_restores_in_another_of_the_same_sources(fmus, tmp_path):
     """The GUID comes from the sources: it was once random per build, and a state saved by one
     build could not be restored by another build of the same sources."""

@@ -30,6 +30,7 @@ def build_without_gcc(out: Path, hide_ziglang: bool = False, **env) -> subproces
                                             "PATH": str(empty), **env})
 
 
+@pytest.mark.slow
 def test_without_gcc_the_build_uses_ziglang_and_runs_the_same(fmus, tmp_path):
     pytest.importorskip("ziglang")
     out = tmp_path / "dist"
@@ -91,6 +92,7 @@ def test_the_link_gets_the_flags_of_the_link_and_the_compile_the_others():
         assert at_link(flag), flag
 
 
+@pytest.mark.slow
 def test_the_model_library_is_compiled_once_per_platform_and_content(tmp_path):
     """``shared_objects`` gives the same objects for the same files, headers and flags, from
     any folder; a changed header or flag compiles them again."""

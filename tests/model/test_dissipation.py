@@ -77,6 +77,7 @@ laws = st.fixed_dictionaries({
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(changes=laws, flank=st.sampled_from([DRIVE, COAST]), phi_p=st.floats(-3.0, 3.0),
        log_v=st.floats(math.log(1e-5), math.log(1.0)))
+@pytest.mark.slow
 def test_the_squeeze_law_equals_the_oracle(changes, flank, phi_p, log_v):
     p = MeshParameters(**SQUEEZE, **changes)
     v = math.exp(log_v)
@@ -166,6 +167,7 @@ def test_single_impacts_realize_the_squeeze_law(flank):
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
 @given(changes=laws, log_v=st.floats(math.log(1e-4), math.log(0.3)),
        flank=st.sampled_from([DRIVE, COAST]))
+@pytest.mark.slow
 def test_any_legal_squeeze_law_is_realized_by_its_impacts(changes, log_v, flank):
     v = math.exp(log_v)
     try:

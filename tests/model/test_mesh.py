@@ -68,6 +68,7 @@ states = st.tuples(st.sampled_from([DRIVE, COAST]), st.floats(-50.0, 50.0),
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(changes=parameters, samples=st.lists(states, min_size=20, max_size=20))
+@pytest.mark.slow
 def test_mesh_loads_equal_the_oracle_at_random_states(changes, samples):
     try:
         p = MeshParameters(**changes)

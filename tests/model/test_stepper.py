@@ -480,6 +480,7 @@ impacts = st.fixed_dictionaries({
 @settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
 @given(changes=impacts, log_v=st.floats(math.log(1e-4), math.log(1.0)),
        flank=st.sampled_from([DRIVE, COAST]))
+@pytest.mark.slow
 def test_no_impact_creates_energy_or_penetrates_beyond_its_energy(changes, log_v, flank):
     # The pinion is held still, so friction can only dissipate: the rebound never exceeds
     # the approach (nor, with Hunt-Crossley dissipation, its closed form), and the peak
@@ -859,6 +860,7 @@ def test_starts_reach_one_attractor_at_the_default_load():
     assert point.attractors[0].mean["drive_rate"] > 10.0
 
 
+@pytest.mark.slow
 def test_above_the_separation_load_no_start_rattles():
     # At 1.2 M* every start ends loaded on the drive flank without rattle (at most one touch
     # below 1 mm/s per forcing period, no coast impact).  The loaded states need not be one:
