@@ -144,19 +144,21 @@ def pytest_collection_modifyitems(config, items):
 def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
     """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built and validated
     once for this run, all in one process: the native FMI 2.0 and FMI 3.0 builds then compile
-    the model library once per platform between them (``platforms.shared_objects``), while a
-    thread builds the pythonfmu face (mostly Python, its validation and its shim's compile: it
-    fills the core the C builds leave idle; each face writes its own folder)."""
+    the model library once per platform between them (``platforms.shared_objects``, under its
+    lock).  Each face is built in a thread of its own, into a folder of its own: much of a
+    build is Python (validation, packing) or one compiler at a time, which alone leaves a core
+    idle."""
     def make(out: Path) -> dict:
         from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
         from drive_rattle_build.native import NATIVE_SUBDIR, build_native
 
-        with ThreadPoolExecutor(max_workers=1) as pool:
+        with ThreadPoolExecutor(max_workers=2) as pool:
             python = pool.submit(build, out)
+            fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR)
             native = build_native(out / NATIVE_SUBDIR)
-            fmi3 = build_fmi3(out / FMI3_SUBDIR)
             return {"pythonfmu": [str(p) for p in python.result()],
-                    "native": [str(p) for p in native], "fmi3": [str(p) for p in fmi3]}
+                    "native": [str(p) for p in native],
+                    "fmi3": [str(p) for p in fmi3.result()]}
 
     made = made_once(tmp_path_factory, "dist", make)
     return {face: {Path(p).stem: Path(p) for p in paths} for face, paths in made.items()}

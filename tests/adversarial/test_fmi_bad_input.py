@@ -10,6 +10,9 @@ from pathlib import Path
 
 import pytest
 
+#: The battery takes 5-11 s per FMU: the whole file is in the slow layer.
+pytestmark = pytest.mark.slow
+
 BATTERY = Path(__file__).with_name("fmi_battery.py")
 ERROR = 3
 
@@ -38,7 +41,6 @@ def battery(request):
 
 
 @pytest.mark.parametrize("model", MODELS)
-@pytest.mark.slow
 def test_both_flavours_answer_every_case_alike(request, model):
     """The native FMUs give every case of the battery the pythonfmu FMUs' status, message and
     outcome (state kept, continuation, limits accepted or refused)."""
@@ -49,7 +51,6 @@ def test_both_flavours_answer_every_case_alike(request, model):
         assert n == p
 
 
-@pytest.mark.slow
 def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):
     _, results = battery
     calls = [r for r in results
@@ -67,7 +68,6 @@ def test_every_bad_call_is_refused_with_a_message_and_changes_nothing(battery):
         assert f"input '{name}' = {value}" in r["message"], r
 
 
-@pytest.mark.slow
 def test_every_parameter_at_and_beyond_its_limits(battery):
     _, results = battery
     params = [r for r in results if "parameter" in r]
