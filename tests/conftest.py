@@ -113,8 +113,13 @@ def pytest_collection_finish(session):
 
 #: Seconds each of the longest files took in a full run on two workers (--junitxml, summed
 #: over the file's tests, builds counted where they fall), 2026-12-02: the run's schedule.
+#: test_wheel.py: 57 s alone since it installs with uv (15 s of setup instead of 95 s).  The
+#: two longest then start the run, and neither links a Windows binary in its first minutes:
+#: on a new machine zig builds its x86_64-windows C runtime on the first such link (about
+#: two minutes of CPU; CI's warm-up does it meanwhile), and a test that links one waits on
+#: zig's cache lock until it is built.
 LONG_FILES = {
-    "test_wheel.py": 161, "cosim/test_model_doc.py": 150, "analysis/test_multistability.py": 124,
+    "cosim/test_model_doc.py": 150, "analysis/test_multistability.py": 124, "test_wheel.py": 57,
     "adversarial/test_fmi_boundary.py": 97, "adversarial/test_endurance.py": 90,
     "sanitize/test_boundary_sanitized.py": 87, "cosim/test_cluster.py": 86,
     "adversarial/test_mutants.py": 74, "cosim/test_tools_doc.py": 64, "test_examples.py": 46,
