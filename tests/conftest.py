@@ -113,11 +113,10 @@ def pytest_collection_finish(session):
 
 #: Seconds each of the longest files took in a full run on two workers (--junitxml, summed
 #: over the file's tests, builds counted where they fall), 2026-12-02: the run's schedule.
-#: test_wheel.py: 57 s alone since it installs with uv (15 s of setup instead of 95 s).  The
-#: two longest then start the run, and neither links a Windows binary in its first minutes:
-#: on a new machine zig builds its x86_64-windows C runtime on the first such link (about
-#: two minutes of CPU; CI's warm-up does it meanwhile), and a test that links one waits on
-#: zig's cache lock until it is built.
+#: test_wheel.py: 57 s alone since it installs with uv (15 s of setup instead of 95 s).  On a
+#: new machine the first test that links a Windows binary waits on zig's cache lock while
+#: zig builds its x86_64-windows C runtime (CI's warm-up starts it before the tests); which
+#: test that is depends on this order, the wait does not.
 LONG_FILES = {
     "cosim/test_model_doc.py": 150, "analysis/test_multistability.py": 124, "test_wheel.py": 57,
     "adversarial/test_fmi_boundary.py": 97, "adversarial/test_endurance.py": 90,
