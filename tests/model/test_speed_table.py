@@ -18,7 +18,7 @@ from drive_rattle import DrivelineParameters, ModelError
 def test_bad_speed_tables_are_refused_naming_the_table_and_row(tmp_path, monkeypatch, content,
                                                                fragment):
     # A relative path: the message quotes at most 80 bytes of it, and pytest's own folder
-    # for tmp_path is of any length (test_a_long_path_is_quoted_to_80_bytes covers longer).
+    # for tmp_path is of any length (test_a_long_path_is_quoted_to_80_bytes_and_its_length: longer).
     monkeypatch.chdir(tmp_path)
     (tmp_path / "bad.csv").write_text(content)
     with pytest.raises(ModelError) as err:
