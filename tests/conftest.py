@@ -16,7 +16,7 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
-that ``-m "not slow"`` is a loop of about two minutes.
+that ``-m "not slow"`` is a loop of minutes (155 s on such a machine on 2026-12-02).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
