@@ -5,11 +5,11 @@ the text of one block of ``model_doc.BLOCKS`` or ``model_doc.ANALYSIS_BLOCKS``.
 
 The runs are the model library's compiled loop (the FMUs' numbers bit for bit), deterministic:
 the same text on every machine with the same library.  Section 6.2's grid of the compliant
-teeth with 24 phases (minutes of runs) is rendered from the data committed in
-docs/data/multistability_grid.json, which ``python -m drive_rattle_cosim.model_doc
---measure-grid`` measures again (``measure_grid``; ``--grid-from`` reduces it from the JSON of
-the study's command, ``write_grid``); the slow tests/analysis/test_multistability.py measures
-two of its points again against it.
+teeth with 24 phases (minutes of runs), and section 6.1's table of its rows at the default
+backlash, are rendered from the data committed in docs/data/multistability_grid.json, which
+``python -m drive_rattle_cosim.model_doc --measure-grid`` measures again (``measure_grid``;
+``--grid-from`` reduces it from the JSON of the study's command, ``write_grid``); the slow
+tests/analysis/test_multistability.py measures two of its points again against it.
 """
 
 from __future__ import annotations
@@ -276,55 +276,56 @@ def band_findings(horizon: dict | None = None) -> str:
 
 # --- section 6.1: the paper's setup over the load -----------------------------------------
 
-#: The loads of section 6.1's table [M*] and its backlash [m].
-LOADS = (0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+#: The backlash of section 6.1's table [m]: the default's, the first of the grid's (section
+#: 6.2), whose rows at it the table shows.
 LOAD_BACKLASH = 1e-4
 
 
-@lru_cache(maxsize=1)
-def _load_study():
-    from . import multistability
-
-    return multistability.study(LOADS, [LOAD_BACKLASH], workers=2)
-
-
-def separation_loads() -> str:
-    """The multistability study's attractors over the load at the default backlash (the
-    command of section 6.1, one backlash), a row per attractor, and what they show."""
-    points = _load_study()
+def separation_loads(data: dict | None = None) -> str:
+    """The attractors of the committed grid (GRID_DATA, section 6.2) over the load at the
+    default backlash, a row per attractor with its onset statistics, and what they show.  The
+    grid runs these loads from every start of the table's study and more (the phase starts),
+    so the table is read from its data rather than run a second time."""
+    data = data or grid_data()
+    points = [p for p in data["points"] if p["backlash"] == LOAD_BACKLASH]
+    if not points:
+        raise ValueError(f"the grid's data has no point at backlash {LOAD_BACKLASH:g} m; "
+                         f"allowed: the backlashes of `{GRID_COMMAND}`")
     rows = ["| load | verdict | starts | drive / coast onsets [1/s] | drive onset speed p10 / "
             "p50 / p90 [mm/s] | impact energy rate [mW] | δmax [µm] | pairs loaded |",
             "|---|---|---|---|---|---|---|---|"]
     for p in points:
-        for a in p.attractors:
-            m = a.mean
+        n = sum(len(a["starts"]) for a in p["attractors"]) + len(p["unsettled"])
+        for a in p["attractors"]:
+            m = a["mean"]
             rows.append(
-                f"| {p.load_fraction:g} M* ({p.load:.4g} N·m) | {p.verdict} | "
-                f"{len(a.starts)} of {len(p.runs)} | {m['drive_rate']:.3g} / "
+                f"| {p['load_fraction']:g} M* ({p['load']:.4g} N·m) | {p['verdict']} | "
+                f"{len(a['starts'])} of {n} | {m['drive_rate']:.3g} / "
                 f"{m['coast_rate']:.3g} | {m['drive_p10'] * 1e3:.2g} / "
                 f"{m['drive_p50'] * 1e3:.3g} / {m['drive_p90'] * 1e3:.3g} | "
                 f"{m['energy_rate'] * 1e3:.3g} | {m['delta_max'] * 1e6:.3g} | "
                 f"{m['pairs']:.3g} |")
-        if p.unsettled:
-            rows.append(f"| {p.load_fraction:g} M* | unsettled: {', '.join(p.unsettled)} "
-                        "| | | | | | |")
-    both = [p.load_fraction for p in points
-            if all(a.mean["coast_rate"] > 0 for a in p.attractors)]
-    drive_only = [p.load_fraction for p in points
-                  if all(a.mean["coast_rate"] == 0 for a in p.attractors)]
+        for u in p["unsettled"]:
+            rows.append(f"| {p['load_fraction']:g} M* | unsettled: {u['start']} after "
+                        f"{u['seconds']:.3g} s | | | | | | |")
+    both = [p["load_fraction"] for p in points
+            if all(a["mean"]["coast_rate"] > 0 for a in p["attractors"])]
+    drive_only = [p["load_fraction"] for p in points
+                  if all(a["mean"]["coast_rate"] == 0 for a in p["attractors"])]
     top = points[-1]
-    p90 = max(a.mean["drive_p90"] for a in top.attractors) * 1e3
-    multi = [f"{p.load_fraction:g} M*" for p in points if p.verdict == "multistable"]
-    text = ("\n" + "\n".join(rows) + "\n\n"
-            f"(`python -m drive_rattle_cosim.multistability --loads "
-            f"{','.join(f'{x:g}' for x in LOADS)} --backlash {LOAD_BACKLASH:g}`.) Impacts on "
+    p90 = max(a["mean"]["drive_p90"] for a in top["attractors"]) * 1e3
+    multi = [f"{p['load_fraction']:g} M*" for p in points if p["verdict"] == "multistable"]
+    return ("\n" + "\n".join(rows) + "\n\n"
+            f"(The rows at {LOAD_BACKLASH * 1e3:g} mm of `{data['command']}`, measured on "
+            f"{data['measured']} at commit {data['commit']}: "
+            f"`{GRID_DATA.relative_to(DOCS.parent)}`, rendered by "
+            "`doc_runs.separation_loads`.) Impacts on "
             f"both flanks (creep rattle) at {', '.join(f'{x:g}' for x in both) or 'no load'} "
             f"M*; on the drive flank only at "
             f"{', '.join(f'{x:g}' for x in drive_only) or 'no load'} M*; at "
-            f"{top.load_fraction:g} M* the drive onsets' 90th percentile is {p90:.2g} mm/s. "
+            f"{top['load_fraction']:g} M* the drive onsets' 90th percentile is {p90:.2g} mm/s. "
             + (f"Several attractors at {', '.join(multi)} (section 6.2)." if multi
                else "Every point single-valued from these starts.") + "\n")
-    return text
 
 
 # --- section 6.2: the compliant teeth's two states -----------------------------------------

@@ -10,10 +10,11 @@ from the same runs, so a sentence that no longer holds changes with its numbers.
 This module is the registry and the command; the blocks are computed by two modules by job:
 ``doc_constants`` the closed forms (the model's laws and derived quantities at the default
 parameters, static equilibria; ``CONSTANT_BLOCKS``, about two seconds) and ``doc_runs`` the
-runs (co-simulation statistics and the multistability study; ``RUN_BLOCKS``, minutes).  One
-run block is not run on update: section 6.2's grid is rendered from the data committed in
-docs/data/multistability_grid.json, which ``--measure-grid`` measures again (or ``--grid-from``
-reduces from the JSON of the study's command).
+runs (co-simulation statistics and the multistability study; ``RUN_BLOCKS``, minutes).  Two
+run blocks are not run on update: section 6.2's grid and section 6.1's table of its rows at the
+default backlash are rendered from the data committed in docs/data/multistability_grid.json,
+which ``--measure-grid`` measures again (or ``--grid-from`` reduces from the JSON of the
+study's command).
 """
 
 from __future__ import annotations

@@ -212,12 +212,14 @@ def test_the_gear_bodies_defaults_are_the_root_radii_on_the_text_shafts():
 
 
 def test_the_compliant_grid_is_the_committed_measurement():
-    """Section 6.2's grid is rendered from docs/data/multistability_grid.json, the data of the
-    grid's command (every point of it, every start at each point); the slow
-    tests/analysis/test_multistability.py measures two of its points again."""
-    assert model_doc.stale(TEXT, ["compliant grid"]) == [], (
-        "docs/model.md section 6.2's grid is not the rendering of its data: run `python -m "
-        "drive_rattle_cosim.model_doc --update --only 'compliant grid'`")
+    """Section 6.2's grid, and section 6.1's table of its rows at the default backlash, are
+    rendered from docs/data/multistability_grid.json, the data of the grid's command (every
+    point of it, every start at each point); the slow tests/analysis/test_multistability.py
+    measures two of its points again."""
+    assert model_doc.stale(TEXT, ["compliant grid", "separation loads"]) == [], (
+        "docs/model.md section 6.2's grid or section 6.1's table is not the rendering of its "
+        "data: run `python -m drive_rattle_cosim.model_doc --update --only 'compliant grid' "
+        "--only 'separation loads'`")
     data = doc_runs.grid_data()
     assert data["command"] == doc_runs.GRID_COMMAND, (
         f"the grid's data was measured by {data['command']!r}; allowed: "
@@ -228,6 +230,15 @@ def test_the_compliant_grid_is_the_committed_measurement():
         found = sorted([*(s for a in p["attractors"] for s in a["starts"]),
                         *(u["start"] for u in p["unsettled"])])
         assert found == starts, (p["load_fraction"], p["backlash"], found)
+
+
+def test_the_load_table_refuses_grid_data_without_its_backlash():
+    data = doc_runs.grid_data()
+    other = {**data, "points": [p for p in data["points"]
+                                if p["backlash"] != doc_runs.LOAD_BACKLASH]}
+    with pytest.raises(ValueError, match=r"no point at backlash 0\.0001 m; allowed: the "
+                                         r"backlashes of `python -m drive_rattle_cosim"):
+        doc_runs.separation_loads(other)
 
 
 def test_the_mixed_regime_is_measured_over_the_roughness_and_the_film():
@@ -273,6 +284,7 @@ def test_the_blocks_left_to_the_study_tests_are_checked_there():
 #: runs, the single impacts, the grid's data, the constants of the defaults), which the whole
 #: document's test leaves to it.
 CHECKED_ABOVE = {"contact options", "contact findings", "single impacts", "compliant grid",
+                 "separation loads",
                  *model_doc.CONSTANT_BLOCKS}
 
 
