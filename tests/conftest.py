@@ -29,6 +29,7 @@ import importlib
 import json
 import os
 import pkgutil
+import re
 import shutil
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -111,38 +112,58 @@ def pytest_collection_finish(session):
                 importlib.import_module(module.name)
 
 
-#: Seconds each of the longest files took in a full run on two workers (--junitxml, summed
-#: over the file's tests, builds counted where they fall), 2026-12-02: the run's schedule.
-#: test_wheel.py: 57 s alone since it installs with uv (15 s of setup instead of 95 s).  On a
-#: new machine the first test that links a Windows binary waits on zig's cache lock while
-#: zig builds its x86_64-windows C runtime (CI's warm-up starts it before the tests); which
-#: test that is depends on this order, the wait does not.
+#: Seconds each of the longest files took in a fresh-clone CI run on two workers (--junitxml,
+#: summed over the file's tests, builds and waits counted where they fall), 2026-12-02: the
+#: run's schedule.
 LONG_FILES = {
-    "cosim/test_model_doc.py": 150, "analysis/test_multistability.py": 124, "test_wheel.py": 57,
-    "adversarial/test_fmi_boundary.py": 97, "adversarial/test_endurance.py": 90,
-    "sanitize/test_boundary_sanitized.py": 87, "cosim/test_cluster.py": 86,
-    "adversarial/test_mutants.py": 74, "cosim/test_tools_doc.py": 64, "test_examples.py": 46,
-    "analysis/test_spectral_lines.py": 37, "faces/test_hosts.py": 37,
-    "cosim/test_masters.py": 34, "cosim/test_ssp.py": 30,
-    "adversarial/test_fmi_bad_input.py": 27, "model/test_stepper.py": 26,
-    "fmu/test_platforms.py": 24, "sanitize/test_native_sanitizers.py": 24,
-    "model/test_system.py": 21, "sanitize/test_fmi3_sanitizers.py": 17,
+    "analysis/test_multistability.py": 106, "adversarial/test_fmi_boundary.py": 86,
+    "sanitize/test_boundary_sanitized.py": 150, "cosim/test_model_doc.py": 131,
+    "adversarial/test_endurance.py": 88, "test_wheel.py": 69, "cosim/test_tools_doc.py": 60,
+    "adversarial/test_mutants.py": 58, "faces/test_hosts.py": 50, "test_examples.py": 43,
+    "cosim/test_masters.py": 41, "analysis/test_spectral_lines.py": 36,
+    "cosim/test_cluster.py": 35, "model/test_system.py": 32, "model/test_stepper.py": 28,
+    "cosim/test_ssp.py": 26, "adversarial/test_fmi_bad_input.py": 18,
+    "fmu/test_build_compiler.py": 17, "fmu/test_platforms.py": 16,
+    "sanitize/test_native_sanitizers.py": 13,
 }
+#: The fixtures of the FMUs built for the session (below, and tests/faces/conftest.py's).
+FMU_FIXTURES = ("fmus", "native_fmus", "fmi3_fmus", "flavour_fmus", "face_fmus")
+_NAMES_AN_FMU_FIXTURE = re.compile(r"\b(" + "|".join(FMU_FIXTURES) + r")\b")
+#: Files that link a Windows binary of their own (the installed wheel builds every FMU).
+LINKS_WINDOWS = ("test_wheel.py",)
+
+
+def waits_for_windows(path: str, items) -> bool:
+    """Whether a test file (``path`` below tests/) links a Windows binary or uses the built FMUs
+    (whose build links theirs), named as a fixture or in its source (some ask for them by
+    name, ``request.getfixturevalue``).  On a new machine such a file waits for zig's
+    x86_64-windows C runtime, about two minutes of one core that CI's warm-up starts first
+    (.ci/warm_cross_compilers.py)."""
+    return (path in LINKS_WINDOWS
+            or any(set(FMU_FIXTURES) & set(getattr(item, "fixturenames", ())) for item in items)
+            or bool(_NAMES_AN_FMU_FIXTURE.search((TESTS / path).read_text(encoding="utf-8"))))
 
 
 def pytest_collection_modifyitems(config, items):
+    by_file: dict[str, list] = {}
     for item in items:
-        folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
-        item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
+        path = Path(str(item.fspath)).resolve().relative_to(TESTS)
+        item.add_marker(getattr(pytest.mark, LAYERS.get(path.parts[0], "examples")))
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
-    # The longest files first, each file's tests kept together and in order: pytest-xdist (the
-    # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
-    # hands whole files to the workers in this order, so the long ones start early and the
-    # short ones fill in around them, instead of one worker finishing a long file alone at
-    # the end.  Only the order depends on LONG_FILES, never a result.
-    items.sort(key=lambda item: -LONG_FILES.get(
-        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
+        by_file.setdefault(path.as_posix(), []).append(item)
+    # The schedule: each file's tests kept together and in order, the files that need no
+    # Windows binary first, each group's longest files first.  pytest-xdist (the README's
+    # ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml) hands
+    # whole files to the workers in this order: on a new machine the workers run the tests of
+    # the model, the analysis and the documents while zig builds its x86_64-windows C runtime
+    # (instead of both waiting for the faces' build, which waits for it), and in either group
+    # the long files start early and the short ones fill in around them.  Only the order
+    # depends on this, never a result.
+    late = {path for path, its in by_file.items() if waits_for_windows(path, its)}
+    items.sort(key=lambda item: (
+        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix() in late,
+        -LONG_FILES.get(Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0)))
 
 
 def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:

@@ -23,8 +23,7 @@ from xml.etree import ElementTree
 
 Patch = tuple[str, str, str]
 
-#: The library's compile flags (drive_rattle_build.compiler.IEEE_CFLAGS) and a shared library.
-IEEE = ("-std=c99", "-O2", "-fno-fast-math", "-ffp-contract=off", "-Wall", "-Wextra")
+#: A shared library's flags beside the library's own (drive_rattle_build.compiler.IEEE_CFLAGS).
 SHARED = ("-fPIC", "-shared", "-fvisibility=hidden")
 
 
@@ -50,9 +49,9 @@ def apply_patches(folder: Path, patches: Sequence[Patch]) -> None:
 def _compile(flags: Sequence[str], sources: Sequence[Path], include: Path, out: Path,
              defines: Sequence[str] = ()) -> Path:
     """The build's compile (each file alone, side by side: drive_rattle_build.compiler)."""
-    from drive_rattle_build.compiler import compile_library
+    from drive_rattle_build.compiler import IEEE_CFLAGS, compile_library
 
-    return compile_library("gcc", [*IEEE, *SHARED, *flags, *defines, "-I", str(include)],
+    return compile_library("gcc", [*IEEE_CFLAGS, *SHARED, *flags, *defines, "-I", str(include)],
                            sources, out, f"a variant's {Path(out).name}", libs=["-lm"])
 
 
