@@ -37,19 +37,11 @@ def run(cc: list, flags: list, source: Path, out: Path) -> None:
                    capture_output=True, timeout=1800)
 
 
-#: The order of the targets: first those the faces' build links (tests/conftest.py), the
-#: longest first -- x86_64-windows-gnu's C runtime is about two minutes of one core, which
-#: the faces' build, and so every test of a built FMU, waits for on a new machine.
-FIRST = ("x86_64-windows", "aarch64-linux")
-
-
 def main() -> int:
-    order = [*FIRST, *(name for name in PLATFORMS if name not in FIRST)]
     with tempfile.TemporaryDirectory(prefix="warm_zig_") as tmp:
         source = Path(tmp) / "warm.c"
         source.write_text(SOURCE, encoding="utf-8")
-        for name in order:
-            target = PLATFORMS[name]
+        for name, target in PLATFORMS.items():
             start = time.monotonic()
             if name == build_machine():  # the build's compiler where gcc is missing
                 run(zig_cc(ZIG_TARGET[host.machine()]), ["-shared", "-fPIC"], source,

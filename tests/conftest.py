@@ -16,7 +16,8 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
-that ``-m "not slow"`` is a loop of minutes (155 s on such a machine on 2026-12-02).
+that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
+108 s on another, 1499 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
@@ -29,7 +30,6 @@ import importlib
 import json
 import os
 import pkgutil
-import re
 import shutil
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -113,8 +113,8 @@ def pytest_collection_finish(session):
 
 
 #: Seconds each of the longest files took in a fresh-clone CI run on two workers (--junitxml,
-#: summed over the file's tests, builds and waits counted where they fall), 2026-12-02: the
-#: run's schedule.
+#: summed over the file's tests, builds counted where they fall, less a wait for the faces'
+#: build), 2026-12-02: the run's schedule.
 LONG_FILES = {
     "analysis/test_multistability.py": 106, "adversarial/test_fmi_boundary.py": 86,
     "sanitize/test_boundary_sanitized.py": 150, "cosim/test_model_doc.py": 131,
@@ -126,44 +126,24 @@ LONG_FILES = {
     "fmu/test_build_compiler.py": 17, "fmu/test_platforms.py": 16,
     "sanitize/test_native_sanitizers.py": 13,
 }
-#: The fixtures of the FMUs built for the session (below, and tests/faces/conftest.py's).
-FMU_FIXTURES = ("fmus", "native_fmus", "fmi3_fmus", "flavour_fmus", "face_fmus")
-_NAMES_AN_FMU_FIXTURE = re.compile(r"\b(" + "|".join(FMU_FIXTURES) + r")\b")
-#: Files that link a Windows binary of their own (the installed wheel builds every FMU).
-LINKS_WINDOWS = ("test_wheel.py",)
-
-
-def waits_for_windows(path: str, items) -> bool:
-    """Whether a test file (``path`` below tests/) links a Windows binary or uses the built FMUs
-    (whose build links theirs), named as a fixture or in its source (some ask for them by
-    name, ``request.getfixturevalue``).  On a new machine such a file waits for zig's
-    x86_64-windows C runtime, about two minutes of one core that CI's warm-up starts first
-    (.ci/warm_cross_compilers.py)."""
-    return (path in LINKS_WINDOWS
-            or any(set(FMU_FIXTURES) & set(getattr(item, "fixturenames", ())) for item in items)
-            or bool(_NAMES_AN_FMU_FIXTURE.search((TESTS / path).read_text(encoding="utf-8"))))
 
 
 def pytest_collection_modifyitems(config, items):
-    by_file: dict[str, list] = {}
     for item in items:
-        path = Path(str(item.fspath)).resolve().relative_to(TESTS)
-        item.add_marker(getattr(pytest.mark, LAYERS.get(path.parts[0], "examples")))
+        folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
+        item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
-        by_file.setdefault(path.as_posix(), []).append(item)
-    # The schedule: each file's tests kept together and in order, the files that need no
-    # Windows binary first, each group's longest files first.  pytest-xdist (the README's
-    # ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml) hands
-    # whole files to the workers in this order: on a new machine the workers run the tests of
-    # the model, the analysis and the documents while zig builds its x86_64-windows C runtime
-    # (instead of both waiting for the faces' build, which waits for it), and in either group
-    # the long files start early and the short ones fill in around them.  Only the order
-    # depends on this, never a result.
-    late = {path for path, its in by_file.items() if waits_for_windows(path, its)}
-    items.sort(key=lambda item: (
-        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix() in late,
-        -LONG_FILES.get(Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0)))
+    # The longest files first, each file's tests kept together and in order: pytest-xdist (the
+    # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
+    # hands whole files to the workers in this order, so the long ones start early and the
+    # short ones fill in around them, instead of one worker finishing a long file alone at
+    # the end.  Only the order depends on LONG_FILES, never a result.  (On a new machine the
+    # first test that needs the built FMUs waits for zig's x86_64-windows C runtime whatever
+    # the order; running the files that need none first was measured and gained nothing: the
+    # runtime's build keeps the core the waiting worker leaves.)
+    items.sort(key=lambda item: -LONG_FILES.get(
+        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
 
 
 def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
