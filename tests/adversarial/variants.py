@@ -89,11 +89,13 @@ def model_library(out: Path, flags: Sequence[str] = (), patches: Sequence[Patch]
 
 
 def rebuild(fmu: Path, out_dir: Path, flags: Sequence[str] = (),
-            patches: Sequence[Patch] = (), shim_flags: Sequence[str] | None = None) -> Path:
+            patches: Sequence[Patch] = (), shim_flags: Sequence[str] | None = None,
+            library: Path | None = None) -> Path:
     """``fmu`` with its C compiled again with ``flags`` and ``patches`` applied to its sources,
     written as ``out_dir/<same name>``; returns the new FMU's path.  ``shim_flags`` (pythonfmu
     FMUs): the status shim compiled again too, with these flags.  (The model library of the
-    pythonfmu FMUs is compiled once per output folder: ``out_dir/rattle_model.so``.)"""
+    pythonfmu FMUs is compiled once per ``library`` path, by default
+    ``out_dir/rattle_model.so``: :func:`model_library`.)"""
     fmu, out_dir = Path(fmu), Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="rattle_variant_") as tmp:
@@ -120,7 +122,7 @@ def rebuild(fmu: Path, out_dir: Path, flags: Sequence[str] = (),
                 [*flags, "-Wno-error"])
         else:
             replaced["resources/drive_rattle/rattle_model.so"] = model_library(
-                out_dir / "rattle_model.so", flags, patches)
+                library or out_dir / "rattle_model.so", flags, patches)
             if shim_flags is not None:
                 from drive_rattle_build.shim import compile_shim
 

@@ -36,17 +36,20 @@ MODELS = ("GearMeshRattle", "Driveline")
 def sanitized(request, tmp_path_factory) -> dict:
     """{model: FMU} of one face, its C compiled with the sanitizers; "library": the
     sanitized model library (the pythonfmu FMUs ship it; the fuzzer's shadow loads it)."""
+    from ..adversarial.variants import model_library
+
     flavour = request.param
     built = request.getfixturevalue(FACES[flavour].fixture)
     out = tmp_path_factory.mktemp(f"sanitized_{flavour}")
+    # one sanitized library for the faces this process runs (the pythonfmu FMUs ship it; the
+    # native faces' shadow loads it), compiled once: model_library keeps it while its
+    # sources and flags are the same
+    library = model_library(tmp_path_factory.getbasetemp() / "sanitized_library" /
+                            "rattle_model.so", ASAN_FLAGS)
     fmus = {model: rebuild(built[model], out, ASAN_FLAGS,
-                           shim_flags=ASAN_FLAGS if flavour == "pythonfmu" else None)
+                           shim_flags=ASAN_FLAGS if flavour == "pythonfmu" else None,
+                           library=library)
             for model in MODELS}
-    library = out / "rattle_model.so"
-    if not library.is_file():  # the native faces: the library alone, for the shadow
-        from ..adversarial.variants import model_library
-
-        model_library(library, ASAN_FLAGS)
     return {**fmus, "library": library, "flavour": flavour}
 
 
