@@ -242,9 +242,9 @@ class LineCatalogue:
     def name(self, frequency: float, tolerance: float) -> tuple[str, str]:
         """``(name, kind)`` of the expected line within ``tolerance`` of ``frequency`` (the
         nearest of the first kind that has one), or ``("", "unexplained")``."""
+        candidates = self.candidates(frequency + tolerance)
         for kind in KINDS:
-            near = [(abs(f - frequency), name) for f, name, k in
-                    self.candidates(frequency + tolerance) if k == kind
+            near = [(abs(f - frequency), name) for f, name, k in candidates if k == kind
                     and abs(f - frequency) <= tolerance]
             if near:
                 return min(near)[1], kind
