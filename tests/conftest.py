@@ -17,7 +17,7 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
 that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
-108 s on another, 1499 tests).
+108-115 s on another, 1499 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
@@ -116,9 +116,9 @@ def pytest_collection_finish(session):
 #: summed over the file's tests, builds counted where they fall, less a wait for the faces'
 #: build), 2026-12-02: the run's schedule.
 LONG_FILES = {
-    "analysis/test_multistability.py": 106, "adversarial/test_fmi_boundary.py": 86,
     "sanitize/test_boundary_sanitized.py": 150, "cosim/test_model_doc.py": 131,
-    "adversarial/test_endurance.py": 88, "test_wheel.py": 69, "cosim/test_tools_doc.py": 60,
+    "analysis/test_multistability.py": 106, "adversarial/test_endurance.py": 88,
+    "adversarial/test_fmi_boundary.py": 86, "test_wheel.py": 69, "cosim/test_tools_doc.py": 60,
     "adversarial/test_mutants.py": 58, "faces/test_hosts.py": 50, "test_examples.py": 43,
     "cosim/test_masters.py": 41, "analysis/test_spectral_lines.py": 36,
     "cosim/test_cluster.py": 35, "model/test_system.py": 32, "model/test_stepper.py": 28,
