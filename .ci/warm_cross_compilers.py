@@ -1,10 +1,11 @@
 """Fill ziglang's cache for every cross target the tests compile for, in the background of CI's
 installation (.ci/run): on a new machine the first program zig links for a target builds
-that target's C runtime first (about two minutes of CPU for x86_64-windows-gnu, 20 s for each
+that target's C runtime first (minutes of CPU for x86_64-windows-gnu, tens of seconds for each
 of the others), which otherwise falls on whichever test compiles for it first.  Each target
 gets a shared library compiled as the build compiles the FMUs' (platforms.compile_for) and a
-program; zig's own cache locks make a test that starts meanwhile wait rather than build it
-again.  Prints each target's time."""
+program, both with -O2 and zig_cc's -g0: the one C runtime of the target that every build and
+test host links.  zig's own cache locks make a test that starts meanwhile wait rather than
+build it again.  Prints each target's time."""
 
 import platform as host
 import subprocess
@@ -33,8 +34,11 @@ int main(void) { printf("%g\\n", warm(2.0)); return 0; }
 
 
 def run(cc: list, flags: list, source: Path, out: Path) -> None:
+    # in the output's folder, as every compile of the build and the tests: run from a folder
+    # that holds ziglang's lib folder (the clone, with its .venv), zig keys the C runtime
+    # differently and builds it again (compiler.zig_cc)
     subprocess.run([*cc, *flags, "-o", str(out), str(source), "-lm"], check=True,
-                   capture_output=True, timeout=1800)
+                   capture_output=True, timeout=1800, cwd=out.parent)
 
 
 def main() -> int:
@@ -44,14 +48,14 @@ def main() -> int:
         for name, target in PLATFORMS.items():
             start = time.monotonic()
             if name == build_machine():  # the build's compiler where gcc is missing
-                run(zig_cc(ZIG_TARGET[host.machine()]), ["-shared", "-fPIC"], source,
+                run(zig_cc(ZIG_TARGET[host.machine()]), ["-O2", "-shared", "-fPIC"], source,
                     Path(tmp) / "zig-native.so")
             else:  # the FMUs' binaries, and the test hosts (no macOS host runs here)
                 compile_for(name, [source], Path(tmp), Path(tmp) / f"{name}{target.suffix}",
                             what="warm-up")
                 if target.system != "darwin":
                     # -O2, as the tests' hosts (a debug program needs a C runtime of its
-                    # own)
+                    # own; a program without zig_cc's -g0 another)
                     run(zig_cc(target.zig_target), ["-O2", "-DWARM_PROGRAM"], source,
                         Path(tmp) / f"{name}.exe")
             print(f"warm_cross_compilers: {name} ({target.zig_target}) "

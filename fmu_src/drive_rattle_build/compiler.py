@@ -81,9 +81,15 @@ TARGETS = {"linux64": None, "win64": "x86_64-windows-gnu"}
 
 
 def zig_cc(target: str) -> list[str]:
-    """ziglang's ``zig cc -target <target>`` (the ziglang package, a dependency; its
+    """ziglang's ``zig cc -target <target> -g0`` (the ziglang package, a dependency; its
     executable on POSIX, ``python -m ziglang`` elsewhere): the cross-compiler of every binary
-    but the build machine's own."""
+    but the build machine's own.  No debug information, as gcc leaves none by default; and
+    every program and library zig links for a target then asks for the same C runtime (zig
+    builds one per debug-information and optimization mode of the link: with ``-O2``,
+    :func:`at_link`), built once on a machine.  (And one per place of ziglang's lib folder
+    relative to the working folder: the build runs zig in a temporary folder, never in a
+    folder that holds the lib folder, such as a clone with its .venv, where a program linked
+    there would build a second C runtime: minutes of CPU for x86_64-windows.)"""
     try:
         import ziglang
     except ImportError:
@@ -91,8 +97,8 @@ def zig_cc(target: str) -> list[str]:
                          "`pip install ziglang` (a dependency of this project)") from None
     if os.name == "posix":  # its executable itself (what ``python -m ziglang`` execs): a
         # build starts it once per C file, and a Python start each time would cost seconds
-        return [str(Path(ziglang.__file__).with_name("zig")), "cc", "-target", target]
-    return [sys.executable, "-m", "ziglang", "cc", "-target", target]
+        return [str(Path(ziglang.__file__).with_name("zig")), "cc", "-target", target, "-g0"]
+    return [sys.executable, "-m", "ziglang", "cc", "-target", target, "-g0"]
 
 
 def link_only(flag: str) -> bool:
@@ -103,9 +109,13 @@ def link_only(flag: str) -> bool:
 
 def at_link(flag: str) -> bool:
     """Whether ``flag`` is also given to the link: the link-only ones, and those that choose
-    the runtime or debug information the objects were compiled for."""
+    the runtime, optimization or debug information the objects were compiled for.  (zig
+    builds the target's C runtime in the optimization mode of the link: a link without the
+    compile's ``-O2`` is a Debug link, which builds a second C runtime, compiler-rt and UBSan
+    runtime for every target, about 30 s of CPU each and over two minutes for
+    x86_64-windows.)"""
     return link_only(flag) or flag == "-pthread" or flag.startswith(
-        ("-fsanitize", "-fno-sanitize", "-g"))
+        ("-fsanitize", "-fno-sanitize", "-g", "-O"))
 
 
 def run_compiler(cmd: list[str], cwd: Path, output: Path, doing: str) -> Path:

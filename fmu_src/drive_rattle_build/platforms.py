@@ -113,8 +113,7 @@ def toolchain(platform: str, cc: str | Sequence[str] | None = None,
         compiler = cc or c_compiler()
         options = []
     else:
-        # no debug information, as the build machine's compiler leaves none by default
-        compiler, options = zig_cc(target.zig_target), ["-g0"]
+        compiler, options = zig_cc(target.zig_target), []  # with -g0, as gcc's default
     if target.system != "windows":
         options += ["-fPIC", "-fvisibility=hidden"]
     libs = ["-lm"] if target.system == "linux" else []  # libm is in libSystem and the CRT

@@ -84,12 +84,13 @@ def test_the_link_gets_the_flags_of_the_link_and_the_compile_the_others():
 
     assert [f for f in ("-shared", "-lm", "-Wl,-z,defs", "-L/x") if link_only(f)] == [
         "-shared", "-lm", "-Wl,-z,defs", "-L/x"]
-    for flag in ("-O2", "-Werror", "-Wall", "-std=c99", "-DRM=1", "-I", "-fPIC",
+    for flag in ("-Werror", "-Wall", "-std=c99", "-DRM=1", "-I", "-fPIC",
                  "-fvisibility=hidden", "-ffp-contract=off"):
         assert not link_only(flag) and not at_link(flag), flag
     for flag in ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g", "-g0",
-                 "-pthread", "-shared"):
+                 "-pthread", "-shared", "-O2", "-O0", "-Os"):
         assert at_link(flag), flag
+    assert not link_only("-O2")  # also compiles
 
 
 @pytest.mark.slow
