@@ -17,7 +17,8 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
 that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
-108-115 s on another, 1499 tests).
+108-115 s on another; on 2026-12-03 131.6 s on a third, with zig's cache filled for this
+clone, 323 s with zig building its x86_64-windows C runtime first; 1499 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
