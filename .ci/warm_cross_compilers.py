@@ -3,9 +3,9 @@ installation (.ci/run): on a new machine the first program zig links for a targe
 that target's C runtime first (minutes of CPU for x86_64-windows-gnu, tens of seconds for each
 of the others), which otherwise falls on whichever test compiles for it first.  Each target
 gets a shared library compiled as the build compiles the FMUs' (platforms.compile_for) and a
-program, both with -O2 and zig_cc's -g0: the one C runtime of the target that every build and
-test host links.  zig's own cache locks make a test that starts meanwhile wait rather than
-build it again.  Prints each target's time."""
+program, both linked with -O2 and outside the clone: the one C runtime of the target that
+every build and test host links (compiler.zig_cc).  zig's own cache locks make a test that
+starts meanwhile wait rather than build it again.  Prints each target's time."""
 
 import platform as host
 import subprocess
@@ -55,7 +55,7 @@ def main() -> int:
                             what="warm-up")
                 if target.system != "darwin":
                     # -O2, as the tests' hosts (a debug program needs a C runtime of its
-                    # own; a program without zig_cc's -g0 another)
+                    # own)
                     run(zig_cc(target.zig_target), ["-O2", "-DWARM_PROGRAM"], source,
                         Path(tmp) / f"{name}.exe")
             print(f"warm_cross_compilers: {name} ({target.zig_target}) "

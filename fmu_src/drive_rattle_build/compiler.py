@@ -83,13 +83,12 @@ TARGETS = {"linux64": None, "win64": "x86_64-windows-gnu"}
 def zig_cc(target: str) -> list[str]:
     """ziglang's ``zig cc -target <target> -g0`` (the ziglang package, a dependency; its
     executable on POSIX, ``python -m ziglang`` elsewhere): the cross-compiler of every binary
-    but the build machine's own.  No debug information, as gcc leaves none by default; and
-    every program and library zig links for a target then asks for the same C runtime (zig
-    builds one per debug-information and optimization mode of the link: with ``-O2``,
-    :func:`at_link`), built once on a machine.  (And one per place of ziglang's lib folder
-    relative to the working folder: the build runs zig in a temporary folder, never in a
-    folder that holds the lib folder, such as a clone with its .venv, where a program linked
-    there would build a second C runtime: minutes of CPU for x86_64-windows.)"""
+    but the build machine's own; no debug information, as gcc leaves none by default.  zig
+    builds a target's C runtime once per optimization mode of the link (the link gets the
+    compile's ``-O2``: :func:`at_link`) and once per place of ziglang's lib folder relative to
+    the working folder: the build runs zig in a temporary folder, never in a folder that holds
+    the lib folder, such as a clone with its .venv, where a program linked there would build
+    a second C runtime (minutes of CPU for x86_64-windows)."""
     try:
         import ziglang
     except ImportError:

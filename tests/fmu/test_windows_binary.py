@@ -44,10 +44,10 @@ def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, wi
     exe = tmp_path / "load.exe"
     source = tmp_path / "load.c"
     source.write_text(LOADER)
-    # -O2 (and zig_cc's -g0), in a folder outside the clone, as every Windows program and
-    # DLL of the tests: zig builds its C runtime once per optimization and debug-information
-    # mode of the link and per place of its lib folder relative to the working folder, and
-    # another would cost a second one (minutes of CPU on a new machine: compiler.zig_cc)
+    # -O2, in a folder outside the clone, as every Windows program and DLL of the tests:
+    # zig builds its C runtime once per optimization mode of the link and per place of its
+    # lib folder relative to the working folder, and another would cost a second one
+    # (minutes of CPU on a new machine: compiler.zig_cc)
     subprocess.run([*zig_cc("x86_64-windows-gnu"), "-O2", "-o", str(exe), str(source)],
                    check=True, capture_output=True, cwd=tmp_path)
     with zipfile.ZipFile(native_fmus["GearMeshRattle"]) as z:
