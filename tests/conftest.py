@@ -32,6 +32,7 @@ import json
 import os
 import pkgutil
 import shutil
+import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -58,10 +59,21 @@ LAYERS = {"model": "model", "analysis": "analysis", "fmi": "fmi", "fmu": "fmu", 
 def pytest_configure(config):
     """The model library built from this checkout's sources before anything is collected (a
     fresh clone has none; the tests, the oracle's start and the studies load it).  Under
-    pytest-xdist the controller builds it before it starts the workers, which find it built."""
+    pytest-xdist the controller builds it before it starts the workers, which find it built.
+
+    Every build of the run, in any worker or subprocess, keeps its compiled objects in one
+    folder of the run (``DRIVE_RATTLE_OBJECT_CACHE``, drive_rattle_build.compiler): the suite
+    builds the same C with the same flags in many tests (the library, each face, the sanitizer
+    builds), and a build finds an object compiled from the same inputs there.  The folder is
+    the run's own and goes with it; tests/test_wheel.py builds without it, as a user does."""
+    from drive_rattle_build.compiler import OBJECT_CACHE
     from drive_rattle_build.library import build_in_place
 
     if not hasattr(config, "workerinput"):
+        if OBJECT_CACHE not in os.environ:
+            folder = tempfile.mkdtemp(prefix="drive_rattle_test_objects_")
+            config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
+            os.environ[OBJECT_CACHE] = folder
         build_in_place()
 
 

@@ -91,9 +91,11 @@ def installed(tmp_path_factory):
 
 
 def _user_env(bindir: Path) -> dict:
-    """The environment of a user of the installed wheel: nothing of this checkout."""
+    """The environment of a user of the installed wheel: nothing of this checkout, and no
+    objects compiled by the rest of the suite (its build compiles every file)."""
     env = {k: v for k, v in os.environ.items()
-           if k not in ("PYTHONPATH", "RATTLE_MODEL_LIBRARY", "VIRTUAL_ENV")}
+           if k not in ("PYTHONPATH", "RATTLE_MODEL_LIBRARY", "VIRTUAL_ENV",
+                        "DRIVE_RATTLE_OBJECT_CACHE")}
     env["PATH"] = f"{bindir}{os.pathsep}{env.get('PATH', '')}"
     return {**env, **_zig_cache_of_this_environment(bindir)}
 

@@ -5,6 +5,7 @@ compiler)."""
 from __future__ import annotations
 
 import atexit
+import hashlib
 import os
 import platform
 import shlex
@@ -12,6 +13,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -130,22 +132,78 @@ def run_compiler(cmd: list[str], cwd: Path, output: Path, doing: str) -> Path:
     return output
 
 
+#: The environment variable naming a folder of compiled objects kept by what they are
+#: compiled from (:func:`object_key`), shared by every build that names it, in any process:
+#: a build finds there what another compiled from the same inputs.  Unset: none is kept.
+OBJECT_CACHE = "DRIVE_RATTLE_OBJECT_CACHE"
+_INCLUDE_OPTIONS = ("-I", "-iquote", "-isystem", "-idirafter")
+
+
+def include_folders(flags: Sequence[str], cwd: Path) -> list[Path]:
+    """The folders that ``flags`` add to the include path (``-I<dir>`` or ``-I <dir>``, and
+    likewise -iquote, -isystem, -idirafter), relative ones taken from ``cwd``."""
+    found, args = [], list(flags)
+    for k, flag in enumerate(args):
+        if flag in _INCLUDE_OPTIONS and k + 1 < len(args):
+            found.append(args[k + 1])
+        elif flag.startswith("-I") and len(flag) > 2:
+            found.append(flag[2:])
+    return [cwd / f for f in found]
+
+
+def object_key(compiler: Sequence[str], flags: Sequence[str], source: Path,
+               cwd: Path) -> str:
+    """What an object is compiled from, as a digest: the compiler command, the compile's
+    flags, the source's bytes, those of a header given by ``-include`` and the name and bytes
+    of every header (``*.h``) beside the source or in a folder of the include path.  A header
+    the source includes from anywhere else is a system header, the same for every build on
+    one machine."""
+    digest = hashlib.sha256(repr((list(map(str, compiler)), list(flags))).encode())
+    digest.update(b"\0source\0" + Path(source).read_bytes())
+    args = list(flags)
+    for k, flag in enumerate(args[:-1]):
+        if flag == "-include":  # a header included before the source's first line
+            digest.update(b"\0-include\0" + (cwd / args[k + 1]).read_bytes())
+    for folder in dict.fromkeys([Path(source).parent, *include_folders(flags, cwd)]):
+        headers = sorted(folder.glob("*.h")) if folder.is_dir() else []
+        for header in headers:
+            digest.update(f"\0{header.name}\0".encode() + header.read_bytes())
+    return digest.hexdigest()
+
+
 def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
     """Compile each of ``sources`` alone (``-c``) with ``cc`` (an executable, or a command as a
     list) and ``flags`` into ``folder/<n>-<stem>.o``, one compiler per core at a time, and
-    return the objects in the order of ``sources``.  RuntimeError with the command and the
-    compiler's output when the compiler is missing or fails on a file."""
+    return the objects in the order of ``sources``.  With the environment's
+    ``DRIVE_RATTLE_OBJECT_CACHE`` (:data:`OBJECT_CACHE`), an object compiled before from the
+    same inputs is copied from that folder instead, and each new one is kept there.
+    RuntimeError with the command and the compiler's output when the compiler is missing or
+    fails on a file."""
     compiler = [cc] if isinstance(cc, (str, Path)) else list(cc)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     jobs = [(Path(source).resolve(), folder / f"{n}-{Path(source).stem}.o")
             for n, source in enumerate(sources)]
+    compile_flags = [f for f in flags if not link_only(f)]
+    cache = os.environ.get(OBJECT_CACHE)
 
     def compile_one(job):
         source, obj = job
+        kept = None
+        if cache:
+            kept = Path(cache) / f"{object_key(compiler, compile_flags, source, folder)}.o"
+            if kept.is_file():
+                shutil.copyfile(kept, obj)
+                return obj
         # in the objects' folder: a cross-compiler may leave files beside its output
-        return run_compiler([*compiler, *(f for f in flags if not link_only(f)), "-c", "-o",
-                             str(obj), str(source)], folder, obj, f"compiling {what}")
+        run_compiler([*compiler, *compile_flags, "-c", "-o", str(obj), str(source)], folder,
+                     obj, f"compiling {what}")
+        if kept is not None:  # whole or not at all: a reader never sees half an object
+            kept.parent.mkdir(parents=True, exist_ok=True)
+            partial = kept.with_name(f".{kept.name}.{os.getpid()}.{threading.get_ident()}")
+            shutil.copyfile(obj, partial)
+            os.replace(partial, kept)
+        return obj
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         return list(pool.map(compile_one, jobs))

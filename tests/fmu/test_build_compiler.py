@@ -123,6 +123,49 @@ def test_the_model_library_is_compiled_once_per_platform_and_content(tmp_path):
     assert objects(copies[1]) != first
 
 
+def test_the_object_cache_reuses_an_object_only_for_the_same_inputs(tmp_path, monkeypatch):
+    """With DRIVE_RATTLE_OBJECT_CACHE, an object compiled from the same compiler, flags,
+    source and headers, in another folder, is the kept one and the compiler does not run; a
+    changed header, flag or source, or no cache at all, runs it."""
+    from drive_rattle_build.compiler import OBJECT_CACHE, compile_objects
+
+    calls = tmp_path / "calls"
+    counting = tmp_path / "counting-cc"  # the system's compiler, each run noted
+    counting.write_text(f"#!/bin/sh\necho \"$@\" >> {calls}\nexec gcc \"$@\"\n",
+                        encoding="utf-8")
+    counting.chmod(0o755)
+
+    def copy(name: str, header: str = "#define ANSWER 42\n") -> Path:
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "answer.h").write_text(header, encoding="utf-8")
+        (folder / "answer.c").write_text(
+            '#include "answer.h"\nint rattle_answer(void) { return ANSWER; }\n',
+            encoding="utf-8")
+        return folder / "answer.c"
+
+    def compiled(source: Path, flags=("-O2", "-fPIC")) -> tuple[bytes, int]:
+        before = calls.read_text().count("\n") if calls.exists() else 0
+        [obj] = compile_objects(str(counting), list(flags), [source],
+                                source.parent / "objects", "the answer")
+        return obj.read_bytes(), calls.read_text().count("\n") - before
+
+    cache = tmp_path / "cache"
+    monkeypatch.setenv(OBJECT_CACHE, str(cache))
+    first, ran = compiled(copy("a"))
+    assert ran == 1 and len(list(cache.glob("*.o"))) == 1
+    assert compiled(copy("b")) == (first, 0)  # the same inputs elsewhere: kept
+    assert compiled(copy("c", "#define ANSWER 43\n"))[1] == 1  # a header changed
+    assert compiled(tmp_path / "a" / "answer.c", ("-O1", "-fPIC"))[1] == 1  # a flag changed
+    other = copy("d")
+    other.write_text(other.read_text() + "int rattle_other(void) { return 1; }\n")
+    assert compiled(other)[1] == 1  # the source changed
+    assert len(list(cache.glob("*.o"))) == 4 and not [
+        p for p in cache.iterdir() if p.name.startswith(".")]  # no partial object left
+    monkeypatch.delenv(OBJECT_CACHE)
+    assert compiled(copy("e")) == (first, 1)  # no cache: compiled, the same object
+
+
 def test_no_file_of_the_model_library_includes_the_fmus_config_header():
     # What shared_objects relies on: the FMU's generated header (its model identifier and
     # GUID) reaches only the face's functions, so the library compiles alike for every FMU.
