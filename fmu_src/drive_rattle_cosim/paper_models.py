@@ -217,7 +217,7 @@ class ModelBand:
         vehicle mode modulates it)."""
         ws = self.central.statistics
         tau = self.central.record.signals["wheel.tau_load"]
-        means = [sum(tau[s]) / len(tau[s]) for s in ws.slices]
+        means = [sum(tau[s].tolist()) / len(tau[s]) for s in ws.slices]  # in time order
         return min(means), max(means)
 
     def cell(self, statistic: str, scale: float) -> str:

@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from drive_rattle.interface import (
     DRIVELINE,
     DRIVELINE_OUTPUTS,
@@ -30,15 +32,21 @@ SIGNALS = {
 }
 
 
+def _empty(dtype=float) -> np.ndarray:
+    return np.zeros(0, dtype=dtype)
+
+
 @dataclass
 class Record:
-    """Time series of a run: ``time`` [s] and one list per signal (SI units)."""
+    """Time series of a run, as numpy arrays: ``time`` [s] and one array per signal (SI units;
+    the integer outputs as int64), and the contact onsets (time [s], normal approach speed
+    [m/s], flank: +1 drive, -1 coast)."""
 
-    time: list[float] = field(default_factory=list)
-    signals: dict[str, list[float]] = field(default_factory=dict)
-    onset_times: list[float] = field(default_factory=list)  # [s]
-    onset_speeds: list[float] = field(default_factory=list)  # [m/s]
-    onset_flanks: list[int] = field(default_factory=list)
+    time: np.ndarray = field(default_factory=_empty)
+    signals: dict[str, np.ndarray] = field(default_factory=dict)
+    onset_times: np.ndarray = field(default_factory=_empty)  # [s]
+    onset_speeds: np.ndarray = field(default_factory=_empty)  # [m/s]
+    onset_flanks: np.ndarray = field(default_factory=lambda: _empty(np.int64))
 
 
 def step_nanoseconds(step: float) -> int:
@@ -57,10 +65,14 @@ def communication_points(start: float, step: float, stop: float) -> list[float]:
     Integer nanoseconds, as libcosim places them; the step from t_k is ``t_{k+1} - t_k``, so
     every master using this grid passes bit-identical times and steps to the units.  Raises
     ValueError for a step that is not a positive whole number of nanoseconds."""
-    step_ns = step_nanoseconds(step)
-    t0_ns = round(start * 1e9)
-    n = round((stop - start) * 1e9 / step_ns)
+    t0_ns, step_ns, n = _grid(start, step, stop)
     return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]
+
+
+def _grid(start: float, step: float, stop: float) -> tuple[int, int, int]:
+    """(t0 [ns], step [ns], steps) of the communication points from ``start`` to ``stop``."""
+    step_ns = step_nanoseconds(step)
+    return round(start * 1e9), step_ns, round((stop - start) * 1e9 / step_ns)
 
 
 def simulate(mesh_params: MeshParameters | None = None,
@@ -74,7 +86,7 @@ def simulate(mesh_params: MeshParameters | None = None,
     mp = mesh_params or MeshParameters()
     dp = driveline_params or DrivelineParameters()
     names = list(SIGNALS) if signals is None else list(signals)
-    points = communication_points(start_time, step, stop_time)
+    t0_ns, step_ns, steps = _grid(start_time, step, stop_time)
     # initialization as the co-simulation masters reach it: the exchange of the units' initial
     # outputs run to its fixed point (the FMUs' input start values for the default system)
     mesh_in, wheel = coupled_start_inputs(mp, dp, start_time)
@@ -84,14 +96,16 @@ def simulate(mesh_params: MeshParameters | None = None,
                           start_time=start_time) as drive:
         # a mesh input is recorded as the driveline output that feeds it
         sources = {name: _source(name, mesh, drive) for name in names}
-        run = run_coupled(mesh, drive, round(step * 1e9), len(points) - 1,
-                          sorted(set(sources.values())))
+        run = run_coupled(mesh, drive, step_ns, steps, sorted(set(sources.values())))
     integers = {s.name for s in MESH_OUTPUTS if s.fmi_type == "Integer"}
-    rec = Record(time=points, onset_times=run.onset_times, onset_speeds=run.onset_speeds,
-                 onset_flanks=run.onset_flanks)
+    # communication_points' values: whole nanoseconds (exact in int64), then seconds
+    time = (t0_ns + step_ns * np.arange(steps + 1, dtype=np.int64)) / 1e9
+    rec = Record(time=time, onset_times=np.array(run.onset_times, dtype=float),
+                 onset_speeds=np.array(run.onset_speeds, dtype=float),
+                 onset_flanks=np.array(run.onset_flanks, dtype=np.int64))
     for name in names:
-        column = run.columns[sources[name]]
-        rec.signals[name] = [int(v) for v in column] if name in integers else column
+        column = np.array(run.column_buffer(sources[name]))  # a copy: the run's buffer goes
+        rec.signals[name] = column.astype(np.int64) if name in integers else column
     return rec
 
 

@@ -33,8 +33,8 @@ def test_libcosim_runs_the_native_pair_as_the_harness_and_the_twin(native_ssp, n
                     DrivelineParameters.from_public(unit_parameters(DRIVELINE)), stop_time=stop)
     assert harness[f"{MESH}.mesh.impacts_drive"][-1] >= 3
     # libcosim records from the first point after the start (it initializes in its first step)
-    assert lc["time"] == harness.time[1:] == twin.time[1:]
+    assert lc["time"] == harness.time[1:] == twin.time[1:].tolist()
     for qualified in OUTPUTS:
         name = qualified.partition(".")[2]
         assert lc["columns"][qualified] == harness[qualified][1:], qualified
-        assert harness[qualified] == twin.signals[name], qualified
+        assert harness[qualified] == twin.signals[name].tolist(), qualified
