@@ -18,7 +18,8 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
 that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
 108-115 s on another; on 2026-12-03 131.6 s on a third, with zig's cache filled for this
-clone, 323 s with zig building its x86_64-windows C runtime first; 1499 tests).
+clone, 323 s with zig building its x86_64-windows C runtime first; 1499 tests; 110.0 s on
+that third machine once the run kept one object cache for its builds, 1500 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
