@@ -199,10 +199,16 @@ def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
         run_compiler([*compiler, *compile_flags, "-c", "-o", str(obj), str(source)], folder,
                      obj, f"compiling {what}")
         if kept is not None:  # whole or not at all: a reader never sees half an object
-            kept.parent.mkdir(parents=True, exist_ok=True)
             partial = kept.with_name(f".{kept.name}.{os.getpid()}.{threading.get_ident()}")
-            shutil.copyfile(obj, partial)
-            os.replace(partial, kept)
+            try:
+                kept.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(obj, partial)
+                os.replace(partial, kept)
+            except OSError as exc:
+                raise RuntimeError(
+                    f"{OBJECT_CACHE} = {cache!r}: cannot keep a compiled object there "
+                    f"({exc.strerror or exc}); allowed: a folder this user can write, or "
+                    f"unset {OBJECT_CACHE}") from None
         return obj
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:

@@ -166,6 +166,20 @@ def test_the_object_cache_reuses_an_object_only_for_the_same_inputs(tmp_path, mo
     assert compiled(copy("e")) == (first, 1)  # no cache: compiled, the same object
 
 
+def test_an_object_cache_that_cannot_be_written_is_named(tmp_path, monkeypatch):
+    from drive_rattle_build.compiler import OBJECT_CACHE, c_compiler, compile_objects
+
+    source = tmp_path / "answer.c"
+    source.write_text("int rattle_answer(void) { return 42; }\n", encoding="utf-8")
+    blocker = tmp_path / "a_file"  # a file where the folder should be: no user can write it
+    blocker.write_text("", encoding="utf-8")
+    monkeypatch.setenv(OBJECT_CACHE, str(blocker / "cache"))
+    with pytest.raises(RuntimeError, match=r"DRIVE_RATTLE_OBJECT_CACHE = '.*a_file/cache': "
+                                           r"cannot keep a compiled object there .*allowed: a "
+                                           r"folder this user can write"):
+        compile_objects(c_compiler(), ["-O2"], [source], tmp_path / "objects", "the answer")
+
+
 def test_no_file_of_the_model_library_includes_the_fmus_config_header():
     # What shared_objects relies on: the FMU's generated header (its model identifier and
     # GUID) reaches only the face's functions, so the library compiles alike for every FMU.
