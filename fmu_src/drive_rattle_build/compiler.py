@@ -151,14 +151,26 @@ def include_folders(flags: Sequence[str], cwd: Path) -> list[Path]:
     return [cwd / f for f in found]
 
 
+def compiler_identity(compiler: Sequence[str]) -> str:
+    """The compiler's executable as found on ``PATH``, with its size and modification time:
+    an upgraded compiler at the same path is another compiler."""
+    exe = shutil.which(str(compiler[0])) or str(compiler[0])
+    try:
+        stat = os.stat(exe)
+    except OSError:
+        return exe
+    return f"{os.path.realpath(exe)} {stat.st_size} {stat.st_mtime_ns}"
+
+
 def object_key(compiler: Sequence[str], flags: Sequence[str], source: Path,
                cwd: Path) -> str:
-    """What an object is compiled from, as a digest: the compiler command, the compile's
-    flags, the source's bytes, those of a header given by ``-include`` and the name and bytes
-    of every header (``*.h``) beside the source or in a folder of the include path.  A header
-    the source includes from anywhere else is a system header, the same for every build on
-    one machine."""
-    digest = hashlib.sha256(repr((list(map(str, compiler)), list(flags))).encode())
+    """What an object is compiled from, as a digest: the compiler command and executable
+    (:func:`compiler_identity`), the compile's flags, the source's bytes, those of a header
+    given by ``-include`` and the name and bytes of every header (``*.h``) beside the source
+    or in a folder of the include path.  A header the source includes from anywhere else is a
+    system header, the same for every build on one machine."""
+    digest = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
+                                  list(flags))).encode())
     digest.update(b"\0source\0" + Path(source).read_bytes())
     args = list(flags)
     for k, flag in enumerate(args[:-1]):

@@ -126,7 +126,7 @@ def test_the_model_library_is_compiled_once_per_platform_and_content(tmp_path):
 def test_the_object_cache_reuses_an_object_only_for_the_same_inputs(tmp_path, monkeypatch):
     """With DRIVE_RATTLE_OBJECT_CACHE, an object compiled from the same compiler, flags,
     source and headers, in another folder, is the kept one and the compiler does not run; a
-    changed header, flag or source, or no cache at all, runs it."""
+    changed header, flag, source or compiler executable, or no cache at all, runs it."""
     from drive_rattle_build.compiler import OBJECT_CACHE, compile_objects
 
     calls = tmp_path / "calls"
@@ -160,10 +160,13 @@ def test_the_object_cache_reuses_an_object_only_for_the_same_inputs(tmp_path, mo
     other = copy("d")
     other.write_text(other.read_text() + "int rattle_other(void) { return 1; }\n")
     assert compiled(other)[1] == 1  # the source changed
-    assert len(list(cache.glob("*.o"))) == 4 and not [
+    stat = counting.stat()  # the compiler replaced at the same path (an upgrade)
+    os.utime(counting, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000_000))
+    assert compiled(copy("f")) == (first, 1)
+    assert len(list(cache.glob("*.o"))) == 5 and not [
         p for p in cache.iterdir() if p.name.startswith(".")]  # no partial object left
     monkeypatch.delenv(OBJECT_CACHE)
-    assert compiled(copy("e")) == (first, 1)  # no cache: compiled, the same object
+    assert compiled(copy("g")) == (first, 1)  # no cache: compiled, the same object
 
 
 def test_an_object_cache_that_cannot_be_written_is_named(tmp_path, monkeypatch):
