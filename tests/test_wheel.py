@@ -12,17 +12,17 @@ after the first run).
 from __future__ import annotations
 
 import csv
-import json
 import os
 import re
 import subprocess
 import sys
 import tarfile
-import time
 import zipfile
 from pathlib import Path
 
 import pytest
+
+from tests.dask_cluster import scheduler_address
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Every file the build needs, as the checkout holds it (relative to ROOT): the model's C
@@ -163,11 +163,7 @@ def test_an_installed_wheel_builds_and_runs_everything(installed):
             [bindir / "dask", "scheduler", "--host", "127.0.0.1", "--port", "0",
              "--no-dashboard", "--scheduler-file", scheduler_file], cwd=cluster, env=env,
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        end = time.monotonic() + 120
-        while not scheduler_file.exists():
-            assert time.monotonic() < end, "the scheduler did not start"
-            time.sleep(0.2)
-        address = json.loads(scheduler_file.read_text())["address"]
+        address = scheduler_address(scheduler_file, 120)
         for k in range(2):
             folder = cluster / f"worker{k}"
             folder.mkdir()

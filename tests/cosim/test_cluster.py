@@ -4,7 +4,6 @@ killed mid-sweep, then the client too; the sweep is resumed and its CSV equals a
 run's (the cases run here in-process)."""
 
 import csv
-import json
 import os
 import re
 import signal
@@ -16,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from drive_rattle_cosim.sweep import FmuBundle, grid_design, run_case
+from tests.dask_cluster import scheduler_address
 
 pytest.importorskip("distributed")
 
@@ -70,8 +70,7 @@ def test_sweep_on_a_cluster_survives_a_killed_worker_and_resumes(fmus, tmp_path)
     try:
         start([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                "--scheduler-file", str(scheduler_file)], folders["scheduler"])
-        wait_for(scheduler_file.exists, 60, "the scheduler")
-        address = json.loads(scheduler_file.read_text())["address"]
+        address = scheduler_address(scheduler_file, 60)
         workers = {
             name: start([DASK, "worker", address, "--no-nanny", "--nthreads", "1",
                          "--no-dashboard", "--host", "127.0.0.1", "--local-directory",
@@ -148,8 +147,7 @@ def test_losing_every_worker_ends_with_the_resume_command(fmus, tmp_path):
     try:
         start([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                "--scheduler-file", str(scheduler_file)])
-        wait_for(scheduler_file.exists, 60, "the scheduler")
-        address = json.loads(scheduler_file.read_text())["address"]
+        address = scheduler_address(scheduler_file, 60)
 
         def worker():
             return start([DASK, "worker", address, "--no-nanny", "--nthreads", "1",
