@@ -133,7 +133,7 @@ def run_compiler(cmd: list[str], cwd: Path, output: Path, doing: str) -> Path:
 
 
 #: The environment variable naming a folder of compiled objects kept by what they are
-#: compiled from (:func:`object_key`), shared by every build that names it, in any process:
+#: compiled from (:func:`object_keys`), shared by every build that names it, in any process:
 #: a build finds there what another compiled from the same inputs.  Unset: none is kept.
 OBJECT_CACHE = "DRIVE_RATTLE_OBJECT_CACHE"
 _INCLUDE_OPTIONS = ("-I", "-iquote", "-isystem", "-idirafter")
@@ -162,25 +162,38 @@ def compiler_identity(compiler: Sequence[str]) -> str:
     return f"{os.path.realpath(exe)} {stat.st_size} {stat.st_mtime_ns}"
 
 
-def object_key(compiler: Sequence[str], flags: Sequence[str], source: Path,
-               cwd: Path) -> str:
-    """What an object is compiled from, as a digest: the compiler command and executable
-    (:func:`compiler_identity`), the compile's flags, the source's bytes, those of a header
-    given by ``-include`` and the name and bytes of every header (``*.h``) beside the source
-    or in a folder of the include path.  A header the source includes from anywhere else is a
-    system header, the same for every build on one machine."""
-    digest = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
+def _headers(folder: Path) -> bytes:
+    """The name and bytes of every header (``*.h``) in ``folder``, in name order."""
+    headers = sorted(folder.glob("*.h")) if folder.is_dir() else []
+    return b"".join(f"\0{h.name}\0".encode() + h.read_bytes() for h in headers)
+
+
+def object_keys(compiler: Sequence[str], flags: Sequence[str], sources: Sequence[Path],
+                cwd: Path) -> list[str]:
+    """What each of ``sources`` is compiled from, as a digest: the compiler command and
+    executable (:func:`compiler_identity`), the compile's flags, the bytes of a header given
+    by ``-include``, the name and bytes of every header (``*.h``) in a folder of the include
+    path and beside the source, and the source's bytes.  A header the source includes from
+    anywhere else is a system header, the same for every build on one machine.  What the
+    sources share is read once."""
+    common = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
                                   list(flags))).encode())
-    digest.update(b"\0source\0" + Path(source).read_bytes())
     args = list(flags)
     for k, flag in enumerate(args[:-1]):
         if flag == "-include":  # a header included before the source's first line
-            digest.update(b"\0-include\0" + (cwd / args[k + 1]).read_bytes())
-    for folder in dict.fromkeys([Path(source).parent, *include_folders(flags, cwd)]):
-        headers = sorted(folder.glob("*.h")) if folder.is_dir() else []
-        for header in headers:
-            digest.update(f"\0{header.name}\0".encode() + header.read_bytes())
-    return digest.hexdigest()
+            common.update(b"\0-include\0" + (cwd / args[k + 1]).read_bytes())
+    for folder in dict.fromkeys(include_folders(flags, cwd)):
+        common.update(_headers(folder))
+    beside: dict[Path, bytes] = {}
+    keys = []
+    for source in map(Path, sources):
+        if source.parent not in beside:
+            beside[source.parent] = _headers(source.parent)
+        digest = common.copy()
+        digest.update(b"\0beside\0" + beside[source.parent])
+        digest.update(b"\0source\0" + source.read_bytes())
+        keys.append(digest.hexdigest())
+    return keys
 
 
 def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
@@ -198,12 +211,14 @@ def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
             for n, source in enumerate(sources)]
     compile_flags = [f for f in flags if not link_only(f)]
     cache = os.environ.get(OBJECT_CACHE)
+    keys = (object_keys(compiler, compile_flags, [source for source, _ in jobs], folder)
+            if cache else [None] * len(jobs))
 
     def compile_one(job):
-        source, obj = job
+        (source, obj), key = job
         kept = None
-        if cache:
-            kept = Path(cache) / f"{object_key(compiler, compile_flags, source, folder)}.o"
+        if key is not None:
+            kept = Path(cache) / f"{key}.o"
             if kept.is_file():
                 shutil.copyfile(kept, obj)
                 return obj
@@ -224,7 +239,7 @@ def compile_objects(cc, flags, sources, folder: Path, what: str) -> list[Path]:
         return obj
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        return list(pool.map(compile_one, jobs))
+        return list(pool.map(compile_one, zip(jobs, keys, strict=True)))
 
 
 def compile_library(cc, flags, sources, out_path: Path, what: str, libs=(),

@@ -65,14 +65,19 @@ def communication_points(start: float, step: float, stop: float) -> list[float]:
     Integer nanoseconds, as libcosim places them; the step from t_k is ``t_{k+1} - t_k``, so
     every master using this grid passes bit-identical times and steps to the units.  Raises
     ValueError for a step that is not a positive whole number of nanoseconds."""
-    t0_ns, step_ns, n = _grid(start, step, stop)
-    return [(t0_ns + k * step_ns) / 1e9 for k in range(n + 1)]
+    return _seconds(*_grid(start, step, stop)).tolist()
 
 
 def _grid(start: float, step: float, stop: float) -> tuple[int, int, int]:
     """(t0 [ns], step [ns], steps) of the communication points from ``start`` to ``stop``."""
     step_ns = step_nanoseconds(step)
     return round(start * 1e9), step_ns, round((stop - start) * 1e9 / step_ns)
+
+
+def _seconds(t0_ns: int, step_ns: int, steps: int) -> np.ndarray:
+    """The points (t0_ns + k step_ns) / 1e9 [s], k = 0..steps: whole nanoseconds, exact in
+    int64, then one correctly rounded division each."""
+    return (t0_ns + step_ns * np.arange(steps + 1, dtype=np.int64)) / 1e9
 
 
 def simulate(mesh_params: MeshParameters | None = None,
@@ -98,14 +103,14 @@ def simulate(mesh_params: MeshParameters | None = None,
         sources = {name: _source(name, mesh, drive) for name in names}
         run = run_coupled(mesh, drive, step_ns, steps, sorted(set(sources.values())))
     integers = {s.name for s in MESH_OUTPUTS if s.fmi_type == "Integer"}
-    # communication_points' values: whole nanoseconds (exact in int64), then seconds
-    time = (t0_ns + step_ns * np.arange(steps + 1, dtype=np.int64)) / 1e9
-    rec = Record(time=time, onset_times=np.array(run.onset_times, dtype=float),
+    rec = Record(time=_seconds(t0_ns, step_ns, steps),
+                 onset_times=np.array(run.onset_times, dtype=float),
                  onset_speeds=np.array(run.onset_speeds, dtype=float),
                  onset_flanks=np.array(run.onset_flanks, dtype=np.int64))
     for name in names:
-        column = np.array(run.column_buffer(sources[name]))  # a copy: the run's buffer goes
-        rec.signals[name] = column.astype(np.int64) if name in integers else column
+        # a copy (the run's buffer goes with it), the integer outputs as integers
+        rec.signals[name] = np.array(run.column_buffer(sources[name]),
+                                     dtype=np.int64 if name in integers else float)
     return rec
 
 
