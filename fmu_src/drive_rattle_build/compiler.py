@@ -8,6 +8,7 @@ import atexit
 import hashlib
 import os
 import platform
+import re
 import shlex
 import shutil
 import subprocess
@@ -151,6 +152,26 @@ def include_folders(flags: Sequence[str], cwd: Path) -> list[Path]:
     return [cwd / f for f in found]
 
 
+def _placeless(flags: Sequence[str]) -> list[str]:
+    """``flags`` with each folder of the include path as its rank in that path, and a header
+    given by ``-include`` without its place: what the compile reads from them is in the key
+    by name and bytes (:class:`_Includes`), so the same files staged in another folder
+    compile alike."""
+    out, args, rank = [], list(flags), 0
+    for k, flag in enumerate(args):
+        if k > 0 and args[k - 1] == "-include":  # its bytes are in the key
+            out.append("<forced header>")
+        elif k > 0 and args[k - 1] in _INCLUDE_OPTIONS:
+            out.append(f"<include folder {rank}>")
+            rank += 1
+        elif flag.startswith("-I") and len(flag) > 2:
+            out.append(f"-I<include folder {rank}>")
+            rank += 1
+        else:
+            out.append(flag)
+    return out
+
+
 def compiler_identity(compiler: Sequence[str]) -> str:
     """The compiler's executable as found on ``PATH``, with its size and modification time:
     an upgraded compiler at the same path is another compiler."""
@@ -168,30 +189,86 @@ def _headers(folder: Path) -> bytes:
     return b"".join(f"\0{h.name}\0".encode() + h.read_bytes() for h in headers)
 
 
+#: An include of a file named in quotes or angle brackets (``#include``, ``#include_next``,
+#: ``#import``), and any include line at all: one that names no file (a computed include)
+#: is resolved only as the preprocessor runs, as is ``__has_include``.
+_NAMED_INCLUDE = re.compile(
+    rb'^[ \t]*#[ \t]*(?:include|include_next|import)[ \t]*(?:"([^"\n]+)"|<([^>\n]+)>)', re.M)
+_ANY_INCLUDE = re.compile(rb"^[ \t]*#[ \t]*(?:include|include_next|import)\b", re.M)
+
+
+class _Includes:
+    """What the files of one compile call include from the project's folders (the source's
+    own and those of the include path), read once per call."""
+
+    def __init__(self, folders: Sequence[Path]):
+        self.folders = list(folders)
+        self.texts: dict[Path, bytes] = {}
+
+    def _text(self, path: Path) -> bytes:
+        if path not in self.texts:
+            self.texts[path] = path.read_bytes()
+        return self.texts[path]
+
+    def reached(self, source: Path) -> bytes | None:
+        """The name, place and bytes of every file that ``source`` includes from its own
+        folder, the including file's folder or a folder of the include path, directly or
+        through such a file, wherever the name is found and in every branch of a
+        conditional (more than the compile reads, never less); None when a file of it
+        includes what only the preprocessor resolves (a computed include, ``__has_include``).
+        """
+        found, seen, todo = [], {source.resolve()}, [source.resolve()]
+        while todo:
+            including = todo.pop(0)
+            text = self._text(including)
+            named = _NAMED_INCLUDE.findall(text)
+            if len(named) != len(_ANY_INCLUDE.findall(text)) or b"__has_include" in text:
+                return None
+            for quoted, angled in named:
+                name = (quoted or angled).decode("utf-8", "surrogateescape")
+                # place 0: the including file's folder (where a quoted name is looked up
+                # first), 1: the source's, then the include path's
+                for place, folder in enumerate([including.parent, source.parent,
+                                                *self.folders]):
+                    path = folder / name
+                    if path.is_file():
+                        found.append(f"\0{place}\0{name}\0".encode() + self._text(path))
+                        if path.resolve() not in seen:
+                            seen.add(path.resolve())
+                            todo.append(path.resolve())
+        return b"".join(found)
+
+
 def object_keys(compiler: Sequence[str], flags: Sequence[str], sources: Sequence[Path],
                 cwd: Path) -> list[str]:
     """What each of ``sources`` is compiled from, as a digest: the compiler command and
     executable (:func:`compiler_identity`), the compile's flags, the bytes of a header given
-    by ``-include``, the name and bytes of every header (``*.h``) in a folder of the include
-    path and beside the source, and the source's bytes.  A header the source includes from
-    anywhere else is a system header, the same for every build on one machine.  What the
-    sources share is read once."""
+    by ``-include``, the source's bytes, and the name, place and bytes of every file it
+    includes from its folder or the include path (:meth:`_Includes.reached`; where an include
+    is computed, every header in those folders).  A header found elsewhere is a system
+    header, the same for every build on one machine.  So a source compiles alike beside
+    headers it does not include (an FMU's generated one).  What the sources share is read
+    once."""
     common = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
-                                  list(flags))).encode())
+                                  _placeless(flags))).encode())
     args = list(flags)
+    forced = []
     for k, flag in enumerate(args[:-1]):
         if flag == "-include":  # a header included before the source's first line
-            common.update(b"\0-include\0" + (cwd / args[k + 1]).read_bytes())
-    for folder in dict.fromkeys(include_folders(flags, cwd)):
-        common.update(_headers(folder))
-    beside: dict[Path, bytes] = {}
+            forced.append((cwd / args[k + 1]).resolve())
+            common.update(b"\0-include\0" + forced[-1].read_bytes())
+    folders = list(dict.fromkeys(include_folders(flags, cwd)))
+    includes = _Includes(folders)
     keys = []
     for source in map(Path, sources):
-        if source.parent not in beside:
-            beside[source.parent] = _headers(source.parent)
         digest = common.copy()
-        digest.update(b"\0beside\0" + beside[source.parent])
-        digest.update(b"\0source\0" + source.read_bytes())
+        reached = [includes.reached(f) for f in (*forced, source)]
+        if any(r is None for r in reached):  # every header the compile could read
+            digest.update(b"\0headers\0" + b"".join(
+                _headers(f) for f in dict.fromkeys([source.parent, *folders])))
+        else:
+            digest.update(b"\0includes\0" + b"\0".join(reached))
+        digest.update(b"\0source\0" + includes._text(source))
         keys.append(digest.hexdigest())
     return keys
 

@@ -169,6 +169,40 @@ def test_the_object_cache_reuses_an_object_only_for_the_same_inputs(tmp_path, mo
     assert compiled(copy("g")) == (first, 1)  # no cache: compiled, the same object
 
 
+def test_the_object_keys_follow_what_a_source_includes(tmp_path):
+    """A source staged in another folder, given with its own -I and beside a header it does
+    not include (an FMU's generated one), has the same key; a change in a header it reaches
+    through another, or in any header beside a computed include, is another key."""
+    from drive_rattle_build.compiler import object_keys
+
+    def staged(name: str, inner: str = "#define INNER 1\n", extra: str = "",
+               source: str = '#include "outer.h"\n#include <math.h>\n') -> Path:
+        folder = tmp_path / name
+        (folder / "include").mkdir(parents=True)
+        (folder / "include" / "outer.h").write_text('#include "inner.h"\n#define OUTER 1\n')
+        (folder / "include" / "inner.h").write_text(inner)
+        (folder / "s.c").write_text(source + "int f(void) { return OUTER + INNER; }\n")
+        if extra:
+            (folder / "config.h").write_text(extra)
+        return folder
+
+    def key(folder: Path) -> str:
+        [k] = object_keys(["gcc"], ["-O2", "-I", str(folder / "include"), f"-I{folder}"],
+                          [folder / "s.c"], folder)
+        return k
+
+    first = key(staged("a"))
+    assert key(staged("b", extra="#define MODEL 2\n")) == first
+    assert key(staged("c", inner="#define INNER 2\n")) != first
+    computed = '#define OUTER_H "outer.h"\n#include OUTER_H\n'
+    plain = key(staged("d", source=computed))
+    assert key(staged("e", source=computed)) == plain
+    assert key(staged("f", source=computed, extra="#define MODEL 2\n")) != plain
+    looped = staged("g", source='#include "loop.h"\n')  # a header that includes itself
+    (looped / "loop.h").write_text('#include "../g/loop.h"\n')
+    assert len(key(looped)) == 64
+
+
 def test_an_object_cache_that_cannot_be_written_is_named(tmp_path, monkeypatch):
     from drive_rattle_build.compiler import OBJECT_CACHE, c_compiler, compile_objects
 
