@@ -66,11 +66,20 @@ def pytest_configure(config):
     folder of the run (``DRIVE_RATTLE_OBJECT_CACHE``, drive_rattle_build.compiler): the suite
     builds the same C with the same flags in many tests (the library, each face, the sanitizer
     builds), and a build finds an object compiled from the same inputs there.  The folder is
-    the run's own and goes with it; tests/test_wheel.py builds without it, as a user does."""
+    the run's own and goes with it.  tests/test_wheel.py's build from the installed wheel uses
+    it too: the key holds every file a compile reads from the wheel, by name and bytes.
+
+    OpenBLAS runs one thread in each process of the run (``OPENBLAS_NUM_THREADS=1`` unless
+    set): the run already keeps every core busy with one worker each, and after each call an
+    OpenBLAS pool keeps spinning on the other cores for a while (a 50 x 50 product followed by
+    0.5 s of other work: 0.58-0.62 CPU-s against 0.34-0.44 with one thread).  The fast layer of
+    tests/model, tests/analysis and tests/cosim on two workers: 158-163 CPU-s against 151-153
+    with one thread, the same results."""
     from drive_rattle_build.compiler import OBJECT_CACHE
     from drive_rattle_build.library import build_in_place
 
     if not hasattr(config, "workerinput"):
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by workers, subprocesses
         if OBJECT_CACHE not in os.environ:
             folder = tempfile.mkdtemp(prefix="drive_rattle_test_objects_")
             config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))

@@ -194,6 +194,9 @@ def test_the_object_keys_follow_what_a_source_includes(tmp_path):
     first = key(staged("a"))
     assert key(staged("b", extra="#define MODEL 2\n")) == first
     assert key(staged("c", inner="#define INNER 2\n")) != first
+    missing = staged("h")  # a header the staged sources lack (an incomplete wheel)
+    (missing / "include" / "inner.h").unlink()
+    assert key(missing) != first
     computed = '#define OUTER_H "outer.h"\n#include OUTER_H\n'
     plain = key(staged("d", source=computed))
     assert key(staged("e", source=computed)) == plain
