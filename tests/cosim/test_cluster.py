@@ -4,7 +4,6 @@ killed mid-sweep, then the client too; the sweep is resumed and its CSV equals a
 run's (the cases run here in-process)."""
 
 import csv
-import os
 import re
 import signal
 import subprocess
@@ -15,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from drive_rattle_cosim.sweep import FmuBundle, grid_design, run_case
-from tests.dask_cluster import scheduler_address
+from tests.dask_cluster import scheduler_address, stop
 
 pytest.importorskip("distributed")
 
@@ -106,15 +105,7 @@ def test_sweep_on_a_cluster_survives_a_killed_worker_and_resumes(fmus, tmp_path)
         unpacked = list(folders["worker_b"].glob(f"**/drive_rattle_fmus_{digest}/*.fmu"))
         assert sorted(p.name for p in unpacked) == ["Driveline.fmu", "GearMeshRattle.fmu"]
     finally:
-        for process in processes:
-            if process.poll() is None:
-                os.kill(process.pid, signal.SIGTERM)
-        for process in processes:
-            try:
-                process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop(processes)
 
     rows = rows_of(out)
     with out.open(encoding="utf-8") as f:
@@ -186,12 +177,4 @@ def test_losing_every_worker_ends_with_the_resume_command(fmus, tmp_path):
         assert f"{len(kept)} already done" in resumed.stdout
         assert len(rows_of(out)) == 9
     finally:
-        for process in processes:
-            if process.poll() is None:
-                os.kill(process.pid, signal.SIGTERM)
-        for process in processes:
-            try:
-                process.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        stop(processes)
