@@ -183,10 +183,10 @@ def compiler_identity(compiler: Sequence[str]) -> str:
     return f"{os.path.realpath(exe)} {stat.st_size} {stat.st_mtime_ns}"
 
 
-def _headers(folder: Path) -> bytes:
-    """The name and bytes of every header (``*.h``) in ``folder``, in name order."""
-    headers = sorted(folder.glob("*.h")) if folder.is_dir() else []
-    return b"".join(f"\0{h.name}\0".encode() + h.read_bytes() for h in headers)
+def _folder_files(folder: Path) -> bytes:
+    """The name and bytes of every file in ``folder`` (not its subfolders), in name order."""
+    files = sorted(f for f in folder.iterdir() if f.is_file()) if folder.is_dir() else []
+    return b"".join(f"\0{f.name}\0".encode() + f.read_bytes() for f in files)
 
 
 #: An include of a file named in quotes or angle brackets (``#include``, ``#include_next``,
@@ -205,25 +205,26 @@ class _Includes:
         self.folders = list(folders)
         self.texts: dict[Path, bytes] = {}
 
-    def _text(self, path: Path) -> bytes:
+    def text(self, path: Path) -> bytes:
         if path not in self.texts:
             self.texts[path] = path.read_bytes()
         return self.texts[path]
 
-    def reached(self, source: Path) -> bytes | None:
-        """The name, place and bytes of every file that ``source`` includes from its own
+    def reached(self, source: Path) -> tuple[bytes, set[Path], bool]:
+        """(the name, place and bytes of every file that ``source`` includes from its own
         folder, the including file's folder or a folder of the include path, directly or
-        through such a file, wherever the name is found and in every branch of a
-        conditional (more than the compile reads, never less); None when a file of it
-        includes what only the preprocessor resolves (a computed include, ``__has_include``).
-        """
-        found, seen, todo = [], {source.resolve()}, [source.resolve()]
+        through such a file, wherever the name is found and in every branch of a conditional
+        (more than the compile reads, never less); the folders of those files; whether one
+        of them includes what only the preprocessor resolves: a computed include,
+        ``__has_include``)."""
+        source = source.resolve()
+        found, seen, todo, computed = [], {source}, [source], False
         while todo:
             including = todo.pop(0)
-            text = self._text(including)
+            text = self.text(including)
             named = _NAMED_INCLUDE.findall(text)
             if len(named) != len(_ANY_INCLUDE.findall(text)) or b"__has_include" in text:
-                return None
+                computed = True
             for quoted, angled in named:
                 name = (quoted or angled).decode("utf-8", "surrogateescape")
                 # place 0: the including file's folder (where a quoted name is looked up
@@ -232,23 +233,24 @@ class _Includes:
                                                 *self.folders]):
                     path = folder / name
                     if path.is_file():
-                        found.append(f"\0{place}\0{name}\0".encode() + self._text(path))
+                        found.append(f"\0{place}\0{name}\0".encode() + self.text(path))
                         if path.resolve() not in seen:
                             seen.add(path.resolve())
                             todo.append(path.resolve())
-        return b"".join(found)
+        return b"".join(found), {f.parent for f in seen}, computed
 
 
 def object_keys(compiler: Sequence[str], flags: Sequence[str], sources: Sequence[Path],
                 cwd: Path) -> list[str]:
     """What each of ``sources`` is compiled from, as a digest: the compiler command and
-    executable (:func:`compiler_identity`), the compile's flags, the bytes of a header given
-    by ``-include``, the source's bytes, and the name, place and bytes of every file it
-    includes from its folder or the include path (:meth:`_Includes.reached`; where an include
-    is computed, every header in those folders).  A header found elsewhere is a system
-    header, the same for every build on one machine.  So a source compiles alike beside
-    headers it does not include (an FMU's generated one).  What the sources share is read
-    once."""
+    executable (:func:`compiler_identity`), the compile's flags without the places of the
+    include path's folders (:func:`_placeless`), the bytes of a header given by
+    ``-include``, the source's bytes, and the name, place and bytes of every file it
+    includes from its folder or the include path (:meth:`_Includes.reached`).  Where an
+    include is computed, every file of those folders and of the included files' folders is
+    in the key instead.  A header found elsewhere is a system header, the same for every
+    build on one machine.  So a source compiles alike beside headers it does not include
+    (an FMU's generated one), in any folder.  What the sources share is read once."""
     common = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
                                   _placeless(flags))).encode())
     args = list(flags)
@@ -263,12 +265,14 @@ def object_keys(compiler: Sequence[str], flags: Sequence[str], sources: Sequence
     for source in map(Path, sources):
         digest = common.copy()
         reached = [includes.reached(f) for f in (*forced, source)]
-        if any(r is None for r in reached):  # every header the compile could read
-            digest.update(b"\0headers\0" + b"".join(
-                _headers(f) for f in dict.fromkeys([source.parent, *folders])))
+        if any(computed for _, _, computed in reached):  # every file the compile could read
+            places = {Path(source).resolve().parent, *folders}.union(
+                *(seen for _, seen, _ in reached))
+            digest.update(b"\0folders\0" + b"".join(
+                _folder_files(f) for f in sorted(places)))
         else:
-            digest.update(b"\0includes\0" + b"\0".join(reached))
-        digest.update(b"\0source\0" + includes._text(source))
+            digest.update(b"\0includes\0" + b"\0".join(found for found, _, _ in reached))
+        digest.update(b"\0source\0" + includes.text(source))
         keys.append(digest.hexdigest())
     return keys
 
