@@ -140,16 +140,26 @@ OBJECT_CACHE = "DRIVE_RATTLE_OBJECT_CACHE"
 _INCLUDE_OPTIONS = ("-I", "-iquote", "-isystem", "-idirafter")
 
 
+def _place_arguments(flags: Sequence[str]) -> dict[int, tuple[str, str]]:
+    """{position in ``flags``: (option, path)} of every argument that names a place: a folder
+    of the include path (``-I<dir>`` or ``-I <dir>``, and likewise -iquote, -isystem,
+    -idirafter: the option ``-I<`` when joined) or a header given by ``-include <file>``."""
+    found, args, k = {}, list(flags), 0
+    while k < len(args):
+        if args[k] in (*_INCLUDE_OPTIONS, "-include") and k + 1 < len(args):
+            found[k + 1] = (args[k], args[k + 1])
+            k += 1
+        elif args[k].startswith("-I") and len(args[k]) > 2:
+            found[k] = ("-I<", args[k][2:])
+        k += 1
+    return found
+
+
 def include_folders(flags: Sequence[str], cwd: Path) -> list[Path]:
     """The folders that ``flags`` add to the include path (``-I<dir>`` or ``-I <dir>``, and
     likewise -iquote, -isystem, -idirafter), relative ones taken from ``cwd``."""
-    found, args = [], list(flags)
-    for k, flag in enumerate(args):
-        if flag in _INCLUDE_OPTIONS and k + 1 < len(args):
-            found.append(args[k + 1])
-        elif flag.startswith("-I") and len(flag) > 2:
-            found.append(flag[2:])
-    return [cwd / f for f in found]
+    return [cwd / path for option, path in _place_arguments(flags).values()
+            if option != "-include"]
 
 
 def _placeless(flags: Sequence[str]) -> list[str]:
@@ -157,18 +167,13 @@ def _placeless(flags: Sequence[str]) -> list[str]:
     given by ``-include`` without its place: what the compile reads from them is in the key
     by name and bytes (:class:`_Includes`), so the same files staged in another folder
     compile alike."""
-    out, args, rank = [], list(flags), 0
-    for k, flag in enumerate(args):
-        if k > 0 and args[k - 1] == "-include":  # its bytes are in the key
-            out.append("<forced header>")
-        elif k > 0 and args[k - 1] in _INCLUDE_OPTIONS:
-            out.append(f"<include folder {rank}>")
-            rank += 1
-        elif flag.startswith("-I") and len(flag) > 2:
-            out.append(f"-I<include folder {rank}>")
-            rank += 1
+    out, rank = list(flags), 0
+    for k, (option, _) in _place_arguments(flags).items():
+        if option == "-include":  # its bytes are in the key
+            out[k] = "<forced header>"
         else:
-            out.append(flag)
+            out[k] = f"{'-I' if option == '-I<' else ''}<include folder {rank}>"
+            rank += 1
     return out
 
 
@@ -253,21 +258,20 @@ def object_keys(compiler: Sequence[str], flags: Sequence[str], sources: Sequence
     (an FMU's generated one), in any folder.  What the sources share is read once."""
     common = hashlib.sha256(repr((list(map(str, compiler)), compiler_identity(compiler),
                                   _placeless(flags))).encode())
-    args = list(flags)
-    forced = []
-    for k, flag in enumerate(args[:-1]):
-        if flag == "-include":  # a header included before the source's first line
-            forced.append((cwd / args[k + 1]).resolve())
-            common.update(b"\0-include\0" + forced[-1].read_bytes())
     folders = list(dict.fromkeys(include_folders(flags, cwd)))
     includes = _Includes(folders)
+    # headers included before each source's first line: the same for every source
+    forced = [(cwd / path).resolve() for option, path in _place_arguments(flags).values()
+              if option == "-include"]
+    for header in forced:
+        common.update(b"\0-include\0" + includes.text(header))
+    forced_reached = [includes.reached(header) for header in forced]
     keys = []
-    for source in map(Path, sources):
+    for source in (Path(s).resolve() for s in sources):
         digest = common.copy()
-        reached = [includes.reached(f) for f in (*forced, source)]
+        reached = [*forced_reached, includes.reached(source)]
         if any(computed for _, _, computed in reached):  # every file the compile could read
-            places = {Path(source).resolve().parent, *folders}.union(
-                *(seen for _, seen, _ in reached))
+            places = {source.parent, *folders}.union(*(seen for _, seen, _ in reached))
             digest.update(b"\0folders\0" + b"".join(
                 _folder_files(f) for f in sorted(places)))
         else:
