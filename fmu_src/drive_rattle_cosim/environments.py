@@ -49,16 +49,10 @@ def _bin(folder: Path, name: str) -> Path:
 
 
 def _uv() -> str | None:
-    """uv's program: the one the ``uv`` package installed beside this interpreter (the test
-    extra's), else one on PATH, else None."""
-    try:
-        from uv import find_uv_bin
-    except ImportError:
-        return shutil.which("uv")
-    try:
-        return find_uv_bin()
-    except FileNotFoundError:
-        return shutil.which("uv")
+    """uv's program: the one installed beside this interpreter (the test extra's ``uv``
+    package puts it there), else one on PATH, else None."""
+    beside = Path(sys.executable).with_name("uv.exe" if sys.platform == "win32" else "uv")
+    return str(beside) if beside.is_file() else shutil.which("uv")
 
 
 def master_python(name: str, cache: Path | None = None) -> Path:
