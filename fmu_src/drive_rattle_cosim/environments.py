@@ -58,13 +58,13 @@ def _uv() -> str | None:
 def master_python(name: str, cache: Path | None = None) -> Path:
     """The python of ``name``'s environment (of ``PINNED``), created on first use (one
     process at a time: a lock file beside it) and reused while its requirements and this
-    Python's version are the same.  uv creates and fills it where it is installed (:func:`_uv`),
-    pip otherwise: the same releases (both resolve ``PINNED`` to the newest that fit), in a
-    quarter of the CPU time or less -- uv leaves the bytecode to each module's first import,
-    where pip compiles every module it installs (gemseo-fmu's environment, with pip's
-    download cache filled: 64 CPU-s with pip, 17 with uv, 7.6 once uv's cache holds the
-    wheels).  RuntimeError with the installer's output when it
-    cannot be made."""
+    Python's version are the same.  uv creates and fills it where it is installed
+    (:func:`_uv`), pip otherwise: the same releases (both resolve ``PINNED`` to the newest
+    that fit), in a quarter of the CPU time or less -- uv leaves the bytecode to each
+    module's first import, where pip compiles every module it installs (gemseo-fmu's
+    environment, with pip's download cache filled: 64 CPU-s with pip, 17 with uv, 7.6 once
+    uv's cache holds the wheels).  RuntimeError with the installer's output when it cannot
+    be made."""
     if name not in PINNED:
         raise ValueError(f"master {name!r} has no environment of its own; allowed: "
                          f"{', '.join(PINNED)}")
