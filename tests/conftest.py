@@ -14,6 +14,11 @@ Every test carries the marker of its layer, from its folder (registered in pypro
   UndefinedBehaviorSanitizer;
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
 
+``cross`` is set on the tests of the binaries for other platforms than the build machine's
+(the Windows and aarch64-linux binaries, under wine and qemu-user); it implies ``slow``.  A
+session that selects none of them builds the faces for the build machine alone (the
+shipped set needs zig's x86_64-windows C runtime: 125-223 s of one core on a new machine).
+
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
 that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
@@ -34,6 +39,7 @@ import os
 import pkgutil
 import shutil
 import tempfile
+import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -41,6 +47,7 @@ import pytest
 from hypothesis import settings
 
 from drive_rattle_build import build
+from drive_rattle_build.platforms import FMI2_SHIPPED, FMI3_SHIPPED, build_machine
 
 # The property tests draw the same examples on every run (derandomized: from each test's own
 # code) and use no example database, so a run depends on the commit alone; the soak profile
@@ -114,7 +121,30 @@ def made_once(tmp_path_factory, name: str, make):
 PACKAGES = ("drive_rattle", "drive_rattle_build", "drive_rattle_cosim", "drive_rattle_fmi")
 
 
+#: The platforms of this session's faces: the shipped ones if a selected test is marked
+#: ``cross``, else the build machine's alone (pytest_collection_finish decides it, in every
+#: pytest-xdist worker alike: each collects the same selection).
+FACE_PLATFORMS: dict[str, tuple[str, ...]] = {"fmi2": FMI2_SHIPPED, "fmi3": FMI3_SHIPPED}
+
+
 def pytest_collection_finish(session):
+    """The faces' platforms for this session's selection (FACE_PLATFORMS), then the project's
+    modules imported for hypothesis (import_every_module)."""
+    machine = build_machine()
+    if machine and not any(item.get_closest_marker("cross") for item in session.items):
+        FACE_PLATFORMS.update(fmi2=(machine,), fmi3=(machine,))
+    import_every_module(session)
+
+
+def built_for(platform: str, fmi_major: int) -> None:
+    """Fail, saying why, unless this session's FMUs of FMI ``fmi_major`` carry a binary for
+    ``platform`` (a test that reads one must be marked ``cross``)."""
+    if platform not in FACE_PLATFORMS[f"fmi{fmi_major}"]:
+        pytest.fail(f"this session built the faces for {FACE_PLATFORMS[f'fmi{fmi_major}']} "
+                    f"only: a test of the {platform} binary must be marked cross")
+
+
+def import_every_module(session):
     """Every module of the project's packages imported before the first test, in every
     process.  Hypothesis draws some examples from the constants of the local modules imported
     so far (``hypothesis.internal.conjecture.providers._get_local_constants``), so a test's
@@ -155,40 +185,44 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
+        if item.get_closest_marker("cross"):
+            item.add_marker(pytest.mark.slow)  # before ``-m`` deselects (it runs after this)
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
     # The longest files first, each file's tests kept together and in order: pytest-xdist (the
     # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
     # hands whole files to the workers in this order, so the long ones start early and the
     # short ones fill in around them, instead of one worker finishing a long file alone at
-    # the end.  Only the order depends on LONG_FILES, never a result.  (On a new machine the
-    # first test that needs the built FMUs waits for zig's x86_64-windows C runtime whatever
-    # the order; running the files that need none first was measured and gained nothing: the
-    # runtime's build keeps the core the waiting worker leaves.)
+    # the end.  Only the order depends on LONG_FILES, never a result.  (On a new machine a
+    # session of ``cross`` tests waits for zig's x86_64-windows C runtime at its first test
+    # of the built FMUs whatever the order; running the files that need none first was
+    # measured and gained nothing: the runtime's build keeps the core the waiting worker
+    # leaves.)
     items.sort(key=lambda item: -LONG_FILES.get(
         Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
 
 
 def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
-    """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built and validated
-    once for this run, all in one process: the native FMI 2.0 and FMI 3.0 builds then compile
-    the model library once per platform between them (``platforms.shared_objects``, under its
-    lock).  Each face is built in a thread of its own, into a folder of its own: much of a
-    build is Python (validation, packing) or one compiler at a time, which alone leaves a core
-    idle."""
+    """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built for
+    FACE_PLATFORMS and validated once for this run, all in one process: the native FMI 2.0
+    and FMI 3.0 builds then compile the model library once per platform between them
+    (``platforms.shared_objects``, under its lock).  Each face is built in a thread of its
+    own, into a folder of its own: much of a build is Python (validation, packing) or one
+    compiler at a time, which alone leaves a core idle."""
     def make(out: Path) -> dict:
         from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
         from drive_rattle_build.native import NATIVE_SUBDIR, build_native
 
         with ThreadPoolExecutor(max_workers=2) as pool:
             python = pool.submit(build, out)
-            fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR)
-            native = build_native(out / NATIVE_SUBDIR)
+            fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR, platforms=platforms["fmi3"])
+            native = build_native(out / NATIVE_SUBDIR, platforms=platforms["fmi2"])
             return {"pythonfmu": [str(p) for p in python.result()],
                     "native": [str(p) for p in native],
                     "fmi3": [str(p) for p in fmi3.result()]}
 
-    made = made_once(tmp_path_factory, "dist", make)
+    platforms = FACE_PLATFORMS
+    made = made_once(tmp_path_factory, "dist-" + "-".join(platforms["fmi3"]), make)
     return {face: {Path(p).stem: Path(p) for p in paths} for face, paths in made.items()}
 
 
@@ -200,16 +234,17 @@ def fmus(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def native_fmus(tmp_path_factory):
-    """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, linux64 and win64
-    binaries and sources, built and validated for this session."""
+    """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, binaries
+    (linux64 and win64 where a ``cross`` test is selected) and sources, built and validated
+    for this session."""
     return built_faces(tmp_path_factory)["native"]
 
 
 @pytest.fixture(scope="session")
 def fmi3_fmus(tmp_path_factory):
-    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only, x86_64-linux,
-    x86_64-windows and aarch64-linux binaries and sources), built, held against their
-    templates and validated for this session."""
+    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only; binaries,
+    x86_64-linux, x86_64-windows and aarch64-linux where a ``cross`` test is selected, and
+    sources), built, held against their templates and validated for this session."""
     return built_faces(tmp_path_factory)["fmi3"]
 
 
@@ -242,6 +277,8 @@ def flavour_fmus(request):
     return request.getfixturevalue("fmus" if request.param == "pythonfmu" else "native_fmus")
 
 
+#: When the session started (time.monotonic()).
+_STARTED = pytest.StashKey[float]()
 #: Seconds spent in the tests (setup, call and teardown), split by whether they are slow.
 _SECONDS = {"not slow": 0.0, "slow": 0.0}
 
@@ -251,8 +288,15 @@ def pytest_runtest_logreport(report):
     _SECONDS["slow" if item_slow else "not slow"] += report.duration
 
 
-def pytest_terminal_summary(terminalreporter):
-    """The fast layer's time beside the slow one's (a session fixture's build counts for the
-    first test that uses it)."""
+def pytest_sessionstart(session):
+    session.config.stash[_STARTED] = time.monotonic()
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    """The session's time from its start (collection and the workers' start included), with
+    the markers it selected, and the time in its tests, fast and slow (summed over the
+    workers; a session fixture's build counts for the first test that uses it)."""
+    selected = f'-m "{config.option.markexpr}"' if config.option.markexpr else "every test"
     terminalreporter.write_line(
-        f"time in tests: {_SECONDS['not slow']:.0f} s not slow, {_SECONDS['slow']:.0f} s slow")
+        f"session: {time.monotonic() - config.stash[_STARTED]:.0f} s, {selected}; time in "
+        f"tests: {_SECONDS['not slow']:.0f} s not slow, {_SECONDS['slow']:.0f} s slow")

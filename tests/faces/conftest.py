@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import pytest
 
+from ..conftest import built_for
 from .calls import loaded
 from .raw_fmi import DIALECTS, Model
 
@@ -74,10 +75,12 @@ def native_face(face):
 
 @pytest.fixture(scope="session")
 def windows_face(face):
-    """The face, if it ships a Windows binary (skipped before its FMUs are built otherwise)."""
+    """The face, if it ships a Windows binary (skipped before its FMUs are built otherwise;
+    the test must be marked ``cross``)."""
     if face.windows is None:
         pytest.skip("the pythonfmu face ships no Windows binary (why: "
                     "tests/fmu/test_windows_binary.py)")
+    built_for("x86_64-windows", int(face.standard[0]))
     return face
 
 

@@ -17,14 +17,12 @@ import pytest
 from drive_rattle.interface import MODELS
 
 from ..fmi3.test_fmi3_build import header_functions
+from .conftest import FACES
 
 #: The functions of the FMI 2.0 co-simulation interface (25 common, 9 co-simulation).
 FMI2_CO_SIMULATION_FUNCTIONS = 34
-#: The platforms of each face's Linux binaries, with readelf's name of their machine.
-LINUX = {"pythonfmu": [("linux64", "Advanced Micro Devices X86-64")],
-         "native": [("linux64", "Advanced Micro Devices X86-64")],
-         "fmi3": [("x86_64-linux", "Advanced Micro Devices X86-64"),
-                  ("aarch64-linux", "AArch64")]}
+#: readelf's name of each Linux binary's machine.
+MACHINES = {"x86_64-linux": "Advanced Micro Devices X86-64", "aarch64-linux": "AArch64"}
 
 
 def _tool(name: str) -> str:
@@ -45,31 +43,50 @@ def assert_the_standards_functions(face, exported: set[str]) -> None:
         assert exported == set(functions), sorted(exported ^ set(functions))
 
 
+def assert_a_linux_binary_of_the_standard(face, fmu, member: str, platform: str,
+                                          tmp_path) -> None:
+    """The binary ``member`` of ``fmu``: built for ``platform``'s machine, needing only libc
+    and libm (glibc 2.29 on aarch64-linux), exporting the standard's functions alone."""
+    binary = tmp_path / f"{platform}.so"
+    with zipfile.ZipFile(fmu) as z:
+        binary.write_bytes(z.read(member))
+    header = subprocess.run([_tool("readelf"), "-h", str(binary)], capture_output=True,
+                            text=True, check=True).stdout
+    assert re.search(rf"Machine:\s+{MACHINES[platform]}\n", header), header
+    dynamic = subprocess.run([_tool("readelf"), "-d", "-W", str(binary)],
+                             capture_output=True, text=True, check=True).stdout
+    needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
+    assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
+    if platform == "aarch64-linux":  # docs/fmi3.md: glibc 2.29 or later
+        versions = subprocess.run([_tool("readelf"), "-V", "-W", str(binary)],
+                                  capture_output=True, text=True, check=True).stdout
+        assert max(tuple(map(int, v.split("."))) for v in re.findall(
+            r"Name: GLIBC_([0-9.]+)", versions)) == (2, 29)
+    symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
+                             capture_output=True, text=True, check=True).stdout
+    assert_the_standards_functions(
+        face, {line.split()[-1] for line in symbols.splitlines() if line.strip()})
+
+
 @pytest.mark.parametrize("model", MODELS)
-def test_linux_binaries_export_the_standards_functions_and_need_only_libc(face, face_fmus,
-                                                                          model, tmp_path):
-    for platform, machine in LINUX[face.name]:
-        with zipfile.ZipFile(face_fmus[model]) as z:
-            binary = tmp_path / f"{platform}.so"
-            binary.write_bytes(z.read(f"binaries/{platform}/{model}.so"))
-        header = subprocess.run([_tool("readelf"), "-h", str(binary)], capture_output=True,
-                                text=True, check=True).stdout
-        assert re.search(rf"Machine:\s+{machine}\n", header), header
-        dynamic = subprocess.run([_tool("readelf"), "-d", "-W", str(binary)],
-                                 capture_output=True, text=True, check=True).stdout
-        needed = set(re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", dynamic))
-        assert needed and needed <= {"libc.so.6", "libm.so.6"}, needed
-        if platform == "aarch64-linux":  # docs/fmi3.md: glibc 2.29 or later
-            versions = subprocess.run([_tool("readelf"), "-V", "-W", str(binary)],
-                                      capture_output=True, text=True, check=True).stdout
-            assert max(tuple(map(int, v.split("."))) for v in re.findall(
-                r"Name: GLIBC_([0-9.]+)", versions)) == (2, 29)
-        symbols = subprocess.run([_tool("nm"), "-D", "--defined-only", str(binary)],
-                                 capture_output=True, text=True, check=True).stdout
-        assert_the_standards_functions(
-            face, {line.split()[-1] for line in symbols.splitlines() if line.strip()})
+def test_x86_64_linux_binary_exports_the_standards_functions_and_needs_only_libc(
+        face, face_fmus, model, tmp_path):
+    assert_a_linux_binary_of_the_standard(face, face_fmus[model], f"binaries/{face.linux}/"
+                                          f"{model}.so", "x86_64-linux", tmp_path)
 
 
+@pytest.mark.cross
+@pytest.mark.parametrize("model", MODELS)
+def test_aarch64_linux_binary_exports_the_standards_functions_and_needs_glibc_2_29(
+        fmi3_fmus, model, tmp_path):
+    """Only the FMI 3.0 face ships one (FMI 2.0 importers load binaries/linux64 on aarch64
+    Linux too: docs/native_fmu.md)."""
+    assert_a_linux_binary_of_the_standard(FACES["fmi3"], fmi3_fmus[model],
+                                          f"binaries/aarch64-linux/{model}.so",
+                                          "aarch64-linux", tmp_path)
+
+
+@pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
 def test_windows_binary_exports_the_standards_functions_and_imports_only_the_c_runtime(
         windows_face, face_fmus, model, tmp_path):

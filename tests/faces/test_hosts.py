@@ -146,7 +146,7 @@ def win64_host(windows_face, tmp_path_factory) -> Path:
                         flags=(*STRICT, *CLANG[face.standard]))
 
 
-@pytest.mark.slow
+@pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
 def test_win64_binary_under_wine(windows_face, win64_host, wine_env, face_fmus, model, tmp_path):
     face = windows_face
@@ -179,6 +179,7 @@ def aarch64_host(tmp_path_factory) -> list[str]:
     return [*qemu, str(exe)]
 
 
+@pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
 def test_aarch64_binary_under_qemu(aarch64_host, fmi3_fmus, model, tmp_path):
     """Only the FMI 3.0 face ships an aarch64-linux binary (FMI 2.0 importers load

@@ -127,7 +127,7 @@ def test_an_fmi2_fmu_gets_its_x86_64_macos_binary_in_darwin64(native_fmus, tmp_p
     assert {"fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate"} <= exported
 
 
-@pytest.mark.slow
+@pytest.mark.cross
 def test_an_aarch64_binary_built_into_an_fmi2_fmu_runs_under_qemu(native_fmus, tmp_path):
     """In binaries/aarch64-linux (FMI 2.0.4+: the FMI 3.0 tuple for a platform FMI 2.0 does
     not name), built twice (the second replaces the first), run by fmu_host.c cross-compiled

@@ -38,7 +38,7 @@ def test_pythonfmus_win64_dll_needs_python_and_the_vc_runtime():
         assert dll in imports, dll
 
 
-@pytest.mark.slow
+@pytest.mark.cross
 def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, wine_env,
                                                                  tmp_path):
     exe = tmp_path / "load.exe"
