@@ -32,6 +32,7 @@ profile below, tests/seeds.py), so that one commit gives one answer; ``tests/soa
 them on fresh seeds.
 """
 
+import contextlib
 import fcntl
 import importlib
 import json
@@ -70,11 +71,14 @@ def pytest_configure(config):
     pytest-xdist the controller builds it before it starts the workers, which find it built.
 
     Every build of the run, in any worker or subprocess, keeps its compiled objects in one
-    folder of the run (``DRIVE_RATTLE_OBJECT_CACHE``, drive_rattle_build.compiler): the suite
-    builds the same C with the same flags in many tests (the library, each face, the sanitizer
-    builds), and a build finds an object compiled from the same inputs there.  The folder is
-    the run's own and goes with it.  tests/test_wheel.py's build from the installed wheel uses
-    it too: the key holds every file a compile reads from the wheel, by name and bytes.
+    folder (``DRIVE_RATTLE_OBJECT_CACHE``, drive_rattle_build.compiler): the suite builds the
+    same C with the same flags in many tests (the library, each face, the sanitizer builds),
+    and a build finds an object compiled from the same inputs there.  The folder is pytest's
+    cache's (``.pytest_cache/d/drive_rattle_objects``, emptied by ``--cache-clear``), so the
+    README's second session (``-m slow``) finds the objects of the first; an object is keyed
+    by every input of its compile, the compiler's identity included, and objects a day old
+    are removed when a session starts.  tests/test_wheel.py's build from the installed wheel
+    uses it too: the key holds every file a compile reads from the wheel, by name and bytes.
 
     OpenBLAS runs one thread in each process of the run (``OPENBLAS_NUM_THREADS=1`` unless
     set): the run already keeps every core busy with one worker each, and after each call an
@@ -88,10 +92,25 @@ def pytest_configure(config):
     if not hasattr(config, "workerinput"):
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # inherited by workers, subprocesses
         if OBJECT_CACHE not in os.environ:
-            folder = tempfile.mkdtemp(prefix="drive_rattle_test_objects_")
-            config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
-            os.environ[OBJECT_CACHE] = folder
+            os.environ[OBJECT_CACHE] = str(object_cache(config))
         build_in_place()
+
+
+def object_cache(config) -> Path:
+    """The folder of the compiled objects (pytest_configure): pytest's cache's, less the
+    objects of a day ago (a folder of this session where pytest's cache is off)."""
+    cache = getattr(config, "cache", None)
+    if cache is None:  # -p no:cacheprovider
+        folder = Path(tempfile.mkdtemp(prefix="drive_rattle_test_objects_"))
+        config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
+        return folder
+    folder = cache.mkdir("drive_rattle_objects")
+    old = time.time() - 24 * 3600
+    for kept in folder.iterdir():
+        with contextlib.suppress(OSError):  # another session may have removed it
+            if kept.stat().st_mtime < old:
+                kept.unlink()
+    return folder
 
 
 def made_once(tmp_path_factory, name: str, make):
