@@ -221,34 +221,38 @@ def pytest_collection_modifyitems(config, items):
         Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
 
 
-def built_faces(tmp_path_factory) -> dict[str, dict[str, Path]]:
-    """{face: {model: path}} of the three faces (pythonfmu, native, fmi3), built for
-    FACE_PLATFORMS and validated once for this run, all in one process: the native FMI 2.0
-    and FMI 3.0 builds then compile the model library once per platform between them
-    (``platforms.shared_objects``, under its lock).  Each face is built in a thread of its
-    own, into a folder of its own: much of a build is Python (validation, packing) or one
-    compiler at a time, which alone leaves a core idle."""
-    def make(out: Path) -> dict:
-        from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
-        from drive_rattle_build.native import NATIVE_SUBDIR, build_native
+def built_faces(tmp_path_factory, face: str) -> dict[str, Path]:
+    """{model: path} of ``face`` (pythonfmu, native, fmi3), built for FACE_PLATFORMS and
+    validated once for this run.  The pythonfmu face (for the build machine alone) is made
+    apart from the C-only faces, so that a test of it never waits for a cross compiler.  The
+    native FMI 2.0 and FMI 3.0 faces are made together, each in a thread of its own, into a
+    folder of its own: they compile the model library once per platform between them
+    (``platforms.shared_objects``, under its lock), and much of a build is Python
+    (validation, packing) or one compiler at a time, which alone leaves a core idle."""
+    if face == "pythonfmu":
+        made = made_once(tmp_path_factory, "dist-pythonfmu",
+                         lambda out: {"pythonfmu": [str(p) for p in build(out)]})
+    else:
+        platforms = FACE_PLATFORMS
 
-        with ThreadPoolExecutor(max_workers=2) as pool:
-            python = pool.submit(build, out)
-            fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR, platforms=platforms["fmi3"])
-            native = build_native(out / NATIVE_SUBDIR, platforms=platforms["fmi2"])
-            return {"pythonfmu": [str(p) for p in python.result()],
-                    "native": [str(p) for p in native],
-                    "fmi3": [str(p) for p in fmi3.result()]}
+        def make(out: Path) -> dict:
+            from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
+            from drive_rattle_build.native import NATIVE_SUBDIR, build_native
 
-    platforms = FACE_PLATFORMS
-    made = made_once(tmp_path_factory, "dist-" + "-".join(platforms["fmi3"]), make)
-    return {face: {Path(p).stem: Path(p) for p in paths} for face, paths in made.items()}
+            with ThreadPoolExecutor(max_workers=1) as pool:
+                fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR, platforms=platforms["fmi3"])
+                native = build_native(out / NATIVE_SUBDIR, platforms=platforms["fmi2"])
+                return {"native": [str(p) for p in native],
+                        "fmi3": [str(p) for p in fmi3.result()]}
+
+        made = made_once(tmp_path_factory, "dist-c-" + "-".join(platforms["fmi3"]), make)
+    return {Path(p).stem: Path(p) for p in made[face]}
 
 
 @pytest.fixture(scope="session")
 def fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}, built and validated for this session."""
-    return built_faces(tmp_path_factory)["pythonfmu"]
+    return built_faces(tmp_path_factory, "pythonfmu")
 
 
 @pytest.fixture(scope="session")
@@ -256,7 +260,7 @@ def native_fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, binaries
     (linux64 and win64 where a ``cross`` test is selected) and sources, built and validated
     for this session."""
-    return built_faces(tmp_path_factory)["native"]
+    return built_faces(tmp_path_factory, "native")
 
 
 @pytest.fixture(scope="session")
@@ -264,7 +268,7 @@ def fmi3_fmus(tmp_path_factory):
     """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only; binaries,
     x86_64-linux, x86_64-windows and aarch64-linux where a ``cross`` test is selected, and
     sources), built, held against their templates and validated for this session."""
-    return built_faces(tmp_path_factory)["fmi3"]
+    return built_faces(tmp_path_factory, "fmi3")
 
 
 @pytest.fixture(scope="session")
