@@ -15,9 +15,11 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 * ``examples``: tests/test_*.py -- the README's commands and the examples.
 
 ``cross`` is set on the tests of the binaries for other platforms than the build machine's
-(the Windows and aarch64-linux binaries, under wine and qemu-user); it implies ``slow``.  A
-session that selects none of them builds the faces for the build machine alone (the
-shipped set needs zig's x86_64-windows C runtime: 125-223 s of one core on a new machine).
+(the Windows and aarch64-linux binaries, under wine and qemu-user); it implies ``slow``.  They
+alone ask for the FMUs of every shipped platform (``shipped_native_fmus``,
+``shipped_fmi3_fmus``, tests/faces' ``shipped_face_fmus``), whose build needs zig's
+x86_64-windows C runtime (86-201 s of one core on a new machine); every other test gets the
+FMUs built for the build machine alone, and never waits for a cross compiler.
 
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
@@ -140,27 +142,8 @@ def made_once(tmp_path_factory, name: str, make):
 PACKAGES = ("drive_rattle", "drive_rattle_build", "drive_rattle_cosim", "drive_rattle_fmi")
 
 
-#: The platforms of this session's faces: the shipped ones if a selected test is marked
-#: ``cross``, else the build machine's alone (pytest_collection_finish decides it, in every
-#: pytest-xdist worker alike: each collects the same selection).
-FACE_PLATFORMS: dict[str, tuple[str, ...]] = {"fmi2": FMI2_SHIPPED, "fmi3": FMI3_SHIPPED}
-
-
 def pytest_collection_finish(session):
-    """The faces' platforms for this session's selection (FACE_PLATFORMS), then the project's
-    modules imported for hypothesis (import_every_module)."""
-    machine = build_machine()
-    if machine and not any(item.get_closest_marker("cross") for item in session.items):
-        FACE_PLATFORMS.update(fmi2=(machine,), fmi3=(machine,))
     import_every_module(session)
-
-
-def built_for(platform: str, fmi_major: int) -> None:
-    """Fail, saying why, unless this session's FMUs of FMI ``fmi_major`` carry a binary for
-    ``platform`` (a test that reads one must be marked ``cross``)."""
-    if platform not in FACE_PLATFORMS[f"fmi{fmi_major}"]:
-        pytest.fail(f"this session built the faces for {FACE_PLATFORMS[f'fmi{fmi_major}']} "
-                    f"only: a test of the {platform} binary must be marked cross")
 
 
 def import_every_module(session):
@@ -206,46 +189,61 @@ def pytest_collection_modifyitems(config, items):
         item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
         if item.get_closest_marker("cross"):
             item.add_marker(pytest.mark.slow)  # before ``-m`` deselects (it runs after this)
+        elif CROSS_FIXTURES & set(getattr(item, "fixturenames", ())):
+            asked = sorted(CROSS_FIXTURES & set(item.fixturenames))
+            raise pytest.UsageError(f"{item.nodeid} asks for {', '.join(asked)}: a test of the "
+                                    "other platforms' binaries must be marked cross")
         if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
             item.add_marker(pytest.mark.seeded)
     # The longest files first, each file's tests kept together and in order: pytest-xdist (the
     # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
     # hands whole files to the workers in this order, so the long ones start early and the
     # short ones fill in around them, instead of one worker finishing a long file alone at
-    # the end.  Only the order depends on LONG_FILES, never a result.  (On a new machine a
-    # session of ``cross`` tests waits for zig's x86_64-windows C runtime at its first test
-    # of the built FMUs whatever the order; running the files that need none first was
-    # measured and gained nothing: the runtime's build keeps the core the waiting worker
-    # leaves.)
-    items.sort(key=lambda item: -LONG_FILES.get(
-        Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix(), 0.0))
+    # the end.  Ahead of them all the longest file with a ``cross`` test: its worker builds
+    # the shipped FMUs first (zig's x86_64-windows C runtime on a new machine: a minute or
+    # more of its core) while the other starts on the long files; only the first file needs
+    # that, the others find the FMUs built.  Only the order depends on LONG_FILES, never a
+    # result.
+    def file(item) -> str:
+        return Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix()
+
+    crossing = {file(item) for item in items if item.get_closest_marker("cross")}
+    first = max(sorted(crossing), key=lambda f: LONG_FILES.get(f, 0.0), default=None)
+    items.sort(key=lambda item: (file(item) != first, -LONG_FILES.get(file(item), 0.0)))
 
 
-def built_faces(tmp_path_factory, face: str) -> dict[str, Path]:
-    """{model: path} of ``face`` (pythonfmu, native, fmi3), built for FACE_PLATFORMS and
-    validated once for this run.  The pythonfmu face (for the build machine alone) is made
-    apart from the C-only faces, so that a test of it never waits for a cross compiler.  The
-    native FMI 2.0 and FMI 3.0 faces are made together, each in a thread of its own, into a
-    folder of its own: they compile the model library once per platform between them
-    (``platforms.shared_objects``, under its lock), and much of a build is Python
-    (validation, packing) or one compiler at a time, which alone leaves a core idle."""
+#: The fixtures of the other platforms' binaries: a test that asks for one is marked cross.
+CROSS_FIXTURES = {"shipped_native_fmus", "shipped_fmi3_fmus", "shipped_face_fmus", "wine_env"}
+
+
+def built_faces(tmp_path_factory, face: str, shipped: bool = False) -> dict[str, Path]:
+    """{model: path} of ``face`` (pythonfmu, native, fmi3), built and validated once for this
+    run: the C-only faces for the build machine alone, or (``shipped``) for every platform
+    they ship (``platforms.FMI2_SHIPPED``, ``FMI3_SHIPPED``).  The pythonfmu face (for the
+    build machine alone) is made apart from the others, so that a test of it never waits for
+    a C-only build.  The native FMI 2.0 and FMI 3.0 faces are made together, each in a
+    thread of its own, into a folder of its own: they compile the model library once per
+    platform between them (``platforms.shared_objects``, under its lock), and much of a
+    build is Python (validation, packing) or one compiler at a time, which alone leaves a
+    core idle."""
     if face == "pythonfmu":
         made = made_once(tmp_path_factory, "dist-pythonfmu",
                          lambda out: {"pythonfmu": [str(p) for p in build(out)]})
-    else:
-        platforms = FACE_PLATFORMS
+        return {Path(p).stem: Path(p) for p in made[face]}
+    machine = build_machine()
+    fmi2, fmi3 = ((FMI2_SHIPPED, FMI3_SHIPPED) if shipped or machine is None
+                  else ((machine,), (machine,)))
 
-        def make(out: Path) -> dict:
-            from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
-            from drive_rattle_build.native import NATIVE_SUBDIR, build_native
+    def make(out: Path) -> dict:
+        from drive_rattle_build.fmi3 import FMI3_SUBDIR, build_fmi3
+        from drive_rattle_build.native import NATIVE_SUBDIR, build_native
 
-            with ThreadPoolExecutor(max_workers=1) as pool:
-                fmi3 = pool.submit(build_fmi3, out / FMI3_SUBDIR, platforms=platforms["fmi3"])
-                native = build_native(out / NATIVE_SUBDIR, platforms=platforms["fmi2"])
-                return {"native": [str(p) for p in native],
-                        "fmi3": [str(p) for p in fmi3.result()]}
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            made3 = pool.submit(build_fmi3, out / FMI3_SUBDIR, platforms=fmi3)
+            made2 = build_native(out / NATIVE_SUBDIR, platforms=fmi2)
+            return {"native": [str(p) for p in made2], "fmi3": [str(p) for p in made3.result()]}
 
-        made = made_once(tmp_path_factory, "dist-c-" + "-".join(platforms["fmi3"]), make)
+    made = made_once(tmp_path_factory, "dist-c-" + "-".join(fmi3), make)
     return {Path(p).stem: Path(p) for p in made[face]}
 
 
@@ -257,18 +255,30 @@ def fmus(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def native_fmus(tmp_path_factory):
-    """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, binaries
-    (linux64 and win64 where a ``cross`` test is selected) and sources, built and validated
-    for this session."""
+    """{'GearMeshRattle': path, 'Driveline': path}: the native (C only) FMUs, the build
+    machine's binary (linux64) and sources, built and validated for this session."""
     return built_faces(tmp_path_factory, "native")
 
 
 @pytest.fixture(scope="session")
 def fmi3_fmus(tmp_path_factory):
-    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only; binaries,
-    x86_64-linux, x86_64-windows and aarch64-linux where a ``cross`` test is selected, and
-    sources), built, held against their templates and validated for this session."""
+    """{'GearMeshRattle': path, 'Driveline': path}: the FMI 3.0 FMUs (C only; the build
+    machine's binary, x86_64-linux, and sources), built, held against their templates and
+    validated for this session."""
     return built_faces(tmp_path_factory, "fmi3")
+
+
+@pytest.fixture(scope="session")
+def shipped_native_fmus(tmp_path_factory):
+    """The native FMUs as shipped: linux64 and win64 binaries (tests marked ``cross``)."""
+    return built_faces(tmp_path_factory, "native", shipped=True)
+
+
+@pytest.fixture(scope="session")
+def shipped_fmi3_fmus(tmp_path_factory):
+    """The FMI 3.0 FMUs as shipped: x86_64-linux, x86_64-windows and aarch64-linux binaries
+    (tests marked ``cross``)."""
+    return built_faces(tmp_path_factory, "fmi3", shipped=True)
 
 
 @pytest.fixture(scope="session")

@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import pytest
 
-from ..conftest import built_for
 from .calls import loaded
 from .raw_fmi import DIALECTS, Model
 
@@ -76,11 +75,10 @@ def native_face(face):
 @pytest.fixture(scope="session")
 def windows_face(face):
     """The face, if it ships a Windows binary (skipped before its FMUs are built otherwise;
-    the test must be marked ``cross``)."""
+    the binary is in ``shipped_face_fmus``)."""
     if face.windows is None:
         pytest.skip("the pythonfmu face ships no Windows binary (why: "
                     "tests/fmu/test_windows_binary.py)")
-    built_for("x86_64-windows", int(face.standard[0]))
     return face
 
 
@@ -88,6 +86,14 @@ def windows_face(face):
 def face_fmus(request, face) -> dict:
     """{'GearMeshRattle': path, 'Driveline': path}: the face's FMUs, built for this session."""
     return request.getfixturevalue(face.fixture)
+
+
+@pytest.fixture(scope="session")
+def shipped_face_fmus(request, face) -> dict:
+    """The face's FMUs as shipped, with the binaries of every platform (tests marked
+    ``cross``; the pythonfmu face ships the build machine's alone)."""
+    return request.getfixturevalue(face.fixture if face.name == "pythonfmu"
+                                   else f"shipped_{face.fixture}")
 
 
 @pytest.fixture(scope="module")

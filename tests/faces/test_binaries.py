@@ -78,10 +78,10 @@ def test_x86_64_linux_binary_exports_the_standards_functions_and_needs_only_libc
 @pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
 def test_aarch64_linux_binary_exports_the_standards_functions_and_needs_glibc_2_29(
-        fmi3_fmus, model, tmp_path):
+        shipped_fmi3_fmus, model, tmp_path):
     """Only the FMI 3.0 face ships one (FMI 2.0 importers load binaries/linux64 on aarch64
     Linux too: docs/native_fmu.md)."""
-    assert_a_linux_binary_of_the_standard(FACES["fmi3"], fmi3_fmus[model],
+    assert_a_linux_binary_of_the_standard(FACES["fmi3"], shipped_fmi3_fmus[model],
                                           f"binaries/aarch64-linux/{model}.so",
                                           "aarch64-linux", tmp_path)
 
@@ -89,9 +89,9 @@ def test_aarch64_linux_binary_exports_the_standards_functions_and_needs_glibc_2_
 @pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
 def test_windows_binary_exports_the_standards_functions_and_imports_only_the_c_runtime(
-        windows_face, face_fmus, model, tmp_path):
+        windows_face, shipped_face_fmus, model, tmp_path):
     face = windows_face
-    with zipfile.ZipFile(face_fmus[model]) as z:
+    with zipfile.ZipFile(shipped_face_fmus[model]) as z:
         binary = tmp_path / f"{model}.dll"
         binary.write_bytes(z.read(f"binaries/{face.windows}/{model}.dll"))
     headers = subprocess.run([_tool("objdump"), "-p", str(binary)], capture_output=True,

@@ -148,9 +148,10 @@ def win64_host(windows_face, tmp_path_factory) -> Path:
 
 @pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
-def test_win64_binary_under_wine(windows_face, win64_host, wine_env, face_fmus, model, tmp_path):
+def test_win64_binary_under_wine(windows_face, win64_host, wine_env, shipped_face_fmus, model,
+                                tmp_path):
     face = windows_face
-    fmu = face_fmus[model]
+    fmu = shipped_face_fmus[model]
     root = unpacked(fmu, tmp_path / "unpacked")
     folder = windows_path(root / "resources")
     resources = ("file:///" + folder.replace("\\", "/") if face.standard == "2.0"
@@ -181,10 +182,10 @@ def aarch64_host(tmp_path_factory) -> list[str]:
 
 @pytest.mark.cross
 @pytest.mark.parametrize("model", MODELS)
-def test_aarch64_binary_under_qemu(aarch64_host, fmi3_fmus, model, tmp_path):
+def test_aarch64_binary_under_qemu(aarch64_host, shipped_fmi3_fmus, model, tmp_path):
     """Only the FMI 3.0 face ships an aarch64-linux binary (FMI 2.0 importers load
     binaries/linux64 there too: docs/native_fmu.md)."""
-    fmu = fmi3_fmus[model]
+    fmu = shipped_fmi3_fmus[model]
     root = unpacked(fmu, tmp_path / "unpacked")
     args = host_arguments(fmu, str(root / "binaries" / "aarch64-linux" / f"{model}.so"),
                           resources_argument(FACES["fmi3"], root / "resources"),

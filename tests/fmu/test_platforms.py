@@ -128,12 +128,12 @@ def test_an_fmi2_fmu_gets_its_x86_64_macos_binary_in_darwin64(native_fmus, tmp_p
 
 
 @pytest.mark.cross
-def test_an_aarch64_binary_built_into_an_fmi2_fmu_runs_under_qemu(native_fmus, tmp_path):
+def test_an_aarch64_binary_built_into_an_fmi2_fmu_runs_under_qemu(shipped_native_fmus, tmp_path):
     """In binaries/aarch64-linux (FMI 2.0.4+: the FMI 3.0 tuple for a platform FMI 2.0 does
     not name), built twice (the second replaces the first), run by fmu_host.c cross-compiled
     for aarch64: the library's numbers on x86-64, bit for bit."""
     qemu = qemu_aarch64()
-    fmu = copy_of(native_fmus["GearMeshRattle"], tmp_path / "fmu")
+    fmu = copy_of(shipped_native_fmus["GearMeshRattle"], tmp_path / "fmu")
     for _ in range(2):
         assert main(["--platform", "aarch64-linux", "--fmu", str(fmu)]) == 0
     assert [n for n in members(fmu) if n.startswith("binaries/")] == [

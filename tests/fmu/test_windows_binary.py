@@ -39,7 +39,7 @@ def test_pythonfmus_win64_dll_needs_python_and_the_vc_runtime():
 
 
 @pytest.mark.cross
-def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, wine_env,
+def test_it_does_not_load_without_them_where_the_native_dll_does(shipped_native_fmus, wine_env,
                                                                  tmp_path):
     exe = tmp_path / "load.exe"
     source = tmp_path / "load.c"
@@ -50,7 +50,7 @@ def test_it_does_not_load_without_them_where_the_native_dll_does(native_fmus, wi
     # (minutes of CPU on a new machine: compiler.zig_cc)
     subprocess.run([*zig_cc("x86_64-windows-gnu"), "-O2", "-o", str(exe), str(source)],
                    check=True, capture_output=True, cwd=tmp_path)
-    with zipfile.ZipFile(native_fmus["GearMeshRattle"]) as z:
+    with zipfile.ZipFile(shipped_native_fmus["GearMeshRattle"]) as z:
         native = Path(z.extract("binaries/win64/GearMeshRattle.dll", tmp_path))
 
     def load(dll: Path) -> str:
