@@ -18,15 +18,17 @@ Every test carries the marker of its layer, from its folder (registered in pypro
 (the Windows and aarch64-linux binaries, under wine and qemu-user); it implies ``slow``.  They
 alone ask for the FMUs of every shipped platform (``shipped_native_fmus``,
 ``shipped_fmi3_fmus``, tests/faces' ``shipped_face_fmus``), whose build needs zig's
-x86_64-windows C runtime (86-201 s of one core on a new machine); every other test gets the
-FMUs built for the build machine alone, and never waits for a cross compiler.
+x86_64-windows C runtime (86 s of a core on a new machine, in a CI run here); every other
+test gets the FMUs built for the build machine alone, and never waits for a cross compiler.
 
 ``slow`` is set on the tests themselves: every test that takes more than about 5 s on a
 2-core machine running the suite on both cores (``--durations`` of the README's command), so
 that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such machine,
 108-115 s on another; on 2026-12-03 131.6 s on a third, with zig's cache filled for this
 clone, 323 s with zig building its x86_64-windows C runtime first; 1499 tests; 110.0 s on
-that third machine once the run kept one object cache for its builds, 1500 tests).
+that third machine once the run kept one object cache for its builds, 1500 tests; on
+2026-12-04 82-87 s in the first session of the README's command on fresh clones of a fourth,
+67 s warm, 1504 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
 here, and the boundary fuzzers, marked themselves): their seeds are fixed (the ``ci``
