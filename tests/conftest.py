@@ -145,10 +145,6 @@ PACKAGES = ("drive_rattle", "drive_rattle_build", "drive_rattle_cosim", "drive_r
 
 
 def pytest_collection_finish(session):
-    import_every_module(session)
-
-
-def import_every_module(session):
     """Every module of the project's packages imported before the first test, in every
     process.  Hypothesis draws some examples from the constants of the local modules imported
     so far (``hypothesis.internal.conjecture.providers._get_local_constants``), so a test's
