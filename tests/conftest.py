@@ -181,33 +181,39 @@ LONG_FILES = {
 }
 
 
-def pytest_collection_modifyitems(config, items):
-    for item in items:
-        folder = Path(str(item.fspath)).resolve().relative_to(TESTS).parts[0]
-        item.add_marker(getattr(pytest.mark, LAYERS.get(folder, "examples")))
-        if item.get_closest_marker("cross"):
-            item.add_marker(pytest.mark.slow)  # before ``-m`` deselects (it runs after this)
-        elif CROSS_FIXTURES & set(getattr(item, "fixturenames", ())):
-            asked = sorted(CROSS_FIXTURES & set(item.fixturenames))
-            raise pytest.UsageError(f"{item.nodeid} asks for {', '.join(asked)}: a test of the "
-                                    "other platforms' binaries must be marked cross")
-        if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
-            item.add_marker(pytest.mark.seeded)
-    # The longest files first, each file's tests kept together and in order: pytest-xdist (the
-    # README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
-    # hands whole files to the workers in this order, so the long ones start early and the
-    # short ones fill in around them, instead of one worker finishing a long file alone at
-    # the end.  Ahead of them all the longest file with a ``cross`` test: its worker builds
-    # the shipped FMUs first (zig's x86_64-windows C runtime on a new machine: a minute or
-    # more of its core) while the other starts on the long files; only the first file needs
-    # that, the others find the FMUs built.  Only the order depends on LONG_FILES, never a
-    # result.
-    def file(item) -> str:
-        return Path(str(item.fspath)).resolve().relative_to(TESTS).as_posix()
+def test_file(item) -> Path:
+    """The file of ``item``, relative to tests/."""
+    return Path(str(item.fspath)).resolve().relative_to(TESTS)
 
-    crossing = {file(item) for item in items if item.get_closest_marker("cross")}
+
+def pytest_itemcollected(item):
+    """The markers of ``item``, set as it is collected (before ``-m`` deselects)."""
+    item.add_marker(getattr(pytest.mark, LAYERS.get(test_file(item).parts[0], "examples")))
+    if item.get_closest_marker("cross"):
+        item.add_marker(pytest.mark.slow)
+    elif CROSS_FIXTURES & set(getattr(item, "fixturenames", ())):
+        asked = sorted(CROSS_FIXTURES & set(item.fixturenames))
+        raise pytest.UsageError(f"{item.nodeid} asks for {', '.join(asked)}: a test of the "
+                                "other platforms' binaries must be marked cross")
+    if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
+        item.add_marker(pytest.mark.seeded)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(items):
+    """The longest files first, each file's tests kept together and in order: pytest-xdist (the
+    README's ``-n auto``, with ``--dist loadfile --no-loadscope-reorder`` in pyproject.toml)
+    hands whole files to the workers in this order, so the long ones start early and the
+    short ones fill in around them, instead of one worker finishing a long file alone at the
+    end.  Ahead of them all the longest file with a selected ``cross`` test (last of the
+    hooks, after ``-m`` has deselected): its worker builds the shipped FMUs first (zig's
+    x86_64-windows C runtime on a new machine: a minute or more of its core) while the other
+    starts on the long files; only the first file needs that, the others find the FMUs
+    built.  Only the order depends on LONG_FILES, never a result."""
+    files = {item: test_file(item).as_posix() for item in items}
+    crossing = {files[item] for item in items if item.get_closest_marker("cross")}
     first = max(sorted(crossing), key=lambda f: LONG_FILES.get(f, 0.0), default=None)
-    items.sort(key=lambda item: (file(item) != first, -LONG_FILES.get(file(item), 0.0)))
+    items.sort(key=lambda item: (files[item] != first, -LONG_FILES.get(files[item], 0.0)))
 
 
 #: The fixtures of the other platforms' binaries: a test that asks for one is marked cross.
