@@ -27,7 +27,7 @@ that ``-m "not slow"`` is a loop of minutes (on 2026-12-02: 155 s on one such ma
 108-115 s on another; on 2026-12-03 131.6 s on a third, with zig's cache filled for this
 clone, 323 s with zig building its x86_64-windows C runtime first; 1499 tests; 110.0 s on
 that third machine once the run kept one object cache for its builds, 1500 tests; on
-2026-12-04 73-87 s in the first session of the README's command on seven fresh clones of a
+2026-12-04 73-87 s in the first session of the README's command on eight fresh clones of a
 fourth, 67 s warm, 1504 tests).
 
 ``seeded`` marks every test that draws at random (the property tests of hypothesis, found
